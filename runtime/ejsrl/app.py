@@ -1,0 +1,539 @@
+"""Running a generated app: in the browser (viser) or headless.
+
+``App`` owns the model, one lock and one loop: the simulation runs in the loop's thread;
+UI callbacks take the lock, apply their change, run ``on_change`` and the fixed
+relations, and return. Errors in user code pause the simulation and are kept in
+``app.error`` (message and spec location) for the UI to show; the server keeps serving.
+
+``main(Model, VIEW, ...)`` is what a generated ``app.py`` calls: it parses the command
+line of the language's last section (``--host``, ``--port``, ``--headless --duration T
+[--csv FILE] [--vars a,b,q] [--every N] [--set NAME=VALUE ...]``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import csv
+import math
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+
+from ejsrl.sim.model import Controller, ModelBase, UserCodeError, describe_error
+from ejsrl.view.elements import Button, Control, Dynamic
+from ejsrl.view.scene_sync import SceneSync, scene_elements
+
+__all__ = ["App", "SimConfig", "AppMeta", "main", "parse_set", "csv_columns"]
+
+
+@dataclass
+class SimConfig:
+    """The spec's ``simulation`` section."""
+
+    fps: float = 30.0
+    steps_per_display: int = 1
+    autoplay: bool = False
+    realtime: bool = False
+    controls: bool = True
+
+
+@dataclass
+class AppMeta:
+    """What the About panel shows: title, Markdown description, author, spec file name."""
+
+    title: str
+    description: str = ""
+    author: str = ""
+    spec: str = ""
+
+
+class App(Controller):
+    """A model, its world and its simulation loop; the view and headless runs drive it.
+
+    ``model_cls``: the generated ``Model``; ``view``: its list of elements; ``base_dir``:
+    where the app's assets are; ``overrides``: initial values replaced before ``init``.
+    """
+
+    def __init__(
+        self,
+        model_cls: type[ModelBase],
+        view: list[Any],
+        *,
+        sim: SimConfig | None = None,
+        meta: AppMeta | None = None,
+        base_dir: Path | str = ".",
+        overrides: dict[str, Any] | None = None,
+    ) -> None:
+        super().__init__()
+        self.model_cls = model_cls
+        self.view = view
+        self.sim = sim or SimConfig()
+        self.meta = meta or AppMeta(title=model_cls.__name__)
+        self.base_dir = Path(base_dir)
+        self.lock = threading.RLock()
+        self.error: UserCodeError | None = None
+        self.error_rev = 0
+        self.frame_count = 0
+        self.views: list[Any] = []
+        self._pending: str | None = None
+        self._wall0: float | None = None
+        self._t0: float = 0.0
+        self._stopped = threading.Event()
+        self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
+        self.model = model_cls(self, overrides, start=False)
+        self.guard(self.model._ejs_reset)
+        if self.error is None:
+            self.scene.update(self.model, self.safe_value, first=True)
+        self.playing = bool(self.sim.autoplay) and self.error is None
+
+    # -- errors ------------------------------------------------------------------------------
+    def fail(self, exc: BaseException, where: str = "") -> None:
+        """Record an error from user code and pause."""
+        err = describe_error(exc, self.model_cls)
+        if where and not err.where:
+            err = UserCodeError(err.message, where)
+        self.error = err
+        self.error_rev += 1
+        self.playing = False
+
+    def guard(self, fn: Callable[[], Any], where: str = "") -> Any:
+        """Run ``fn`` under the error guard: on an exception, record it, pause, return None."""
+        try:
+            return fn()
+        except Exception as exc:  # noqa: BLE001 - user code may raise anything
+            self.fail(exc, where)
+            return None
+
+    def safe_value(self, prop: Any, where: str = "") -> Any:
+        """A constant or dynamic property's value, or None after an error (recorded)."""
+        if not isinstance(prop, Dynamic):
+            return prop
+        if self.error is not None:
+            return None
+        return self.guard(lambda: prop(self.model), where)
+
+    def pop_alerts(self) -> list[str]:
+        """The messages from ``alert()`` since the last call."""
+        out, self.alerts = self.alerts, []
+        return out
+
+    # -- controls (thread-safe) ---------------------------------------------------------------
+    def play(self) -> None:
+        with self.lock:
+            if self.error is None:
+                self.playing = True
+                self._wall0 = None
+
+    def pause(self) -> None:
+        with self.lock:
+            self.playing = False
+
+    def is_playing(self) -> bool:
+        return self.playing
+
+    def step_once(self) -> None:
+        """Run one step (from the UI's Step button, or ``step()`` in user code)."""
+        with self.lock:
+            if self.error is None:
+                self._run_steps(1)
+                self._after_change()
+
+    def request_reset(self) -> None:
+        self._pending = "reset"
+
+    def request_initialize(self) -> None:
+        self._pending = self._pending or "initialize"
+
+    def reset(self) -> None:
+        """Back to the initial state (the UI's Reset button): clears errors too."""
+        with self.lock:
+            self._pending = "reset"
+            self._apply_pending()
+            self._refresh_views()
+
+    def _apply_pending(self) -> None:
+        while self._pending is not None:
+            what, self._pending = self._pending, None
+            if what == "reset":
+                self.playing = False
+                self.error = None
+                self.error_rev += 1
+                self.scene.reset()
+                self.guard(self.model._ejs_reset)
+                for v in self.views:
+                    if hasattr(v, "on_reset"):
+                        v.on_reset()
+            else:
+                self.guard(self.model._ejs_initialize)
+
+    def apply_control(self, control: Control, value: Any) -> None:
+        """Write an already validated value from the UI, then ``on_change`` and the fixed relations."""
+        with self.lock:
+            if self.guard(lambda: control.set(self.model, value), control.where) is None and self.error is not None:
+                return
+            if control.on_change is not None:
+                self.guard(lambda: control.on_change(self.model), control.where)  # type: ignore[misc]
+            self._after_change()
+
+    def run_action(self, button: Button) -> None:
+        """Run a button's action, then the fixed relations."""
+        with self.lock:
+            self.guard(lambda: button.action(self.model), button.where)
+            self._after_change()
+
+    def apply_gizmo(self, name: str, T_world: Any) -> None:
+        """A gizmo was dragged: write its bound pose, run ``on_change`` and the fixed relations."""
+        T = np.asarray(T_world, dtype=float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            return
+        for b in self.scene.bindings:
+            if b.element.name == name and b.element.kind == "gizmo" and b.element.set is not None:
+                with self.lock:
+                    element = b.element
+                    self.guard(lambda: element.set(self.model, T), element.where)  # type: ignore[misc]
+                    if element.on_change is not None:
+                        self.guard(lambda: element.on_change(self.model), element.where)  # type: ignore[misc]
+                    self._after_change()
+                return
+
+    def _after_change(self) -> None:
+        if self.error is None:
+            self.guard(self.model._fixed_relations)
+            self.model._ejs_restart_solvers()
+        self._apply_pending()
+        self._wall0 = None
+        self._refresh_views()
+
+    def _refresh_views(self) -> None:
+        if self.error is None:
+            self.scene.update(self.model, self.safe_value)
+
+    # -- the world, for model code ---------------------------------------------------------------
+    @property
+    def world(self) -> Any:  # type: ignore[override]
+        return self.scene.world
+
+    def capture(self, name: str) -> np.ndarray:
+        """Render what camera ``name`` sees now (the scene is brought up to date first)."""
+        from ejsrl.world import render
+
+        self.scene.update(self.model, None)
+        rgb, _depth = render(self.scene.world, name)
+        return rgb
+
+    # -- stepping ---------------------------------------------------------------------------------
+    def _run_steps(self, n: int) -> int:
+        done = 0
+        for _ in range(n):
+            try:
+                stop = self.model._ejs_step()
+            except Exception as exc:  # noqa: BLE001
+                self.fail(exc)
+                break
+            done += 1
+            if self._pending is not None:
+                self._apply_pending()
+            if stop:
+                self.playing = False
+                break
+            if not self.playing and n > 1:
+                break
+        return done
+
+    def frame(self) -> None:
+        """One display frame: the steps (when playing), then the world and the views."""
+        with self.lock:
+            if self.playing and self.error is None:
+                if self.sim.realtime and self.model.INDEPENDENT is not None:
+                    self._realtime_steps()
+                else:
+                    self._run_steps(int(self.sim.steps_per_display))
+            self._apply_pending()
+            self._refresh_views()
+            self.frame_count += 1
+            for v in self.views:
+                v.on_frame()
+
+    def _realtime_steps(self) -> None:
+        now = time.perf_counter()
+        t = self.model._ejs_time() or 0.0
+        if self._wall0 is None:
+            self._wall0, self._t0 = now, t
+            self._run_steps(1)
+            return
+        target = self._t0 + (now - self._wall0)
+        deadline = now + 0.8 / max(self.sim.fps, 1.0)
+        while self.playing and self.error is None and (self.model._ejs_time() or 0.0) < target:
+            if self._run_steps(1) == 0 or time.perf_counter() > deadline:
+                self._wall0 = None  # cannot keep up: pace from here
+                break
+
+    def run_loop(self, stop: threading.Event | None = None) -> None:
+        """Run frames at ``sim.fps`` until ``stop`` is set."""
+        stop = stop or self._stopped
+        period = 1.0 / max(float(self.sim.fps), 1.0)
+        next_time = time.perf_counter()
+        while not stop.is_set():
+            self.frame()
+            next_time += period
+            delay = next_time - time.perf_counter()
+            if delay > 0:
+                stop.wait(delay)
+            else:
+                next_time = time.perf_counter()
+
+    def stop(self) -> None:
+        self._stopped.set()
+
+    # -- serving ----------------------------------------------------------------------------------
+    def serve(self, host: str = "127.0.0.1", port: int = 8080, *, block: bool = True) -> Any:
+        """Start the viser server and the loop; returns the server (its real port: ``get_port()``)."""
+        import viser
+
+        from ejsrl.view.viser_view import ViserView
+
+        server = viser.ViserServer(host=host, port=port, label=self.meta.title, verbose=False)
+        view = ViserView(self, server)
+        self.views.append(view)
+        url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
+        print(f"{self.meta.title}: serving on http://{url_host}:{server.get_port()} (Ctrl+C to stop)", flush=True)
+        if not block:
+            thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)
+            thread.start()
+            return server
+        try:
+            self.run_loop()
+        except KeyboardInterrupt:
+            pass
+        finally:
+            server.stop()
+        return server
+
+    # -- headless -----------------------------------------------------------------------------------
+    def run_headless(
+        self,
+        duration: float,
+        *,
+        csv_file: TextIO | None = None,
+        variables: Sequence[str] | None = None,
+        every: int = 1,
+        log: TextIO = sys.stderr,
+    ) -> int:
+        """Run for ``duration`` units of the independent variable; returns the exit status."""
+        model = self.model
+        if self.error is not None:
+            print(_format_error(self.error), file=log)
+            return 1
+        if model.INDEPENDENT is None:
+            print("error: this model has no independent variable (no ODE page and no variable 't')", file=log)
+            return 2
+        columns = csv_columns(model, variables)
+        writer = csv.writer(csv_file) if csv_file is not None else None
+        if writer is not None:
+            writer.writerow([name for name, _ in columns])
+            writer.writerow(_row(model, columns))
+        t_start = model._ejs_time() or 0.0
+        t_end = t_start + duration
+        steps = 0
+        self.playing = True
+        last_t = t_start
+        while True:
+            t = model._ejs_time() or 0.0
+            if t >= t_end - 1e-9 * max(1.0, abs(t_end)):
+                break
+            if self._run_steps(1) == 0:
+                break
+            steps += 1
+            t_new = model._ejs_time() or 0.0
+            if writer is not None and steps % every == 0:
+                writer.writerow(_row(model, columns))
+            for text in self.pop_alerts():
+                print(f"alert: {text}", file=log)
+            if self.error is not None or not self.playing:
+                break
+            if t_new <= last_t:
+                print(f"error: the independent variable '{model.INDEPENDENT}' did not advance in a step (t = {t_new:g})", file=log)
+                return 2
+            last_t = t_new
+        for text in self.pop_alerts():
+            print(f"alert: {text}", file=log)
+        if self.error is not None:
+            print(_format_error(self.error), file=log)
+            return 1
+        if not self.playing:
+            print(f"stopped at {model.INDEPENDENT} = {model._ejs_time():g} (the simulation paused itself)", file=log)
+        return 0
+
+
+def _format_error(err: UserCodeError) -> str:
+    return f"{err.where}: error: {err.message}" if err.where else f"error: {err.message}"
+
+
+# -- CSV ---------------------------------------------------------------------------------------------
+
+
+def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tuple[str, Callable[[], Any]]]:
+    """The CSV columns: (header, getter). Arrays are spread as ``q[0]``, ``q[1]``, ...
+
+    With no ``names``, every numeric variable (numbers and numeric arrays; not booleans
+    or strings) in declaration order.
+    """
+    types = model.VARIABLES
+    if names is None:
+        names = [n for n, kind in types.items() if kind in ("float", "int", "array")]
+    else:
+        for n in names:
+            if n not in types:
+                import difflib
+
+                close = difflib.get_close_matches(n, list(types), n=1)
+                hint = f"; did you mean '{close[0]}'?" if close else ""
+                raise UserCodeError(f"--vars: unknown variable '{n}'{hint}")
+    columns: list[tuple[str, Callable[[], Any]]] = []
+    for n in names:
+        value = getattr(model, n)
+        if isinstance(value, np.ndarray):
+            if not np.issubdtype(value.dtype, np.number):
+                continue
+            for idx in np.ndindex(value.shape):
+                label = f"{n}[{']['.join(str(i) for i in idx)}]"
+                columns.append((label, (lambda n=n, idx=idx: getattr(model, n)[idx])))
+        elif isinstance(value, (bool, int, float, np.number)):
+            columns.append((n, (lambda n=n: getattr(model, n))))
+    return columns
+
+
+def _row(model: ModelBase, columns: list[tuple[str, Callable[[], Any]]]) -> list[str]:
+    out = []
+    for _, get in columns:
+        v = get()
+        if isinstance(v, (bool, np.bool_)):
+            out.append("1" if v else "0")
+        elif isinstance(v, (int, np.integer)):
+            out.append(str(int(v)))
+        else:
+            out.append(repr(float(v)))
+    return out
+
+
+# -- the command line ----------------------------------------------------------------------------------
+
+
+def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
+    """Parse ``NAME=VALUE`` for ``--set``: the value is a literal of the variable's type.
+
+    Raises ``ValueError`` with a message for the user. Nothing is evaluated: numbers,
+    booleans, strings and (nested) lists of numbers only.
+    """
+    if "=" not in text:
+        raise ValueError(f"--set takes NAME=VALUE, got {text!r}")
+    name, raw = (s.strip() for s in text.split("=", 1))
+    if name not in types:
+        import difflib
+
+        close = difflib.get_close_matches(name, list(types), n=1)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        raise ValueError(f"--set: unknown variable '{name}'{hint}")
+    kind = types[name]
+    if kind == "str":
+        try:
+            value = ast.literal_eval(raw)
+            if not isinstance(value, str):
+                value = raw
+        except (ValueError, SyntaxError):
+            value = raw
+        return name, value
+    if kind == "bool":
+        low = raw.lower()
+        if low in ("true", "1", "yes", "on"):
+            return name, True
+        if low in ("false", "0", "no", "off"):
+            return name, False
+        raise ValueError(f"--set {name}: expected true or false, got {raw!r}")
+    try:
+        value = ast.literal_eval(raw)
+    except (ValueError, SyntaxError):
+        raise ValueError(f"--set {name}: {raw!r} is not a number or a list of numbers") from None
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"--set {name}: expected an integer, got {raw!r}")
+        return name, value
+    if kind == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ValueError(f"--set {name}: expected a finite number, got {raw!r}")
+        return name, float(value)
+    if kind == "array":
+        try:
+            arr = np.array(value, dtype=float)
+        except (ValueError, TypeError):
+            raise ValueError(f"--set {name}: expected a list of numbers, got {raw!r}") from None
+        if arr.ndim == 0 or not np.all(np.isfinite(arr)):
+            raise ValueError(f"--set {name}: expected a list of finite numbers, got {raw!r}")
+        return name, arr
+    raise ValueError(f"--set {name}: this variable's type cannot be set from the command line")
+
+
+def _parser(title: str) -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(description=f"{title} (an ejsgen app). Serves the UI in the browser, or runs headless.")
+    p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this machine only)")
+    p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if taken)")
+    p.add_argument("--headless", action="store_true", help="run without a server")
+    p.add_argument("--duration", type=float, help="headless: how long to run, in units of the independent variable")
+    p.add_argument("--csv", metavar="FILE", help="headless: write variables to this CSV file ('-' for standard output)")
+    p.add_argument("--vars", metavar="a,b,q", help="headless: the variables to write (default: every numeric variable)")
+    p.add_argument("--every", type=int, default=1, metavar="N", help="headless: write a row every N steps (default 1)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="replace a variable's initial value (repeatable)")
+    return p
+
+
+def main(
+    model_cls: type[ModelBase],
+    view: list[Any],
+    *,
+    sim: SimConfig,
+    meta: AppMeta,
+    base_dir: Path | str,
+    argv: Sequence[str] | None = None,
+) -> int:
+    """The generated app's entry point; returns the process exit status."""
+    args = _parser(meta.title).parse_args(argv)
+    overrides: dict[str, Any] = {}
+    try:
+        for item in args.set:
+            name, value = parse_set(item, model_cls.VARIABLES)
+            overrides[name] = value
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if args.headless:
+        if args.duration is None or not math.isfinite(args.duration) or args.duration < 0:
+            print("error: --headless needs --duration T (a number >= 0)", file=sys.stderr)
+            return 2
+        if args.every < 1:
+            print("error: --every must be at least 1", file=sys.stderr)
+            return 2
+        app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
+        names = [n.strip() for n in args.vars.split(",") if n.strip()] if args.vars else None
+        try:
+            if args.csv is None:
+                return app.run_headless(args.duration, variables=names, every=args.every)
+            if args.csv == "-":
+                return app.run_headless(args.duration, csv_file=sys.stdout, variables=names, every=args.every)
+            with open(args.csv, "w", newline="") as fh:
+                return app.run_headless(args.duration, csv_file=fh, variables=names, every=args.every)
+        except UserCodeError as exc:
+            print(f"error: {exc.message}", file=sys.stderr)
+            return 2
+    if any(v is not None for v in (args.duration, args.csv, args.vars)):
+        print("error: --duration, --csv and --vars go with --headless", file=sys.stderr)
+        return 2
+    app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
+    app.serve(args.host, args.port)
+    return 0

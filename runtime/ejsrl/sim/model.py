@@ -1,0 +1,290 @@
+"""The base class of every generated ``Model`` and the evolution pages it runs.
+
+A generated app defines ``class Model(ModelBase)`` whose methods are the spec's code,
+rewritten: ``_declare`` (initial values), ``_init``, ``_fixed_relations``, the custom
+functions, and for each ODE page its state packing, rates and events. ``ModelBase``
+runs them in the order the language prescribes and gives the prelude's simulation
+controls (``play()``, ``pause()``, ``reset()``, ...) to user code, which calls them as
+methods of the model.
+"""
+
+from __future__ import annotations
+
+import sys
+import traceback
+from collections.abc import Callable, Sequence
+from types import TracebackType
+from typing import Any, ClassVar
+
+import numpy as np
+
+__all__ = ["ModelBase", "CodePage", "OdePage", "UserCodeError", "Controller", "locate_error"]
+
+
+class UserCodeError(Exception):
+    """An error raised by the spec's code, with its spec location.
+
+    ``message``: what went wrong, in words; ``where``: ``"file:line:col"`` in the spec
+    (empty if unknown).
+    """
+
+    def __init__(self, message: str, where: str = "") -> None:
+        super().__init__(f"{where}: {message}" if where else message)
+        self.message = message
+        self.where = where
+
+
+class Controller:
+    """What the prelude's simulation controls talk to (an app, or a headless run).
+
+    This default is used when a model runs on its own (in tests): play/pause only set a
+    flag, alerts are collected, reset and initialize run at once.
+    """
+
+    def __init__(self) -> None:
+        self.playing = False
+        self.alerts: list[str] = []
+        self.model: ModelBase | None = None
+
+    def play(self) -> None:
+        self.playing = True
+
+    def pause(self) -> None:
+        self.playing = False
+
+    def is_playing(self) -> bool:
+        return self.playing
+
+    def step_once(self) -> None:
+        if self.model is not None:
+            self.model._ejs_step()
+
+    def request_reset(self) -> None:
+        if self.model is not None:
+            self.model._ejs_reset()
+
+    def request_initialize(self) -> None:
+        if self.model is not None:
+            self.model._ejs_initialize()
+
+    def alert(self, text: str) -> None:
+        self.alerts.append(text)
+
+    def capture(self, name: str) -> np.ndarray:
+        raise RuntimeError("capture() needs a scene; this model runs without one")
+
+    @property
+    def world(self) -> Any:
+        raise RuntimeError("this model runs without a scene")
+
+
+class CodePage:
+    """An evolution page of plain code: ``fn()`` runs once per step."""
+
+    def __init__(self, name: str, fn: Callable[[], None], enabled: bool = True) -> None:
+        self.name = name
+        self.fn = fn
+        self.enabled = enabled
+
+    def run(self) -> bool:
+        if self.enabled:
+            self.fn()
+        return False
+
+    def restart(self) -> None:
+        """Nothing to forget."""
+
+
+class OdePage:
+    """An evolution page of ODEs, advanced by ``step()`` of its independent variable.
+
+    ``state()`` -> ``(t, y)`` reads the independent variable and the packed state (1-D
+    float64); ``load(t, y)`` writes them back into the model; ``rates(t, y)`` gives dy/dt
+    (it loads the state and runs the preliminary code first); ``events`` are
+    ``ejsrl.sim.ode.EventDef``. ``names`` are the state variables, for messages.
+    """
+
+    def __init__(
+        self,
+        name: str,
+        *,
+        method: str,
+        step: Callable[[], float],
+        state: Callable[[], tuple[float, np.ndarray]],
+        load: Callable[[float, np.ndarray], None],
+        rates: Callable[[float, np.ndarray], np.ndarray],
+        names: Sequence[str],
+        events: Sequence[Any] = (),
+        tolerance: float = 1e-6,
+        max_step: float | None = None,
+        enabled: bool = True,
+    ) -> None:
+        from ejsrl.sim.ode import OdeIntegrator
+
+        self.name = name
+        self.method = method
+        self.step_fn = step
+        self.state = state
+        self.load = load
+        self.names = tuple(names)
+        self.enabled = enabled
+        self.integrator = OdeIntegrator(rates, method, tolerance=tolerance, max_step=max_step, events=events)
+        self.fired: list[tuple[str, float]] = []
+
+    def run(self) -> bool:
+        """Advance one step; True if an event asked the simulation to stop."""
+        if not self.enabled:
+            return False
+        h = float(self.step_fn())
+        t, y = self.state()
+        result = self.integrator.step(t, y, h)
+        y_new = result.y
+        if not np.all(np.isfinite(y_new)):
+            bad = int(np.flatnonzero(~np.isfinite(y_new))[0])
+            raise FloatingPointError(f"the state became non-finite (element {bad} of {', '.join(self.names)}) near t = {result.t:.6g}")
+        self.load(result.t, y_new.copy())
+        self.fired = result.fired
+        return bool(result.stop)
+
+    def restart(self) -> None:
+        """Forget step-size memory and implicit-solver state (the state was changed from outside)."""
+        self.integrator.reset()
+
+
+def locate_error(exc: BaseException, model_cls: type, tb: TracebackType | None = None) -> str:
+    """The spec location ``file:line:col`` of the deepest frame of ``exc`` in the app's code."""
+    module = sys.modules.get(model_cls.__module__)
+    app_file = getattr(module, "__file__", None)
+    lines: dict[int, tuple[int, int]] = getattr(model_cls, "SPEC_LINES", {})
+    spec = getattr(model_cls, "SPEC", "")
+    where = ""
+    for frame, lineno in traceback.walk_tb(tb or exc.__traceback__):
+        if app_file is not None and frame.f_code.co_filename == app_file and lineno in lines:
+            line, col = lines[lineno]
+            where = f"{spec}:{line}:{col}"
+    return where
+
+
+def describe_error(exc: BaseException, model_cls: type) -> UserCodeError:
+    """Turn any exception from user code into a ``UserCodeError`` with its spec location."""
+    if isinstance(exc, UserCodeError):
+        return exc
+    where = locate_error(exc, model_cls)
+    text = str(exc)
+    message = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return UserCodeError(message, where)
+
+
+class ModelBase:
+    """Base of generated models.
+
+    Class attributes set by the generated code:
+    ``SPEC`` (the spec's file name), ``SPEC_LINES`` (app.py line -> (spec line, column)),
+    ``VARIABLES`` (name -> value type: ``float``, ``int``, ``bool``, ``str``, ``array``,
+    ``object``), ``INDEPENDENT`` (the independent variable of the first ODE page, or
+    ``"t"`` if declared, else None).
+    """
+
+    SPEC: ClassVar[str] = ""
+    SPEC_LINES: ClassVar[dict[int, tuple[int, int]]] = {}
+    VARIABLES: ClassVar[dict[str, str]] = {}
+    INDEPENDENT: ClassVar[str | None] = None
+
+    def __init__(
+        self, controller: Controller | None = None, overrides: dict[str, Any] | None = None, *, start: bool = True
+    ) -> None:
+        self._ejs_ctl = controller if controller is not None else Controller()
+        if getattr(self._ejs_ctl, "model", None) is None:
+            self._ejs_ctl.model = self
+        self._ejs_overrides = dict(overrides or {})
+        self._ejs_pages: list[Any] = []
+        if start:
+            self._ejs_reset()
+
+    # -- generated parts (overridden) ----------------------------------------------------
+    def _declare(self) -> None:
+        """Give every variable its initial value, in declaration order."""
+
+    def _init(self) -> None:
+        """The spec's ``init`` code."""
+
+    def _fixed_relations(self) -> None:
+        """The spec's ``fixed_relations`` code."""
+
+    def _evolution(self) -> list[Any]:
+        """The evolution pages (``CodePage`` / ``OdePage``), freshly built."""
+        return []
+
+    # -- lifecycle ------------------------------------------------------------------------
+    def _ejs_reset(self) -> None:
+        """Initial values, ``--set`` overrides, fresh solvers, ``init``, fixed relations."""
+        self._declare()
+        for name, value in self._ejs_overrides.items():
+            setattr(self, name, value)
+        self._ejs_pages = self._evolution()
+        self._init()
+        self._fixed_relations()
+
+    def _ejs_initialize(self) -> None:
+        """Run ``init`` and the fixed relations again on the current values."""
+        self._init()
+        self._fixed_relations()
+        self._ejs_restart_solvers()
+
+    def _ejs_step(self) -> bool:
+        """One simulation step: every page in order, then the fixed relations.
+
+        Returns True if an event with ``stop: true`` fired.
+        """
+        stop = False
+        for page in self._ejs_pages:
+            stop = page.run() or stop
+        self._fixed_relations()
+        return stop
+
+    def _ejs_restart_solvers(self) -> None:
+        for page in self._ejs_pages:
+            page.restart()
+
+    def _ejs_time(self) -> float | None:
+        """The current value of the independent variable (None if the model has none)."""
+        if self.INDEPENDENT is None:
+            return None
+        return float(getattr(self, self.INDEPENDENT))
+
+    def _ejs_values(self) -> dict[str, Any]:
+        """Every variable's current value (for CSV output and tests)."""
+        return {name: getattr(self, name) for name in self.VARIABLES}
+
+    # -- the prelude's simulation controls -------------------------------------------------
+    def play(self) -> None:
+        """Start (or go on with) the simulation."""
+        self._ejs_ctl.play()
+
+    def pause(self) -> None:
+        """Pause the simulation."""
+        self._ejs_ctl.pause()
+
+    def step(self) -> None:
+        """Run one simulation step."""
+        self._ejs_ctl.step_once()
+
+    def reset(self) -> None:
+        """Return every variable to its initial value and run ``init`` (after the current action)."""
+        self._ejs_ctl.request_reset()
+
+    def initialize(self) -> None:
+        """Run ``init`` and the fixed relations again on the current values."""
+        self._ejs_ctl.request_initialize()
+
+    def is_playing(self) -> bool:
+        """True while the simulation runs."""
+        return bool(self._ejs_ctl.is_playing())
+
+    def alert(self, text: Any) -> None:
+        """Show a message in the UI (printed in headless runs)."""
+        self._ejs_ctl.alert(str(text))
+
+    def capture(self, name: str) -> np.ndarray:
+        """The current RGB image (H, W, 3) uint8 seen by the virtual camera ``name``."""
+        return self._ejs_ctl.capture(name)

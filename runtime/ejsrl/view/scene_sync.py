@@ -1,0 +1,175 @@
+"""Keep the runtime's ``World`` in step with the model, from the view's ``Scene`` description.
+
+``SceneSync`` builds one world node per ``Node3D`` element, then on every frame evaluates
+each element's dynamic properties against the model and writes them into its node
+(nodes count their own changes, so the browser view can send only what changed). It runs
+with or without a browser, so ``capture()`` sees the same world in headless runs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ejsrl.robotics.transforms import rpy2r
+from ejsrl.view.elements import Dynamic, Folder, Node3D, Scene, Tabs, is_dynamic
+from ejsrl.world.scene import NODE_KINDS, Node, Trail, World
+
+__all__ = ["SceneSync", "pose_from", "scene_elements"]
+
+Evaluate = Callable[[Any, str], Any]
+
+
+def pose_from(position: Any, rotation: Any, transform: Any) -> np.ndarray:
+    """A (4, 4) pose from a ``transform`` or from ``position`` (3,) and ``rotation`` (roll, pitch, yaw)."""
+    if transform is not None:
+        T = np.asarray(transform, dtype=float)
+        if T.shape != (4, 4):
+            raise ValueError(f"a transform must be a 4x4 matrix, got shape {T.shape}")
+        return T
+    T = np.eye(4)
+    if position is not None:
+        p = np.asarray(position, dtype=float).reshape(-1)
+        if p.shape != (3,):
+            raise ValueError(f"a position needs 3 numbers, got {p.size}")
+        T[:3, 3] = p
+    if rotation is not None:
+        r = np.asarray(rotation, dtype=float).reshape(-1)
+        if r.shape != (3,):
+            raise ValueError(f"a rotation needs 3 angles (roll, pitch, yaw), got {r.size}")
+        T[:3, :3] = rpy2r(r)
+    return T
+
+
+def scene_elements(view: list[Any]) -> list[Node3D]:
+    """The top-level 3D elements of every ``Scene`` in a view (inside folders and tabs too)."""
+    out: list[Node3D] = []
+    for element in view:
+        if isinstance(element, Scene):
+            out.extend(element.children)
+        elif isinstance(element, Folder):
+            out.extend(scene_elements(element.children))
+        elif isinstance(element, Tabs):
+            for _, children in element.tabs:
+                out.extend(scene_elements(children))
+    return out
+
+
+class _Binding:
+    """One element and its node, with the lists of constant and dynamic properties."""
+
+    __slots__ = ("element", "node", "dynamic_props", "dynamic_pose", "dynamic_common", "trail_point")
+
+    def __init__(self, element: Node3D, node: Node) -> None:
+        self.element = element
+        self.node = node
+        props = dict(element.props)
+        self.trail_point = props.pop("point", None) if element.kind == "trail" else None
+        self.dynamic_props = {k: v for k, v in props.items() if is_dynamic(v)}
+        self.dynamic_pose = any(is_dynamic(p) for p in (element.position, element.rotation, element.transform))
+        self.dynamic_common = {
+            k: v for k, v in (("visible", element.visible), ("color", element.color), ("opacity", element.opacity)) if is_dynamic(v)
+        }
+
+
+class SceneSync:
+    """Builds the world from the scene elements and refreshes it from the model.
+
+    ``base_dir`` resolves mesh files; ``node_factories`` may add node kinds (robots).
+    """
+
+    def __init__(self, elements: list[Node3D], *, base_dir: Path | str = ".", world: World | None = None) -> None:
+        self.world = world if world is not None else World()
+        self.base_dir = Path(base_dir)
+        self.bindings: list[_Binding] = []
+        for element in elements:
+            self._build(element, None)
+
+    # -- building ---------------------------------------------------------------------------
+    def _build(self, element: Node3D, parent: Node | None) -> None:
+        node = self._make_node(element)
+        self.world.add(node, parent)
+        self.bindings.append(_Binding(element, node))
+        for child in element.children:
+            self._build(child, node)
+
+    def _make_node(self, element: Node3D) -> Node:
+        kind = element.kind
+        common: dict[str, Any] = {"graspable": bool(element.graspable)}
+        for key in ("visible", "color", "opacity"):
+            value = getattr(element, key)
+            if value is not None and not is_dynamic(value):
+                common[key] = value
+        if kind == "robot":
+            from ejsrl.view._robot_node import RobotNode
+
+            return RobotNode(element.name, **common)
+        if kind == "mesh":
+            from ejsrl.world.mesh import load_mesh
+
+            file = element.props.get("file", "")
+            parts = load_mesh(self.base_dir / str(file))
+            scale = element.props.get("scale", 1.0)
+            return NODE_KINDS["mesh"](element.name, mesh_parts=tuple(parts), scale=1.0 if is_dynamic(scale) else scale, file=str(file), **common)
+        cls = NODE_KINDS.get(kind)
+        if cls is None:
+            raise ValueError(f"unknown 3D element kind {kind!r}")
+        own = {k: v for k, v in element.props.items() if k in cls.DEFAULTS and not is_dynamic(v)}
+        if kind == "trail":
+            own.pop("points", None)
+        return cls(element.name, **own, **common)
+
+    # -- every frame ----------------------------------------------------------------------------
+    def reset(self) -> None:
+        """Clear what accumulates over time (trails)."""
+        for b in self.bindings:
+            if isinstance(b.node, Trail):
+                b.node.clear()
+
+    def update(self, model: Any, evaluate: Evaluate | None = None, *, first: bool = False) -> None:
+        """Evaluate every dynamic property against ``model`` and write it into the world.
+
+        ``evaluate(prop, where)`` reads a property under the app's error guard (it returns
+        None after an error, and the property is then left as it was); ``first`` also
+        applies constant poses (done once).
+        """
+        ev = evaluate or (lambda prop, where: prop(model) if isinstance(prop, Dynamic) else prop)
+        for b in self.bindings:
+            e = b.element
+            values: dict[str, Any] = {}
+            for key, prop in b.dynamic_props.items():
+                v = ev(prop, e.where)
+                if v is not None:
+                    values[key] = v
+            for key, prop in b.dynamic_common.items():
+                v = ev(prop, e.where)
+                if v is not None:
+                    values[key] = v
+            if b.dynamic_pose or first:
+                parts = [ev(p, e.where) if is_dynamic(p) else p for p in (e.position, e.rotation, e.transform)]
+                if not any(is_dynamic(p) and v is None for p, v in zip((e.position, e.rotation, e.transform), parts)):
+                    try:
+                        values["T_parent_local"] = pose_from(*parts)
+                    except ValueError as exc:
+                        ev(Dynamic(_raiser(exc), ""), e.where)
+            if "scale" in values and b.node.kind == "mesh":
+                values["scale"] = float(np.asarray(values["scale"], dtype=float).reshape(-1)[0]) if np.ndim(values["scale"]) else values["scale"]
+            if values:
+                try:
+                    b.node.set(**values)
+                except (ValueError, TypeError) as exc:
+                    ev(Dynamic(_raiser(exc), ""), e.where)
+            if b.trail_point is not None:
+                p = ev(b.trail_point, e.where) if is_dynamic(b.trail_point) else b.trail_point
+                if p is not None:
+                    b.node.push(p)  # type: ignore[attr-defined]
+
+
+def _raiser(exc: Exception) -> Callable[[Any], Any]:
+    def fn(_model: Any) -> Any:
+        raise exc
+
+    return fn
