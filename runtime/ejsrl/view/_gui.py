@@ -1,0 +1,391 @@
+"""The control panel: builds viser GUI handles from the view's elements and refreshes them.
+
+:class:`Panel` walks the element list once (folders, tabs, markdown, labels, controls,
+buttons, plots, images) and keeps one small binding per dynamic element. Each frame
+:meth:`Panel.refresh` reads the model (the caller holds the model lock) and sends only
+the values that changed. Values coming back from the browser are validated by
+:func:`ejsrl.view._validate.validate_control` before the app applies them.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ejsrl.view._plots import ImageBinding, PlotBinding
+from ejsrl.view._validate import option_label, validate_control
+from ejsrl.view.elements import (
+    Button,
+    Checkbox,
+    Control,
+    Dropdown,
+    Dynamic,
+    Folder,
+    Image,
+    Label,
+    Markdown,
+    Number,
+    Plot,
+    Scene,
+    Slider,
+    Tabs,
+    Text,
+)
+
+__all__ = ["Panel", "ControlBinding", "USER_HOLD_SECONDS"]
+
+log = logging.getLogger("ejsrl.view")
+
+#: after the user changes a control, the model's value is not pushed back to it for this long
+USER_HOLD_SECONDS = 0.6
+
+Notify = Callable[[Any, str, str, str], None]
+
+
+def _finite(x: Any) -> bool:
+    try:
+        return math.isfinite(float(x))
+    except (TypeError, ValueError):
+        return False
+
+
+class ControlBinding:
+    """One control and its viser handle.
+
+    ``display(value)`` turns a model value into what the handle shows (or None to leave it);
+    ``user_time`` is when the user last changed it (monotonic seconds).
+    """
+
+    def __init__(self, control: Control, handle: Any, display: Callable[[Any], Any]) -> None:
+        self.control = control
+        self.handle = handle
+        self.display = display
+        self.getter = Dynamic(control.get, control.bind)
+        self.user_time = -math.inf
+        self.lock = threading.Lock()
+
+
+def _display_fn(control: Control) -> Callable[[Any], Any]:
+    """How a model value is shown by the control's handle (None: cannot show it)."""
+    if isinstance(control, Dropdown):
+        options = list(control.options)
+
+        def show_option(v: Any) -> Any:
+            for opt in options:
+                try:
+                    if type(opt) is type(v) and opt == v:
+                        return option_label(opt)
+                except Exception:
+                    continue
+            for opt in options:  # 2 == 2.0, numpy scalars
+                try:
+                    if not isinstance(opt, str) and not isinstance(v, str) and bool(opt == v):
+                        return option_label(opt)
+                except Exception:
+                    continue
+            return None
+
+        return show_option
+    if isinstance(control, Checkbox) or control.vtype == "bool":
+        return lambda v: None if v is None else bool(v)
+    if isinstance(control, Text) or control.vtype == "str":
+        return lambda v: None if v is None else str(v)
+
+    lo = getattr(control, "min", None)
+    hi = getattr(control, "max", None)
+    is_int = control.vtype == "int"
+
+    def show_number(v: Any) -> Any:
+        if isinstance(v, (bool, np.bool_)) or not _finite(v):
+            return None
+        x = float(v)
+        if lo is not None:
+            x = max(x, float(lo))
+        if hi is not None:
+            x = min(x, float(hi))
+        return int(round(x)) if is_int else x
+
+    return show_number
+
+
+class Panel:
+    """The GUI of one app: control bar, error box, about, and the view's elements.
+
+    ``app``: the running app (see :mod:`ejsrl.view.viser_view`); ``gui``: ``server.gui``;
+    ``notify(client or None, title, body, color)`` shows a notification (None: everyone).
+    """
+
+    def __init__(self, app: Any, gui: Any, notify: Notify) -> None:
+        self.app = app
+        self.gui = gui
+        self.notify = notify
+        self.controls: list[ControlBinding] = []
+        self.labels: list[tuple[Label, Any]] = []
+        self.plots: list[PlotBinding] = []
+        self.images: list[ImageBinding] = []
+        self.buttons: dict[str, Any] = {}
+        self.handles_by_label: dict[str, Any] = {}
+        self._error_rev_shown: int | None = None
+        self._playing_shown: bool | None = None
+        self._readout_shown: str | None = None
+        self.play_button: Any = None
+        self.step_button: Any = None
+        self.reset_button: Any = None
+        self.readout: Any = None
+        self._x_label = getattr(getattr(app, "sim", None), "independent", None) or "t"
+        self._build()
+
+    # -- building ---------------------------------------------------------------------------
+    def _build(self) -> None:
+        app, gui = self.app, self.gui
+        meta = getattr(app, "meta", None)
+        title = getattr(meta, "title", "") or "ejsgen simulation"
+        gui.set_panel_label(title)
+        self.error_box = gui.add_html("", visible=False)
+        if getattr(getattr(app, "sim", None), "controls", True):
+            self._build_controls_bar()
+        description = getattr(meta, "description", "") or ""
+        author = getattr(meta, "author", "") or ""
+        if description or author:
+            with gui.add_folder("About", expand_by_default=False):
+                text = description
+                if author:
+                    text += f"\n\n*Author: {author}*"
+                gui.add_markdown(text)
+        self._build_elements(list(getattr(app, "view", []) or []))
+
+    def _build_controls_bar(self) -> None:
+        gui, app = self.gui, self.app
+        playing = bool(app.is_playing())
+        self.play_button = gui.add_button("Pause" if playing else "Play", icon=None, color="green")
+        self.step_button = gui.add_button("Step")
+        self.reset_button = gui.add_button("Reset")
+        self._playing_shown = playing
+        self.readout = gui.add_markdown("")
+
+        @self.play_button.on_click
+        def _(_e: Any) -> None:
+            if app.is_playing():
+                app.pause()
+            else:
+                app.play()
+            self._show_playing()
+
+        @self.step_button.on_click
+        def _(_e: Any) -> None:
+            app.step_once()
+
+        @self.reset_button.on_click
+        def _(_e: Any) -> None:
+            app.reset()
+
+    def _build_elements(self, elements: list[Any]) -> None:
+        gui = self.gui
+        for el in elements:
+            try:
+                if isinstance(el, Folder):
+                    with gui.add_folder(el.label, expand_by_default=el.expanded):
+                        self._build_elements(el.children)
+                elif isinstance(el, Tabs):
+                    group = gui.add_tab_group()
+                    for label, children in el.tabs:
+                        with group.add_tab(label):
+                            self._build_elements(children)
+                elif isinstance(el, Markdown):
+                    gui.add_markdown(el.text)
+                elif isinstance(el, Label):
+                    handle = gui.add_markdown("")
+                    self.labels.append((el, handle))
+                elif isinstance(el, Control):
+                    self._build_control(el)
+                elif isinstance(el, Button):
+                    self._build_button(el)
+                elif isinstance(el, Plot):
+                    self.plots.append(PlotBinding(gui, el, x_label=self._x_label))
+                elif isinstance(el, Image):
+                    self.images.append(ImageBinding(gui, el))
+                elif isinstance(el, Scene):
+                    pass  # mirrored from the world by the scene mirror
+                else:
+                    log.warning("ejsrl.view: no GUI for %r", type(el).__name__)
+            except Exception as exc:  # a bad element must not take the whole panel down
+                log.exception("ejsrl.view: could not build %s at %s", type(el).__name__, el.where)
+                gui.add_markdown(f"*Could not show {type(el).__name__} ({el.where}): {exc}*")
+
+    def _initial(self, control: Control) -> Any:
+        with self.app.lock:
+            value = self.app.safe_value(Dynamic(control.get, control.bind), control.where)
+        return _display_fn(control)(value)
+
+    def _build_control(self, c: Control) -> None:
+        gui = self.gui
+        label = c.label or c.bind
+        shown = self._initial(c)
+        hint = f"{c.bind}" if c.label and c.label != c.bind else None
+        if isinstance(c, Slider):
+            is_int = c.vtype == "int"
+            lo, hi = float(c.min), float(c.max)
+            step = c.step if c.step else (1 if is_int else (hi - lo) / 100 if hi > lo else 0.01)
+            if is_int:
+                lo_i, hi_i, step_i = int(math.ceil(lo)), int(math.floor(hi)), max(1, int(round(step)))
+                init = lo_i if shown is None else int(min(max(shown, lo_i), hi_i))
+                handle = gui.add_slider(label, min=lo_i, max=hi_i, step=step_i, initial_value=init, hint=hint)
+            else:
+                init = lo if shown is None else float(shown)
+                handle = gui.add_slider(label, min=lo, max=hi, step=float(step), initial_value=init, hint=hint)
+        elif isinstance(c, Number) or (not isinstance(c, (Checkbox, Text, Dropdown)) and c.vtype in ("float", "int")):
+            lo = getattr(c, "min", None)
+            hi = getattr(c, "max", None)
+            step = getattr(c, "step", None)
+            if c.vtype == "int":
+                init = 0 if shown is None else int(shown)
+                if lo is not None and init < lo:
+                    init = int(math.ceil(lo))
+                handle = gui.add_number(label, init, min=lo, max=hi, step=step or 1, hint=hint)
+            else:
+                init = 0.0 if shown is None else float(shown)
+                if lo is not None and init < lo:
+                    init = float(lo)
+                if hi is not None and init > hi:
+                    init = float(hi)
+                handle = gui.add_number(label, init, min=lo, max=hi, step=step, hint=hint)
+        elif isinstance(c, Checkbox) or c.vtype == "bool":
+            handle = gui.add_checkbox(label, bool(shown) if shown is not None else False, hint=hint)
+        elif isinstance(c, Dropdown):
+            options = [option_label(o) for o in c.options] or ["(none)"]
+            handle = gui.add_dropdown(label, options, initial_value=shown if shown in options else options[0], hint=hint)
+        else:
+            handle = gui.add_text(label, "" if shown is None else str(shown), hint=hint)
+        binding = ControlBinding(c, handle, _display_fn(c))
+        self.controls.append(binding)
+        self.handles_by_label[label] = handle
+        handle.on_update(lambda event, b=binding: self._on_user_change(b, event))
+
+    def _build_button(self, b: Button) -> None:
+        handle = self.gui.add_button(b.label)
+        self.buttons[b.label] = handle
+
+        @handle.on_click
+        def _(_e: Any) -> None:
+            self.app.run_action(b)
+
+    # -- values from the browser -----------------------------------------------------------------
+    def _on_user_change(self, b: ControlBinding, event: Any) -> None:
+        """A control changed; only changes made by a client are applied to the model."""
+        if getattr(event, "client", None) is None:
+            return  # our own refresh assigned the handle
+        with b.lock:
+            b.user_time = time.monotonic()
+            raw = b.handle.value
+            checked = validate_control(b.control, raw)
+            if not checked.ok:
+                self.notify(event.client, "Value refused", checked.message, "red")
+                with self.app.lock:
+                    current = b.display(self.app.safe_value(b.getter, b.control.where))
+                b.user_time = -math.inf
+                if current is not None:
+                    b.handle.value = current
+                return
+            self.app.apply_control(b.control, checked.value)
+            shown = b.display(checked.value)
+            if shown is not None and shown != raw:
+                b.handle.value = shown  # show the clamped / rounded value
+
+    def set_from_client(self, b: ControlBinding, raw: Any, client: Any = object()) -> None:
+        """Apply ``raw`` as if a browser had sent it (used by tests and scripted input)."""
+        b.handle._impl.value = raw  # what viser stores before calling on_update
+
+        class _Event:
+            pass
+
+        e = _Event()
+        e.client = client  # type: ignore[attr-defined]
+        self._on_user_change(b, e)
+
+    # -- every frame --------------------------------------------------------------------------
+    def refresh(self) -> None:
+        """Push the model's current values (caller holds ``app.lock``)."""
+        app = self.app
+        self._show_error()
+        self._show_playing()
+        self._show_readout()
+        now = time.monotonic()
+        for label, handle in self.labels:
+            text = app.safe_value(label.text, label.where)
+            if text is not None:
+                handle.content = str(text)
+        for b in self.controls:
+            if now - b.user_time < USER_HOLD_SECONDS:
+                continue
+            shown = b.display(app.safe_value(b.getter, b.control.where))
+            if shown is not None:
+                b.handle.value = shown  # viser sends nothing when unchanged
+        playing = bool(app.is_playing())
+        for p in self.plots:
+            x = app.safe_value(p.plot.x, p.plot.where)
+            ys = [app.safe_value(s.y, s.where or p.plot.where) for s in p.plot.series]
+            if x is not None and all(y is not None for y in ys):
+                p.append(x, ys)
+            p.push(force=not playing)
+        for im in self.images:
+            src = app.safe_value(im.image.source, im.image.where)
+            pts = app.safe_value(im.image.points, im.image.where) if im.image.points is not None else None
+            im.update(src, pts)
+
+    def on_reset(self) -> None:
+        """Forget plot data and cached images."""
+        for p in self.plots:
+            p.clear()
+        for im in self.images:
+            im.clear()
+        for b in self.controls:
+            b.user_time = -math.inf
+
+    def _show_playing(self) -> None:
+        if self.play_button is None:
+            return
+        playing = bool(self.app.is_playing())
+        if playing != self._playing_shown:
+            self.play_button.label = "Pause" if playing else "Play"
+            self.play_button.color = "orange" if playing else "green"
+            self._playing_shown = playing
+
+    def _show_readout(self) -> None:
+        if self.readout is None:
+            return
+        value = getattr(getattr(self.app, "model", None), self._x_label, None)
+        if value is None or not _finite(value):
+            return
+        text = f"**{self._x_label}** = {float(value):.4g}"
+        if text != self._readout_shown:
+            self.readout.content = text
+            self._readout_shown = text
+
+    def _show_error(self) -> None:
+        rev = getattr(self.app, "error_rev", 0)
+        if rev == self._error_rev_shown:
+            return
+        self._error_rev_shown = rev
+        err = getattr(self.app, "error", None)
+        if err is None:
+            self.error_box.visible = False
+            return
+        import html
+
+        where = getattr(err, "where", "") or ""
+        message = str(getattr(err, "message", err))
+        head = f"⚠ Error at {where}" if where else "⚠ Error"
+        self.error_box.content = (
+            '<div style="background:#fde8e8;border:1px solid #e03131;color:#c92a2a;'
+            'border-radius:6px;padding:8px 10px;font-size:0.9em;white-space:pre-wrap;word-break:break-word">'
+            f"<b>{html.escape(head)}</b><br>{html.escape(message)}"
+            "<br><i>The simulation is paused; press Reset to start again.</i></div>"
+        )
+        self.error_box.visible = True
+        self.notify(None, head, message, "red")

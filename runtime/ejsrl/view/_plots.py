@@ -1,0 +1,221 @@
+"""Plots (uPlot) and images in the control panel.
+
+A :class:`PlotBuffer` keeps the points of one ``Plot`` (one per display frame), trims them
+to the plot's ``window`` (x-span) and ``max_points``; :class:`PlotBinding` pushes them to
+a viser uPlot chart at most ``max_rate`` times a second. :class:`ImageBinding` sends an
+image only when its pixels or its overlay points changed.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from ejsrl.view.elements import Image, Plot
+from ejsrl.world.colors import to_rgb
+
+__all__ = ["PlotBuffer", "PlotBinding", "ImageBinding", "prepare_image", "PALETTE"]
+
+#: colours of series that name none (matplotlib's tab10)
+PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf")
+
+
+def _css(color: Any, i: int) -> str:
+    if color is None:
+        return PALETTE[i % len(PALETTE)]
+    try:
+        r, g, b = (int(round(255 * c)) for c in to_rgb(color))
+    except Exception:
+        return PALETTE[i % len(PALETTE)]
+    return f"rgb({r}, {g}, {b})"
+
+
+class PlotBuffer:
+    """The points of one plot: x (n,) and one y (n,) per series, trimmed to window and max_points."""
+
+    def __init__(self, n_series: int, *, window: float | None = None, max_points: int = 2000) -> None:
+        self.n_series = n_series
+        self.window = window
+        self.max_points = max(2, int(max_points))
+        cap = self.max_points * 2
+        self._x = np.empty(cap)
+        self._y = np.empty((n_series, cap))
+        self._start = 0
+        self._end = 0
+        self.rev = 0
+
+    def __len__(self) -> int:
+        return self._end - self._start
+
+    def clear(self) -> None:
+        """Forget every point."""
+        self._start = self._end = 0
+        self.rev += 1
+
+    def append(self, x: float, ys: list[float]) -> bool:
+        """Add one point; returns False (and adds nothing) if any value is not finite."""
+        if not np.isfinite(x) or not all(np.isfinite(y) for y in ys):
+            return False
+        if len(self) and x < self._x[self._end - 1]:
+            # the independent variable went back (a reset, or the user set it): start over
+            self.clear()
+        if self._end == len(self._x):
+            n = len(self)
+            self._x[:n] = self._x[self._start : self._end]
+            self._y[:, :n] = self._y[:, self._start : self._end]
+            self._start, self._end = 0, n
+        self._x[self._end] = x
+        self._y[:, self._end] = ys
+        self._end += 1
+        if len(self) > self.max_points:
+            self._start = self._end - self.max_points
+        if self.window is not None:
+            lo = x - self.window
+            xs = self._x[self._start : self._end]
+            self._start += int(np.searchsorted(xs, lo, side="left"))
+        self.rev += 1
+        return True
+
+    def data(self) -> tuple[np.ndarray, ...]:
+        """``(x, y_0, y_1, ...)`` as fresh float64 arrays."""
+        s, e = self._start, self._end
+        return (self._x[s:e].copy(), *(self._y[i, s:e].copy() for i in range(self.n_series)))
+
+
+class PlotBinding:
+    """One ``Plot`` element shown as a viser uPlot chart."""
+
+    def __init__(self, gui: Any, plot: Plot, *, x_label: str = "", max_rate: float = 15.0) -> None:
+        self.plot = plot
+        self.buffer = PlotBuffer(len(plot.series), window=plot.window, max_points=plot.max_points)
+        self.max_rate = max_rate
+        self._sent_rev = -1
+        self._last_push = 0.0
+        series = [{"label": x_label or "x"}]
+        for i, s in enumerate(plot.series):
+            series.append({"label": s.label or f"y{i + 1}", "stroke": _css(s.color, i), "width": 2})
+        scales: dict[str, Any] = {"x": {"time": False, "auto": True}}
+        if plot.y_range is not None:
+            lo, hi = (float(v) for v in plot.y_range)
+            scales["y"] = {"auto": False, "range": [lo, hi]}
+        else:
+            scales["y"] = {"auto": True}
+        empty = np.zeros(0)
+        self.handle = gui.add_uplot(
+            data=(empty, *(empty for _ in plot.series)),
+            series=tuple(series),
+            title=plot.title or None,
+            scales=scales,
+            aspect=1.6,
+        )
+
+    def append(self, x: Any, ys: list[Any]) -> None:
+        """Record this frame's point (None or non-numeric values skip the frame)."""
+        try:
+            xf = float(x)
+            yf = [float(y) for y in ys]
+        except (TypeError, ValueError):
+            return
+        self.buffer.append(xf, yf)
+
+    def push(self, *, force: bool = False) -> bool:
+        """Send the data if it changed and the rate allows; returns True if sent."""
+        if self.buffer.rev == self._sent_rev:
+            return False
+        now = time.monotonic()
+        if not force and now - self._last_push < 1.0 / self.max_rate:
+            return False
+        self.handle.data = self.buffer.data()
+        self._sent_rev = self.buffer.rev
+        self._last_push = now
+        return True
+
+    def clear(self) -> None:
+        """Forget the data (on reset) and show the empty plot."""
+        self.buffer.clear()
+        self.push(force=True)
+
+
+def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
+    """An (H, W, 3) uint8 image ready for viser, with ``points`` (N, 2) (x, y) drawn over it.
+
+    Returns None if ``img`` is not an image.
+    """
+    if img is None:
+        return None
+    a = np.asarray(img)
+    if a.ndim == 2:
+        a = np.repeat(a[:, :, None], 3, axis=2)
+    elif a.ndim == 3 and a.shape[2] == 1:
+        a = np.repeat(a, 3, axis=2)
+    elif a.ndim == 3 and a.shape[2] == 4:
+        a = a[:, :, :3]
+    if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
+        return None
+    if a.dtype != np.uint8:
+        if np.issubdtype(a.dtype, np.floating) and a.size and float(np.nanmax(a)) <= 1.0:
+            a = np.clip(np.nan_to_num(a) * 255.0, 0, 255).astype(np.uint8)
+        else:
+            a = np.clip(np.nan_to_num(a.astype(np.float64)), 0, 255).astype(np.uint8)
+    a = np.ascontiguousarray(a)
+    if points is not None:
+        pts = np.asarray(points, dtype=float).reshape(-1, 2)
+        if len(pts):
+            import cv2
+
+            a = a.copy()
+            h, w = a.shape[:2]
+            r = max(2, int(round(min(h, w) / 80)))
+            for x, y in pts:
+                if np.isfinite(x) and np.isfinite(y) and -w < x < 2 * w and -h < y < 2 * h:
+                    c = (int(round(x)), int(round(y)))
+                    cv2.circle(a, c, r + 1, (0, 0, 0), 2, lineType=cv2.LINE_AA)
+                    cv2.circle(a, c, r, (255, 40, 40), 2, lineType=cv2.LINE_AA)
+    return a
+
+
+class ImageBinding:
+    """One ``Image`` element: sends the picture only when the source or the points changed."""
+
+    def __init__(self, gui: Any, image: Image, *, max_rate: float = 20.0) -> None:
+        self.image = image
+        self.max_rate = max_rate
+        self._last_src: np.ndarray | None = None
+        self._last_pts: np.ndarray | None = None
+        self._last_push = 0.0
+        self.pushes = 0
+        placeholder = np.full((2, 2, 3), 40, dtype=np.uint8)
+        self.handle = gui.add_image(placeholder, label=image.label or None, format="jpeg", jpeg_quality=85)
+
+    def update(self, src: Any, pts: Any) -> bool:
+        """Send the image if it changed (at most ``max_rate`` a second); True if sent."""
+        if src is None:
+            return False
+        now = time.monotonic()
+        if now - self._last_push < 1.0 / self.max_rate:
+            return False
+        a = np.asarray(src)
+        p = None if pts is None else np.asarray(pts, dtype=float)
+        same_src = self._last_src is not None and self._last_src.shape == a.shape and np.array_equal(self._last_src, a)
+        same_pts = (p is None and self._last_pts is None) or (
+            p is not None and self._last_pts is not None and p.shape == self._last_pts.shape and np.array_equal(p, self._last_pts)
+        )
+        if same_src and same_pts:
+            return False
+        out = prepare_image(a, p)
+        if out is None:
+            return False
+        self.handle.image = out
+        self._last_src = a.copy()
+        self._last_pts = None if p is None else p.copy()
+        self._last_push = now
+        self.pushes += 1
+        return True
+
+    def clear(self) -> None:
+        """Forget what was sent, so the next frame sends the image again."""
+        self._last_src = None
+        self._last_pts = None
+        self._last_push = 0.0

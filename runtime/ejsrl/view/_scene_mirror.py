@@ -1,0 +1,419 @@
+"""Mirror an ``ejsrl.world.World`` into a viser scene, sending only what changed.
+
+Every world node becomes one viser node named ``/ejs/<name>`` placed at the node's
+*world* pose (flat names, so reparenting in the world, e.g. a gripper picking up a part,
+never needs a rebuild). Its geometry hangs below it as ``/ejs/<name>/g<i>`` children in
+the node frame. Each frame :meth:`SceneMirror.sync` compares, per node:
+
+- the world pose (4, 4) with the last one sent: a changed pose sends ``position`` and
+  ``wxyz`` (quaternion w, x, y, z) of the node handle only;
+- ``geom_rev``: a changed shape updates primitive sizes in place or rebuilds the geometry;
+- ``rev``: any other change (colour, opacity, points of a line, text) updates those props;
+- the visibility of the node and its ancestors.
+
+Everything is sent inside one ``server.atomic()`` block by the caller.
+Gizmo nodes become transform controls; a drag calls ``on_gizmo(name, T_world (4, 4))``.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from ejsrl.robotics.transforms import q2r, r2q
+
+__all__ = ["SceneMirror", "ROOT"]
+
+#: the viser scene path under which every world node is placed
+ROOT = "/ejs"
+
+GizmoCallback = Callable[[str, np.ndarray], None]
+
+
+def _rgb255(rgb: Any) -> tuple[int, int, int]:
+    c = np.clip(np.asarray(rgb, dtype=float).reshape(3) * 255.0 + 0.5, 0, 255).astype(int)
+    return (int(c[0]), int(c[1]), int(c[2]))
+
+
+def _opacity(x: float) -> float | None:
+    return None if x >= 1.0 else max(0.0, float(x))
+
+
+def _polyline_segments(points: Any) -> np.ndarray:
+    p = np.asarray(points, dtype=np.float32).reshape(-1, 3)
+    if len(p) < 2:
+        return np.zeros((1, 2, 3), dtype=np.float32)
+    return np.ascontiguousarray(np.stack([p[:-1], p[1:]], axis=1))
+
+
+def _snapshot(node: Any) -> tuple:
+    """A comparable record of the node's non-pose state (colour, opacity, own props)."""
+    items = []
+    for k, v in sorted(node.props.items()):
+        if isinstance(v, np.ndarray):
+            items.append((k, v.shape, v.tobytes()))
+        elif isinstance(v, (list, tuple)) and v and not isinstance(v[0], (int, float, str)):
+            items.append((k, id(v), len(v)))
+        else:
+            try:
+                hash(v)
+                items.append((k, v))
+            except TypeError:
+                items.append((k, repr(v)))
+    return (tuple(node.color), node.opacity, tuple(items))
+
+
+class _Mirror:
+    """What has been sent for one world node."""
+
+    __slots__ = ("kind", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb")
+
+    def __init__(self, kind: str) -> None:
+        self.kind = kind
+        self.frame: Any = None  # the node handle (a frame, or transform controls)
+        self.geoms: list[Any] = []  # geometry handles below it
+        self.T: np.ndarray | None = None
+        self.rev = -1
+        self.geom_rev = -1
+        self.visible: bool | None = None
+        self.state: tuple | None = None
+        #: for meshes: per geometry handle, True if it takes the node colour
+        self.mesh_parts_rgb: list[bool] = []
+
+
+class SceneMirror:
+    """Keeps a viser scene in step with a world.
+
+    ``scene``: ``server.scene``; ``on_gizmo(name, T_world)``: called (from a viser thread)
+    when the user drags a gizmo. ``counters`` counts the updates sent, by kind, for tests
+    and benchmarks.
+    """
+
+    def __init__(self, scene: Any, *, on_gizmo: GizmoCallback | None = None) -> None:
+        self.scene = scene
+        self.on_gizmo = on_gizmo
+        self._nodes: dict[str, _Mirror] = {}
+        self._dragging: dict[str, float] = {}
+        self._gizmo_lock = threading.Lock()
+        self.counters: dict[str, int] = {"create": 0, "pose": 0, "geometry": 0, "props": 0, "visible": 0, "remove": 0}
+
+    # -- the per-frame entry point ------------------------------------------------------
+    def sync(self, world: Any) -> None:
+        """Send what changed in ``world`` since the last call (caller holds the model lock)."""
+        seen: set[str] = set()
+        T_of: dict[str, np.ndarray] = {}
+        vis_of: dict[str, bool] = {}
+        for node in world.walk():
+            parent = node.parent
+            if parent is None:
+                T = node.T_parent_local
+                vis = node.visible
+            else:
+                T = T_of[parent.name] @ node.T_parent_local
+                vis = vis_of[parent.name] and node.visible
+            T_of[node.name] = T
+            vis_of[node.name] = vis
+            seen.add(node.name)
+            self._sync_node(node, T, vis)
+        for name in [n for n in self._nodes if n not in seen]:
+            self._remove(name)
+
+    def clear(self) -> None:
+        """Remove every mirrored node (the next ``sync`` rebuilds them)."""
+        for name in list(self._nodes):
+            self._remove(name)
+
+    # -- one node -----------------------------------------------------------------------
+    def _sync_node(self, node: Any, T: np.ndarray, visible: bool) -> None:
+        m = self._nodes.get(node.name)
+        if m is None or m.kind != node.kind:
+            if m is not None:
+                self._remove(node.name)
+            m = self._create(node, T, visible)
+            self._nodes[node.name] = m
+            return
+        if m.T is None or not np.array_equal(m.T, T):
+            if not (m.kind == "gizmo" and self._is_dragging(node.name)):
+                m.frame.position = T[:3, 3]
+                m.frame.wxyz = r2q(T)
+                self.counters["pose"] += 1
+            m.T = np.array(T)
+        if visible != m.visible:
+            m.frame.visible = visible
+            m.visible = visible
+            self.counters["visible"] += 1
+        if node.rev != m.rev:
+            m.rev = node.rev
+            state = _snapshot(node)
+            if node.geom_rev != m.geom_rev:
+                m.geom_rev = node.geom_rev
+                m.state = state
+                self._update_geometry(node, m)
+            elif state != m.state:
+                m.state = state
+                self._update_props(node, m)
+
+    def _path(self, name: str) -> str:
+        return f"{ROOT}/{name}"
+
+    def _create(self, node: Any, T: np.ndarray, visible: bool) -> _Mirror:
+        m = _Mirror(node.kind)
+        path = self._path(node.name)
+        pos, wxyz = T[:3, 3], r2q(T)
+        if node.kind == "gizmo":
+            m.frame = self.scene.add_transform_controls(
+                path, scale=float(node.props.get("scale", 0.3)), position=pos, wxyz=wxyz, visible=visible
+            )
+            self._attach_gizmo(node.name, m.frame)
+        else:
+            m.frame = self.scene.add_frame(path, show_axes=False, position=pos, wxyz=wxyz, visible=visible)
+        m.T = np.array(T)
+        m.visible = visible
+        m.rev = node.rev
+        m.geom_rev = node.geom_rev
+        m.state = _snapshot(node)
+        self._build_geometry(node, m)
+        self.counters["create"] += 1
+        return m
+
+    def _remove(self, name: str) -> None:
+        m = self._nodes.pop(name, None)
+        if m is None:
+            return
+        for h in m.geoms:
+            _safe_remove(h)
+        _safe_remove(m.frame)
+        self.counters["remove"] += 1
+
+    # -- geometry -----------------------------------------------------------------------
+    def _build_geometry(self, node: Any, m: _Mirror) -> None:
+        """Create the geometry handles of ``node`` below its frame."""
+        base = self._path(node.name)
+        kind = node.kind
+        color = _rgb255(node.color)
+        opacity = _opacity(node.opacity)
+        props = node.props
+        s = self.scene
+        m.geoms = []
+        m.mesh_parts_rgb = []
+        if kind == "box":
+            size = tuple(float(v) for v in np.asarray(props["size"], dtype=float).reshape(3))
+            m.geoms.append(s.add_box(f"{base}/g0", dimensions=size, color=color, opacity=opacity))
+        elif kind == "sphere":
+            m.geoms.append(
+                s.add_icosphere(f"{base}/g0", radius=float(props["radius"]), color=color, opacity=opacity, subdivisions=3)
+            )
+        elif kind in ("line", "trail"):
+            segs = _polyline_segments(props["points"])
+            h = s.add_line_segments(
+                f"{base}/g0", segs, colors=color, thickness=float(props["width"]), thickness_units="screen"
+            )
+            h.visible = len(np.asarray(props["points"]).reshape(-1, 3)) >= 2
+            m.geoms.append(h)
+        elif kind == "points":
+            pts = np.asarray(props["points"], dtype=np.float32).reshape(-1, 3)
+            m.geoms.append(
+                s.add_point_cloud(
+                    f"{base}/g0", points=pts, colors=color, point_size=float(props["size"]), precision="float32"
+                )
+            )
+        elif kind == "frame":
+            size = float(props["size"])
+            m.geoms.append(s.add_frame(f"{base}/g0", axes_length=size, axes_radius=max(size * 0.04, 1e-4)))
+        elif kind == "grid":
+            size, cell = float(props["size"]), float(props["cell"])
+            m.geoms.append(
+                s.add_grid(
+                    f"{base}/g0",
+                    width=size,
+                    height=size,
+                    plane="xy",
+                    cell_size=cell,
+                    section_size=cell * 10,
+                    cell_color=color,
+                    section_color=tuple(max(0, c - 60) for c in color),
+                )
+            )
+        elif kind == "text3d":
+            m.geoms.append(s.add_label(f"{base}/g0", str(props["text"])))
+        elif kind == "camera":
+            fov, aspect = _camera_fov_aspect(props)
+            m.geoms.append(s.add_camera_frustum(f"{base}/g0", fov=fov, aspect=aspect, scale=0.1, color=color))
+        elif kind in ("group", "gizmo"):
+            pass
+        else:
+            self._build_mesh(node, m, base, color, opacity)
+
+    def _build_mesh(self, node: Any, m: _Mirror, base: str, color: tuple[int, int, int], opacity: float | None) -> None:
+        """Any solid node: its ``parts()`` as meshes, one per part and colour."""
+        try:
+            parts = node.parts()
+        except Exception:
+            parts = []
+        flat = node.kind in ("cylinder", "arrow", "box")
+        i = 0
+        for part in parts:
+            v = np.asarray(part.vertices, dtype=np.float64)
+            if part.T_node_part is not None:
+                Tp = np.asarray(part.T_node_part, dtype=float)
+                v = v @ Tp[:3, :3].T + Tp[:3, 3]
+            faces = np.asarray(part.faces, dtype=np.int64)
+            if len(faces) == 0:
+                continue
+            if part.face_rgb is not None:
+                groups = _faces_by_colour(np.asarray(part.face_rgb))
+            else:
+                groups = [(None, np.arange(len(faces)))]
+            for rgb, idx in groups:
+                verts, fcs = _compact(v, faces[idx])
+                own = rgb if rgb is not None else part.rgb
+                c = color if own is None else _rgb255(own)
+                h = self.scene.add_mesh_simple(
+                    f"{base}/g{i}",
+                    vertices=verts.astype(np.float32),
+                    faces=fcs.astype(np.uint32),
+                    color=c,
+                    opacity=opacity,
+                    flat_shading=flat,
+                    side="double" if node.kind == "mesh" else "front",
+                )
+                m.geoms.append(h)
+                m.mesh_parts_rgb.append(own is None)
+                i += 1
+
+    def _update_geometry(self, node: Any, m: _Mirror) -> None:
+        """The shape changed: update sizes in place where viser can, else rebuild."""
+        self.counters["geometry"] += 1
+        props = node.props
+        if node.kind == "box" and m.geoms:
+            m.geoms[0].dimensions = tuple(float(v) for v in np.asarray(props["size"], dtype=float).reshape(3))
+            self._update_props(node, m, count=False)
+            return
+        if node.kind == "sphere" and m.geoms:
+            m.geoms[0].radius = float(props["radius"])
+            self._update_props(node, m, count=False)
+            return
+        for h in m.geoms:
+            _safe_remove(h)
+        self._build_geometry(node, m)
+
+    def _update_props(self, node: Any, m: _Mirror, *, count: bool = True) -> None:
+        """Colour, opacity and the kinds' own non-shape props, in place."""
+        if count:
+            self.counters["props"] += 1
+        kind = node.kind
+        props = node.props
+        color = _rgb255(node.color)
+        opacity = _opacity(node.opacity)
+        if not m.geoms:
+            if kind == "gizmo":
+                m.frame.scale = float(props.get("scale", 0.3))
+            return
+        g = m.geoms[0]
+        if kind in ("box", "sphere"):
+            g.color = color
+            g.opacity = opacity
+        elif kind in ("line", "trail"):
+            pts = np.asarray(props["points"]).reshape(-1, 3)
+            g.points = _polyline_segments(pts)
+            g.colors = np.broadcast_to(np.array(color, dtype=np.uint8), g.points.shape).copy()
+            g.thickness = float(props["width"])
+            g.visible = len(pts) >= 2
+        elif kind == "points":
+            g.points = np.asarray(props["points"], dtype=np.float32).reshape(-1, 3)
+            n = len(g.points)
+            g.colors = np.broadcast_to(np.array(color, dtype=np.uint8), (n, 3)).copy()
+            g.point_size = float(props["size"])
+        elif kind == "frame":
+            size = float(props["size"])
+            g.axes_length = size
+            g.axes_radius = max(size * 0.04, 1e-4)
+        elif kind == "text3d":
+            g.text = str(props["text"])
+        elif kind == "camera":
+            fov, aspect = _camera_fov_aspect(props)
+            g.fov = fov
+            g.aspect = aspect
+            g.color = color
+        elif kind == "grid":
+            for h in m.geoms:
+                _safe_remove(h)
+            self._build_geometry(node, m)
+        else:
+            for h, takes_node_colour in zip(m.geoms, m.mesh_parts_rgb):
+                if takes_node_colour:
+                    h.color = color
+                h.opacity = opacity
+
+    # -- gizmos ---------------------------------------------------------------------------
+    def _attach_gizmo(self, name: str, handle: Any) -> None:
+        @handle.on_drag_start
+        def _(_event: Any) -> None:
+            with self._gizmo_lock:
+                self._dragging[name] = float("inf")
+
+        @handle.on_drag_end
+        def _(_event: Any) -> None:
+            with self._gizmo_lock:
+                # keep ignoring server poses briefly, so a late frame does not snap it back
+                self._dragging[name] = time.monotonic() + 0.3
+
+        @handle.on_update
+        def _(_event: Any) -> None:
+            T = np.eye(4)
+            T[:3, :3] = q2r(np.asarray(handle.wxyz, dtype=float))
+            T[:3, 3] = np.asarray(handle.position, dtype=float)
+            if not np.all(np.isfinite(T)):
+                return
+            if self.on_gizmo is not None:
+                self.on_gizmo(name, T)
+
+    def _is_dragging(self, name: str) -> bool:
+        with self._gizmo_lock:
+            until = self._dragging.get(name)
+            if until is None:
+                return False
+            if time.monotonic() < until:
+                return True
+            del self._dragging[name]
+            return False
+
+
+def _camera_fov_aspect(props: dict[str, Any]) -> tuple[float, float]:
+    """Vertical field of view (radians) and aspect ratio (w / h) of a camera node."""
+    w, h = (float(v) for v in props.get("resolution", (320, 240)))
+    K = props.get("intrinsics")
+    if K is not None:
+        K = np.asarray(K, dtype=float)
+        fov = 2.0 * float(np.arctan2(h / 2.0, K[1, 1]))
+    else:
+        fov = float(np.radians(float(props.get("fov", 60.0))))
+    return fov, (w / h if h > 0 else 4.0 / 3.0)
+
+
+def _faces_by_colour(face_rgb: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Face indices grouped by their (quantised) colour."""
+    q = np.clip(np.round(face_rgb * 255), 0, 255).astype(np.int64)
+    key = (q[:, 0] << 16) | (q[:, 1] << 8) | q[:, 2]
+    out = []
+    for k in np.unique(key):
+        idx = np.nonzero(key == k)[0]
+        out.append((np.array([(k >> 16) & 255, (k >> 8) & 255, k & 255], dtype=float) / 255.0, idx))
+    return out
+
+
+def _compact(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Only the vertices ``faces`` use, with the faces renumbered."""
+    used, inverse = np.unique(faces.reshape(-1), return_inverse=True)
+    return vertices[used], inverse.reshape(-1, 3)
+
+
+def _safe_remove(handle: Any) -> None:
+    try:
+        handle.remove()
+    except Exception:
+        pass

@@ -1,0 +1,117 @@
+"""The web UI of a generated app: a viser control panel and a 3D view of the world.
+
+The app creates the server and the view, then calls :meth:`ViserView.on_frame` after
+every display frame (with ``app.lock`` held) and :meth:`ViserView.on_reset` after a reset.
+
+What the view needs from the app (``ejsrl.app.App`` provides it):
+
+- ``model``, ``lock`` (an ``RLock`` guarding the model), ``world``, ``view`` (elements),
+  ``meta`` (``title``, ``description``, ``author``), ``sim`` (``controls``, ...);
+- ``play()``, ``pause()``, ``step_once()``, ``reset()``, ``is_playing()``;
+- ``apply_control(control, value)`` (value already validated), ``run_action(button)``,
+  ``apply_gizmo(name, T_world)``;
+- ``safe_value(prop, where)`` (None on a user-code error), ``error`` / ``error_rev``,
+  ``pop_alerts()``.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+import numpy as np
+
+from ejsrl.view._gui import Panel
+from ejsrl.view._scene_mirror import SceneMirror
+
+__all__ = ["ViserView", "make_server"]
+
+log = logging.getLogger("ejsrl.view")
+
+
+def make_server(host: str = "127.0.0.1", port: int = 8080, *, verbose: bool = False) -> tuple[Any, str]:
+    """Start a viser server on ``host:port`` (the next free port if taken; 0: any free one).
+
+    Returns ``(server, url)`` with the port actually bound.
+    """
+    import viser
+
+    server = viser.ViserServer(host=host, port=port, verbose=verbose)
+    shown_host = "127.0.0.1" if host in ("0.0.0.0", "") else host
+    return server, f"http://{shown_host}:{server.get_port()}"
+
+
+class ViserView:
+    """Shows ``app`` in the browser through ``server`` (a ``viser.ViserServer``).
+
+    Builds the control panel and the 3D scene at construction; afterwards
+    :meth:`on_frame` sends only what changed.
+    """
+
+    def __init__(self, app: Any, server: Any) -> None:
+        self.app = app
+        self.server = server
+        self.frames = 0
+        self._broken: set[str] = set()
+        server.scene.set_up_direction("+z")
+        with server.atomic():
+            self.panel = Panel(app, server.gui, self.notify)
+            self.scene = SceneMirror(server.scene, on_gizmo=self._on_gizmo)
+            world = getattr(app, "world", None)
+            if world is not None:
+                with app.lock:
+                    self.scene.sync(world)
+
+        @server.on_client_connect
+        def _(client: Any) -> None:
+            # a sensible first view of a scene in metres, z up
+            try:
+                client.camera.position = (2.0, -2.0, 1.5)
+                client.camera.look_at = (0.0, 0.0, 0.3)
+            except Exception:
+                pass
+
+    # -- called by the app's loop -------------------------------------------------------
+    def on_frame(self) -> None:
+        """Send this frame's changes (the caller holds ``app.lock``)."""
+        self.frames += 1
+        with self.server.atomic():
+            self._guarded("panel", self.panel.refresh)
+            world = getattr(self.app, "world", None)
+            if world is not None:
+                self._guarded("scene", lambda: self.scene.sync(world))
+            self._guarded("alerts", self._show_alerts)
+
+    def on_reset(self) -> None:
+        """Forget accumulated data (plot points, cached images) after a reset."""
+        self._guarded("reset", self.panel.on_reset)
+
+    # -- helpers ----------------------------------------------------------------------------
+    def notify(self, client: Any, title: str, body: str, color: str = "blue") -> None:
+        """Show a notification to ``client``, or to every connected client if None."""
+        clients = [client] if client is not None else list(self.server.get_clients().values())
+        auto_close = None if color == "red" else 6.0
+        for c in clients:
+            try:
+                c.add_notification(title, body, color=color, auto_close_seconds=auto_close)
+            except Exception:
+                log.debug("notification to a client failed", exc_info=True)
+
+    def _show_alerts(self) -> None:
+        pop = getattr(self.app, "pop_alerts", None)
+        if pop is None:
+            return
+        for text in pop():
+            self.notify(None, "Alert", str(text), "yellow")
+
+    def _on_gizmo(self, name: str, T_world: np.ndarray) -> None:
+        self.app.apply_gizmo(name, T_world)
+
+    def _guarded(self, what: str, fn: Any) -> None:
+        """Run one part of the refresh; a bug in one part must not stop the others or the app."""
+        try:
+            fn()
+        except Exception:
+            if what not in self._broken:
+                self._broken.add(what)
+                log.exception("ejsrl.view: updating the %s failed", what)
