@@ -1,1 +1,33 @@
-"""ejsrl.robotics."""
+"""ejsrl.robotics: serial-link arms from DH parameters (what EjsRL's Robotics module gave EJS).
+
+Names follow Corke's Robotics Toolbox: ``Robot.fkine``, ``jacob0``, ``ikine``, ``rne``...
+Everything takes and returns NumPy arrays, SI units and radians.
+
+- :class:`Link`, :class:`Robot`: models and their kinematics and dynamics.
+- :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``planar``, ``rrr``, ``scara``.
+- :mod:`trajectory`: cubic, quintic, LSPB, synchronous/asynchronous, splines, 4-3-4, Cartesian.
+- :mod:`transforms`: rotations, transforms, RPY/Euler, angle-axis, quaternions (wxyz).
+- :mod:`ik`: ``ikine`` (Levenberg-Marquardt) and ``ikine_a`` (closed form, Puma type).
+"""
+
+from __future__ import annotations
+
+from . import transforms
+from .link import Link, PrismaticDH, PrismaticMDH, RevoluteDH, RevoluteMDH
+from .robot import Robot
+
+from . import models  # noqa: E402  (models need Robot)
+from . import ik, trajectory  # noqa: E402
+
+__all__ = [
+    "Link",
+    "RevoluteDH",
+    "PrismaticDH",
+    "RevoluteMDH",
+    "PrismaticMDH",
+    "Robot",
+    "models",
+    "trajectory",
+    "transforms",
+    "ik",
+]

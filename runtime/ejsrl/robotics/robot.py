@@ -1,0 +1,447 @@
+"""``Robot``: a serial-link arm described by DH links, its kinematics and dynamics.
+
+Names and conventions follow Corke's Robotics Toolbox (``fkine``, ``jacob0``, ``rne``...).
+All inputs and outputs are NumPy arrays in SI units and radians. Methods that take joint
+values accept one configuration ``(n,)`` or a batch ``(m, n)`` and answer for all of them
+at once (vectorised over configurations).
+
+Frames: ``base`` is ``T_world_base`` (4, 4); ``tool`` is ``T_linkn_tool`` (4, 4).
+``gravity`` is the gravitational acceleration in the world frame (default
+``[0, 0, -9.81]`` m/s^2).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Iterable
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import _dynamics, _kinematics
+from .link import Link
+
+__all__ = ["Robot"]
+
+Array = NDArray[np.float64]
+
+
+def _parallel_axis(d: Array) -> Array:
+    """Inertia shift ``(d.d) E - d d^T`` (3, 3) for a unit mass at offset d."""
+    return float(d @ d) * np.eye(3) - np.outer(d, d)
+
+
+class Robot:
+    """A serial-link arm.
+
+    Args:
+        links: the links from base to end-effector (all standard or all modified DH).
+        name: label shown in the UI and in ``repr``.
+        base: ``T_world_base`` (4, 4); identity by default.
+        tool: ``T_linkn_tool`` (4, 4); identity by default.
+        gravity: gravitational acceleration in the world frame (3,), m/s^2.
+        poses: named joint configurations, e.g. ``{"qz": ..., "qr": ...}``; each is also
+            available as an attribute (``robot.qz``).
+        manufacturer: optional text.
+
+    Geometry for drawing: ``link_lengths()`` gives each link's ``a`` and ``d`` and
+    ``reach`` a characteristic size of the arm (m), so a viewer can size link bodies and
+    the scene without knowing the model.
+    """
+
+    def __init__(
+        self,
+        links: Iterable[Link],
+        *,
+        name: str = "robot",
+        base: ArrayLike | None = None,
+        tool: ArrayLike | None = None,
+        gravity: ArrayLike = (0.0, 0.0, -9.81),
+        poses: dict[str, ArrayLike] | None = None,
+        manufacturer: str = "",
+    ) -> None:
+        self.links: list[Link] = list(links)
+        if not self.links:
+            raise ValueError("a Robot needs at least one link")
+        mdh = {link.mdh for link in self.links}
+        if len(mdh) != 1:
+            raise ValueError("all links must use the same DH convention (standard or modified)")
+        self.name = name
+        self.manufacturer = manufacturer
+        self.base = np.eye(4) if base is None else base  # type: ignore[assignment]
+        self.tool = np.eye(4) if tool is None else tool  # type: ignore[assignment]
+        self.gravity = np.asarray(gravity, dtype=float).reshape(3)
+        self.poses: dict[str, Array] = {}
+        self._payload: tuple[float, Array, Array] | None = None
+        self._cache_key: tuple[int, ...] | None = None
+        for key, value in (poses or {}).items():
+            self.addconfiguration(key, value)
+
+    # ----------------------------------------------------------------- structure
+    @property
+    def n(self) -> int:
+        """Number of joints."""
+        return len(self.links)
+
+    @property
+    def mdh(self) -> bool:
+        """True when the links use modified (Craig) DH parameters."""
+        return self.links[0].mdh
+
+    @property
+    def base(self) -> Array:
+        """``T_world_base`` (4, 4)."""
+        return self._base
+
+    @base.setter
+    def base(self, T: ArrayLike) -> None:
+        T = np.array(T, dtype=float).reshape(4, 4)
+        self._base = T
+        self._base_is_eye = bool(np.array_equal(T, np.eye(4)))
+
+    @property
+    def tool(self) -> Array:
+        """``T_linkn_tool`` (4, 4)."""
+        return self._tool
+
+    @tool.setter
+    def tool(self, T: ArrayLike) -> None:
+        T = np.array(T, dtype=float).reshape(4, 4)
+        self._tool = T
+        self._tool_is_eye = bool(np.array_equal(T, np.eye(4)))
+        self._cache_key = None  # the payload is placed relative to the tool
+
+    @property
+    def qlim(self) -> Array:
+        """Joint limits (2, n): row 0 minimum, row 1 maximum (``±inf`` when unlimited)."""
+        out = np.empty((2, self.n))
+        for j, link in enumerate(self.links):
+            out[:, j] = (-np.inf, np.inf) if link.qlim is None else link.qlim
+        return out
+
+    @property
+    def reach(self) -> float:
+        """Characteristic size (m): the sum of ``|a| + |d|`` over the links (prismatic
+        links count their upper limit), plus the tool offset. An upper bound on reach."""
+        total = 0.0
+        for link in self.links:
+            d = link.d
+            if link.isprismatic:
+                d = link.qlim[1] + link.offset if link.qlim is not None else link.offset
+            total += abs(link.a) + abs(d)
+        return float(total + np.linalg.norm(self.tool[:3, 3]))
+
+    def link_lengths(self) -> Array:
+        """Geometry hints (n, 2): ``[a, d]`` of each link in m (prismatic: ``d`` = upper
+        limit). Link i's body runs from frame i-1 to frame i: ``d`` along ``z_{i-1}`` then
+        ``a`` along ``x_i`` (standard DH)."""
+        out = np.empty((self.n, 2))
+        for j, link in enumerate(self.links):
+            d = link.d
+            if link.isprismatic:
+                d = link.qlim[1] + link.offset if link.qlim is not None else link.offset
+            out[j] = (link.a, d)
+        return out
+
+    def addconfiguration(self, name: str, q: ArrayLike) -> None:
+        """Register a named pose, reachable as ``robot.poses[name]`` and ``robot.<name>``."""
+        q = np.asarray(q, dtype=float).reshape(self.n)
+        self.poses[name] = q
+        setattr(self, name, q)
+
+    # ----------------------------------------------------------------- cached arrays
+    def _params(self) -> None:
+        key = tuple(link.version for link in self.links)
+        if key == self._cache_key:
+            return
+        L = self.links
+        self._a = np.array([k.a for k in L])
+        self._alpha = np.array([k.alpha for k in L])
+        self._ca = np.cos(self._alpha)
+        self._sa = np.sin(self._alpha)
+        self._d = np.array([k.d for k in L])
+        self._theta = np.array([k.theta for k in L])
+        self._offset = np.array([k.offset for k in L])
+        self._prism = np.array([k.isprismatic for k in L])
+        self._m = np.array([k.m for k in L])
+        self._r = np.array([k.r for k in L])
+        self._I = np.array([k.I for k in L])
+        self._Jm = np.array([k.Jm for k in L])
+        self._G = np.array([k.G for k in L])
+        self._B = np.array([k.B for k in L])
+        self._Tc = np.array([k.Tc for k in L])  # (n, 2)
+        self._armature = self._Jm * self._G**2
+        if self._payload is not None:
+            self._apply_payload()
+        self._cache_key = key
+
+    def _apply_payload(self) -> None:
+        mp, rp, Ip = self._payload  # type: ignore[misc]
+        R = self.tool[:3, :3]
+        r_n = R @ rp + self.tool[:3, 3]  # payload centre of mass in frame n
+        I_n = R @ Ip @ R.T
+        m0, r0, I0 = self._m[-1], self._r[-1], self._I[-1]
+        mt = m0 + mp
+        if mt <= 0:
+            return
+        c = (m0 * r0 + mp * r_n) / mt
+        self._m = self._m.copy()
+        self._r = self._r.copy()
+        self._I = self._I.copy()
+        self._m[-1] = mt
+        self._r[-1] = c
+        self._I[-1] = I0 + m0 * _parallel_axis(r0 - c) + I_n + mp * _parallel_axis(r_n - c)
+
+    def _A(self, q: Array) -> Array:
+        self._params()
+        return _kinematics.dh_transforms(
+            q, self._a, self._alpha, self._d, self._theta, self._offset, self._prism, self.mdh,
+            ca=self._ca, sa=self._sa,
+        )
+
+    def _q(self, q: ArrayLike) -> Array:
+        q = np.asarray(q, dtype=float)
+        if q.shape[-1] != self.n:
+            raise ValueError(f"{self.name}: expected {self.n} joint values, got shape {q.shape}")
+        return q
+
+    # ----------------------------------------------------------------- kinematics
+    def fkine(self, q: ArrayLike) -> Array:
+        """End-effector pose ``T_world_tool`` (4, 4), or (m, 4, 4) for q of shape (m, n).
+
+        Includes ``base`` and ``tool``."""
+        q = self._q(q)
+        A = self._A(q)
+        return _kinematics.chain(
+            A, None if self._base_is_eye else self._base, None if self._tool_is_eye else self._tool
+        )
+
+    def fkine_all(self, q: ArrayLike) -> Array:
+        """World frames (n+1, 4, 4) (or (m, n+1, 4, 4)): index 0 is the base frame
+        (``base``), index i the frame of link i; the tool is not applied. Draw link i's
+        body in frame i."""
+        q = self._q(q)
+        return _kinematics.chain_all(self._A(q), self._base)
+
+    def _frames_and_end(self, q: Array) -> tuple[Array, Array]:
+        F = _kinematics.chain_all(self._A(q), self._base)
+        Te = F[..., -1, :, :] if self._tool_is_eye else F[..., -1, :, :] @ self._tool
+        return F, Te
+
+    def jacob0(self, q: ArrayLike) -> Array:
+        """Geometric Jacobian in the world frame (6, n) or (m, 6, n).
+
+        Rows ``vx vy vz wx wy wz``: linear velocity of the tool origin and angular
+        velocity, both in world coordinates."""
+        q = self._q(q)
+        F, Te = self._frames_and_end(q)
+        return _kinematics.jacobian_from_frames(F, Te, self._prism, self.mdh)
+
+    def jacobe(self, q: ArrayLike) -> Array:
+        """Geometric Jacobian in the tool frame (6, n) or (m, 6, n), rows ``vx vy vz wx wy wz``."""
+        q = self._q(q)
+        F, Te = self._frames_and_end(q)
+        J = _kinematics.jacobian_from_frames(F, Te, self._prism, self.mdh)
+        Rt = np.swapaxes(Te[..., :3, :3], -1, -2)
+        return np.concatenate((Rt @ J[..., :3, :], Rt @ J[..., 3:, :]), axis=-2)
+
+    def manipulability(self, q: ArrayLike, *, axes: str = "all") -> Array | float:
+        """Yoshikawa manipulability ``sqrt(det(J J^T))`` of ``jacob0`` (scalar or (m,)).
+
+        ``axes``: ``"all"`` (6 rows), ``"trans"`` (linear rows), ``"rot"`` (angular rows).
+        """
+        J = self.jacob0(q)
+        rows = {"all": slice(0, 6), "trans": slice(0, 3), "rot": slice(3, 6)}[axes]
+        J = J[..., rows, :]
+        out = np.sqrt(np.maximum(np.linalg.det(J @ np.swapaxes(J, -1, -2)), 0.0))
+        return float(out) if np.ndim(out) == 0 else out
+
+    # ----------------------------------------------------------------- inverse kinematics
+    def ikine(self, T: ArrayLike, q0: ArrayLike | None = None, **kw: Any) -> Any:
+        """Numerical inverse kinematics (Levenberg-Marquardt); see :func:`ejsrl.robotics.ik.ikine`."""
+        from .ik import ikine
+
+        return ikine(self, T, q0, **kw)
+
+    def ikine_a(self, T: ArrayLike, config: str = "lun") -> Any:
+        """Closed-form inverse kinematics of a Puma-type arm; see :func:`ejsrl.robotics.ik.ikine_a`."""
+        from .ik import ikine_a
+
+        return ikine_a(self, T, config)
+
+    # ----------------------------------------------------------------- dynamics
+    def payload(self, mass: float, r: ArrayLike = (0.0, 0.0, 0.0), I: ArrayLike | None = None) -> None:  # noqa: E741
+        """Attach a payload rigidly to the tool (the EjsRL paper's external inertia).
+
+        Args:
+            mass: kg (0 removes the payload).
+            r: its centre of mass in the tool frame (m).
+            I: its inertia about its centre of mass in tool-frame axes (3, 6 or (3, 3)).
+        """
+        from .link import _inertia_matrix
+
+        self._payload = None if mass == 0 else (float(mass), np.asarray(r, float).reshape(3), _inertia_matrix(I))
+        self._cache_key = None
+
+    def _gravity_base(self, gravity: ArrayLike | None) -> Array:
+        g = self.gravity if gravity is None else np.asarray(gravity, dtype=float)
+        return g if self._base_is_eye else g @ self._base[:3, :3]  # R^T g
+
+    def friction(self, qd: ArrayLike) -> Array:
+        """Joint friction (n,) or (m, n) at joint velocities ``qd``: viscous ``B G^2 qd`` and
+        Coulomb ``|G| Tc±``, acting *against* the motion (Toolbox sign). ``rne`` adds its
+        negative, i.e. the torque the motors spend overcoming it."""
+        self._params()
+        qd = np.asarray(qd, dtype=float)
+        G = np.abs(self._G)
+        coul = np.where(qd > 0, self._Tc[:, 0], np.where(qd < 0, self._Tc[:, 1], 0.0))
+        return -G * (self._B * G * qd + coul)
+
+    def nofriction(self, *, coulomb: bool = True, viscous: bool = False) -> "Robot":
+        """A copy without Coulomb friction (and without viscous friction unless ``viscous``)."""
+        links = [k.copy() for k in self.links]
+        for k in links:
+            if coulomb:
+                k.Tc = np.zeros(2)
+            if not viscous:
+                k.B = 0.0
+        r = Robot(links, name=self.name + " (no friction)", base=self.base, tool=self.tool,
+                  gravity=self.gravity, poses=self.poses, manufacturer=self.manufacturer)
+        r._payload = self._payload
+        return r
+
+    def rne(
+        self,
+        q: ArrayLike,
+        qd: ArrayLike | None = None,
+        qdd: ArrayLike | None = None,
+        *,
+        gravity: ArrayLike | None = None,
+        fext: ArrayLike | None = None,
+        friction: bool = True,
+        armature: bool = True,
+    ) -> Array:
+        """Inverse dynamics by recursive Newton-Euler: joint forces (n,) or (m, n).
+
+        ``tau = M(q) qdd + C(q, qd) qd + g(q) - friction(qd) - J0(q)^T fext``, where M
+        includes the motor armature ``Jm G^2`` and any ``payload``.
+
+        Args:
+            q, qd, qdd: (n,) or (m, n); ``qd``/``qdd`` default to zero.
+            gravity: override ``self.gravity`` (world frame, m/s^2).
+            fext: (6,) or (m, 6) wrench ``[fx fy fz mx my mz]`` applied *by the environment
+                on the tool*, expressed in the world frame, moment about the tool origin.
+            friction, armature: include friction / motor armature (default True).
+        """
+        q = self._q(q)
+        single = q.ndim == 1
+        Q = np.atleast_2d(q)
+        Qd = np.zeros_like(Q) if qd is None else np.broadcast_to(np.asarray(qd, float), Q.shape)
+        Qdd = np.zeros_like(Q) if qdd is None else np.broadcast_to(np.asarray(qdd, float), Q.shape)
+        A = self._A(Q)
+        tau = _dynamics.rne_rigid(A, Qd, Qdd, -self._gravity_base(gravity), self._m, self._r, self._I,
+                                  self._prism, self.mdh)
+        if armature:
+            tau += self._armature * Qdd
+        if friction:
+            tau -= self.friction(Qd)
+        if fext is not None:
+            J = self.jacob0(Q)
+            tau -= (np.swapaxes(J, -1, -2) @ np.broadcast_to(np.asarray(fext, float), (len(Q), 6))[..., None])[..., 0]
+        return tau[0] if single else tau
+
+    def inertia(self, q: ArrayLike) -> Array:
+        """Joint-space inertia matrix (n, n) or (m, n, n), motor armature included."""
+        q = self._q(q)
+        single = q.ndim == 1
+        Q = np.atleast_2d(q)
+        m, n = Q.shape
+        Qr = np.repeat(Q, n, axis=0)
+        E = np.tile(np.eye(n), (m, 1))
+        tau = self.rne(Qr, np.zeros_like(Qr), E, gravity=np.zeros(3), friction=False)
+        M = tau.reshape(m, n, n).swapaxes(-1, -2)  # column j is the response to qdd = e_j
+        M = 0.5 * (M + M.swapaxes(-1, -2))
+        return M[0] if single else M
+
+    def coriolis(self, q: ArrayLike, qd: ArrayLike) -> Array:
+        """Coriolis/centripetal matrix C (n, n) or (m, n, n): velocity torques are ``C @ qd``."""
+        q = self._q(q)
+        single = q.ndim == 1
+        Q = np.atleast_2d(q)
+        Qd = np.broadcast_to(np.asarray(qd, float), Q.shape)
+        m, n = Q.shape
+        # Unit speeds e_j give the squared terms; pairs e_j + e_k the products.
+        pairs = [(j, k) for j in range(n) for k in range(j + 1, n)]
+        basis = np.zeros((n + len(pairs), n))
+        basis[np.arange(n), np.arange(n)] = 1.0
+        for row, (j, k) in enumerate(pairs, start=n):
+            basis[row, [j, k]] = 1.0
+        nb = len(basis)
+        tau = self.rne(np.repeat(Q, nb, axis=0), np.tile(basis, (m, 1)), None,
+                       gravity=np.zeros(3), friction=False, armature=False).reshape(m, nb, n)
+        Csq = tau[:, :n, :].swapaxes(-1, -2)  # (m, n, n): column j from qd_j^2
+        C = Csq * Qd[:, None, :]
+        for row, (j, k) in enumerate(pairs, start=n):
+            cross_jk = tau[:, row, :] - Csq[:, :, j] - Csq[:, :, k]  # coefficient of qd_j qd_k
+            C[:, :, j] += 0.5 * cross_jk * Qd[:, k, None]
+            C[:, :, k] += 0.5 * cross_jk * Qd[:, j, None]
+        return C[0] if single else C
+
+    def gravload(self, q: ArrayLike, *, gravity: ArrayLike | None = None) -> Array:
+        """Gravity torques g(q) (n,) or (m, n)."""
+        q = self._q(q)
+        return self.rne(q, None, None, gravity=gravity, friction=False, armature=False)
+
+    def accel(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, *, gravity: ArrayLike | None = None) -> Array:
+        """Forward dynamics: joint accelerations (n,) or (m, n) for applied forces ``tau``.
+
+        Walker-Orin method 1: one batched RNE gives the bias ``C qd + g - friction`` and the
+        columns of M (composite inertia), then ``qdd = M^-1 (tau - bias)``.
+        """
+        q = self._q(q)
+        single = q.ndim == 1
+        Q = np.atleast_2d(q)
+        Qd = np.broadcast_to(np.asarray(qd, float), Q.shape)
+        T = np.broadcast_to(np.asarray(tau, float), Q.shape)
+        m, n = Q.shape
+        self._params()
+        A = self._A(Q)
+        # rows 0..n-1 of each block: qdd = e_j, qd = 0, no gravity; row n: the bias.
+        Ab = np.repeat(A, n + 1, axis=0)
+        QD = np.zeros((m, n + 1, n))
+        QD[:, n, :] = Qd
+        QDD = np.zeros((m, n + 1, n))
+        QDD[:, np.arange(n), np.arange(n)] = 1.0
+        a0 = np.zeros((m, n + 1, 3))
+        a0[:, n, :] = -self._gravity_base(gravity)
+        tau = _dynamics.rne_rigid(Ab, QD.reshape(-1, n), QDD.reshape(-1, n), a0.reshape(-1, 3), self._m,
+                                  self._r, self._I, self._prism, self.mdh).reshape(m, n + 1, n)
+        M = tau[:, :n, :] + np.eye(n) * self._armature
+        bias = tau[:, n, :] - self.friction(Qd)
+        qdd = np.linalg.solve(M, (T - bias)[..., None])[..., 0]
+        return qdd[0] if single else qdd
+
+    # ----------------------------------------------------------------- display
+    def __repr__(self) -> str:
+        conv = "modified DH" if self.mdh else "standard DH"
+        head = f"{self.name}: {self.n} joints ({''.join('P' if k.isprismatic else 'R' for k in self.links)}), {conv}"
+        rows = [f"{'j':>2} | {'theta':>12} | {'d':>12} | {'a':>9} | {'alpha':>9} | {'qlim (deg or m)':>19}"]
+        rows.append("-" * len(rows[0]))
+        for j, k in enumerate(self.links, start=1):
+            off = f"{k.offset:+.4g}" if k.offset else ""
+            theta = f"{k.theta:.4g}" if k.isprismatic else f"q{j}{off}"
+            d = f"q{j}{off}" if k.isprismatic else f"{k.d:.5g}"
+            if k.qlim is None:
+                lim = "-"
+            elif k.isprismatic:
+                lim = f"[{k.qlim[0]:.3g}, {k.qlim[1]:.3g}]"
+            else:
+                lim = f"[{np.degrees(k.qlim[0]):.0f}, {np.degrees(k.qlim[1]):.0f}]"
+            rows.append(f"{j:>2} | {theta:>12} | {d:>12} | {k.a:>9.5g} | {np.degrees(k.alpha):>8.4g}° | {lim:>19}")
+        extra = []
+        if not self._base_is_eye:
+            extra.append(f"base t = {np.round(self.base[:3, 3], 4).tolist()}")
+        if not self._tool_is_eye:
+            extra.append(f"tool t = {np.round(self.tool[:3, 3], 4).tolist()}")
+        if self.poses:
+            extra.append("poses: " + ", ".join(self.poses))
+        return "\n".join([head, *rows, *extra])
