@@ -188,6 +188,7 @@ class _Parser:
         if word == "NULL":
             return None
         if word == "USE":
+            self.skip()
             name_pos = self.pos
             name = self.ident("a DEF name after USE")
             if name not in self.defs:
