@@ -138,7 +138,8 @@ class Panel:
         self.step_button: Any = None
         self.reset_button: Any = None
         self.readout: Any = None
-        self._x_label = getattr(getattr(app, "sim", None), "independent", None) or "t"
+        #: the independent variable shown next to the control bar (the model's ``INDEPENDENT``)
+        self._time_name: str | None = getattr(getattr(app, "model", None), "INDEPENDENT", None)
         self._build()
 
     # -- building ---------------------------------------------------------------------------
@@ -207,7 +208,8 @@ class Panel:
                 elif isinstance(el, Button):
                     self._build_button(el)
                 elif isinstance(el, Plot):
-                    self.plots.append(PlotBinding(gui, el, x_label=self._x_label))
+                    x_label = getattr(el.x, "source", "") or self._time_name or "x"
+                    self.plots.append(PlotBinding(gui, el, x_label=x_label))
                 elif isinstance(el, Image):
                     self.images.append(ImageBinding(gui, el))
                 elif isinstance(el, Scene):
@@ -312,7 +314,6 @@ class Panel:
     def refresh(self) -> None:
         """Push the model's current values (caller holds ``app.lock``)."""
         app = self.app
-        self._show_error()
         self._show_playing()
         self._show_readout()
         now = time.monotonic()
@@ -337,6 +338,8 @@ class Panel:
             src = app.safe_value(im.image.source, im.image.where)
             pts = app.safe_value(im.image.points, im.image.where) if im.image.points is not None else None
             im.update(src, pts)
+        self._show_error()  # last: the expressions above may have just failed
+        self._show_playing()
 
     def on_reset(self) -> None:
         """Forget plot data and cached images."""
@@ -357,12 +360,12 @@ class Panel:
             self._playing_shown = playing
 
     def _show_readout(self) -> None:
-        if self.readout is None:
+        if self.readout is None or not self._time_name:
             return
-        value = getattr(getattr(self.app, "model", None), self._x_label, None)
+        value = getattr(getattr(self.app, "model", None), self._time_name, None)
         if value is None or not _finite(value):
             return
-        text = f"**{self._x_label}** = {float(value):.4g}"
+        text = f"**{self._time_name}** = {float(value):.4g}"
         if text != self._readout_shown:
             self.readout.content = text
             self._readout_shown = text

@@ -58,6 +58,14 @@ class PlotBuffer:
         """Add one point; returns False (and adds nothing) if any value is not finite."""
         if not np.isfinite(x) or not all(np.isfinite(y) for y in ys):
             return False
+        if len(self) and x == self._x[self._end - 1]:
+            # the same instant again (paused, or a value changed from the panel): replace it
+            last = self._end - 1
+            if np.array_equal(self._y[:, last], ys):
+                return True
+            self._y[:, last] = ys
+            self.rev += 1
+            return True
         if len(self) and x < self._x[self._end - 1]:
             # the independent variable went back (a reset, or the user set it): start over
             self.clear()

@@ -70,7 +70,7 @@ def _snapshot(node: Any) -> tuple:
 class _Mirror:
     """What has been sent for one world node."""
 
-    __slots__ = ("kind", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb")
+    __slots__ = ("kind", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref")
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
@@ -83,6 +83,10 @@ class _Mirror:
         self.state: tuple | None = None
         #: for meshes: per geometry handle, True if it takes the node colour
         self.mesh_parts_rgb: list[bool] = []
+        #: for meshes: what identifies each part's shape, and its handles
+        self.part_keys: list[tuple] | None = None
+        self.part_handles: list[list[Any]] = []
+        self.parts_ref: list[Any] = []  # keeps the keyed arrays alive, so their ids stay unique
 
 
 class SceneMirror:
@@ -99,7 +103,7 @@ class SceneMirror:
         self._nodes: dict[str, _Mirror] = {}
         self._dragging: dict[str, float] = {}
         self._gizmo_lock = threading.Lock()
-        self.counters: dict[str, int] = {"create": 0, "pose": 0, "geometry": 0, "props": 0, "visible": 0, "remove": 0}
+        self.counters: dict[str, int] = {"create": 0, "pose": 0, "geometry": 0, "props": 0, "visible": 0, "remove": 0, "part_poses": 0}
 
     # -- the per-frame entry point ------------------------------------------------------
     def sync(self, world: Any) -> None:
@@ -249,19 +253,27 @@ class SceneMirror:
             self._build_mesh(node, m, base, color, opacity)
 
     def _build_mesh(self, node: Any, m: _Mirror, base: str, color: tuple[int, int, int], opacity: float | None) -> None:
-        """Any solid node: its ``parts()`` as meshes, one per part and colour."""
+        """Any solid node: its ``parts()`` as meshes, one per part and colour.
+
+        Each mesh is placed at its part's ``T_node_part``, so a node whose parts only move
+        (a robot's links) is updated by poses alone.
+        """
         try:
             parts = node.parts()
         except Exception:
             parts = []
         flat = node.kind in ("cylinder", "arrow", "box")
+        m.part_keys = []
+        m.part_handles = []
+        m.parts_ref = list(parts)
         i = 0
         for part in parts:
             v = np.asarray(part.vertices, dtype=np.float64)
-            if part.T_node_part is not None:
-                Tp = np.asarray(part.T_node_part, dtype=float)
-                v = v @ Tp[:3, :3].T + Tp[:3, 3]
             faces = np.asarray(part.faces, dtype=np.int64)
+            T = np.eye(4) if part.T_node_part is None else np.asarray(part.T_node_part, dtype=float)
+            m.part_keys.append(_part_key(part))
+            handles: list[Any] = []
+            m.part_handles.append(handles)
             if len(faces) == 0:
                 continue
             if part.face_rgb is not None:
@@ -280,10 +292,32 @@ class SceneMirror:
                     opacity=opacity,
                     flat_shading=flat,
                     side="double" if node.kind == "mesh" else "front",
+                    position=T[:3, 3],
+                    wxyz=r2q(T),
                 )
                 m.geoms.append(h)
+                handles.append(h)
                 m.mesh_parts_rgb.append(own is None)
                 i += 1
+
+    def _move_parts(self, node: Any, m: _Mirror) -> bool:
+        """If only the parts' poses changed, send those; False if the shapes changed."""
+        if m.part_keys is None:
+            return False
+        try:
+            parts = node.parts()
+        except Exception:
+            return False
+        if len(parts) != len(m.part_keys) or any(_part_key(p) != k for p, k in zip(parts, m.part_keys)):
+            return False
+        m.parts_ref = list(parts)
+        for part, handles in zip(parts, m.part_handles):
+            T = np.eye(4) if part.T_node_part is None else np.asarray(part.T_node_part, dtype=float)
+            for h in handles:
+                h.position = T[:3, 3]
+                h.wxyz = r2q(T)
+        self.counters["part_poses"] += 1
+        return True
 
     def _update_geometry(self, node: Any, m: _Mirror) -> None:
         """The shape changed: update sizes in place where viser can, else rebuild."""
@@ -295,6 +329,10 @@ class SceneMirror:
             return
         if node.kind == "sphere" and m.geoms:
             m.geoms[0].radius = float(props["radius"])
+            self._update_props(node, m, count=False)
+            return
+        if self._move_parts(node, m):
+            self.counters["geometry"] -= 1
             self._update_props(node, m, count=False)
             return
         for h in m.geoms:
@@ -351,25 +389,17 @@ class SceneMirror:
 
     # -- gizmos ---------------------------------------------------------------------------
     def _attach_gizmo(self, name: str, handle: Any) -> None:
-        @handle.on_drag_start
-        def _(_event: Any) -> None:
-            with self._gizmo_lock:
-                self._dragging[name] = float("inf")
-
-        @handle.on_drag_end
-        def _(_event: Any) -> None:
-            with self._gizmo_lock:
-                # keep ignoring server poses briefly, so a late frame does not snap it back
-                self._dragging[name] = time.monotonic() + 0.3
-
         @handle.on_update
-        def _(_event: Any) -> None:
+        def _(event: Any) -> None:
+            phase = getattr(event, "phase", "update")
+            with self._gizmo_lock:
+                # while the user drags, the server's poses must not snap the gizmo back;
+                # after the release keep ignoring them briefly, for frames already in flight
+                self._dragging[name] = float("inf") if phase != "end" else time.monotonic() + 0.3
             T = np.eye(4)
             T[:3, :3] = q2r(np.asarray(handle.wxyz, dtype=float))
             T[:3, 3] = np.asarray(handle.position, dtype=float)
-            if not np.all(np.isfinite(T)):
-                return
-            if self.on_gizmo is not None:
+            if np.all(np.isfinite(T)) and self.on_gizmo is not None:
                 self.on_gizmo(name, T)
 
     def _is_dragging(self, name: str) -> bool:
@@ -404,6 +434,19 @@ def _faces_by_colour(face_rgb: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]
         idx = np.nonzero(key == k)[0]
         out.append((np.array([(k >> 16) & 255, (k >> 8) & 255, k & 255], dtype=float) / 255.0, idx))
     return out
+
+
+def _part_key(part: Any) -> tuple:
+    """What identifies a part's shape: its arrays (by identity, or by content when small) and colours."""
+
+    def arr(a: Any) -> Any:
+        if a is None:
+            return None
+        a = np.asarray(a)
+        return (a.shape, a.tobytes()) if a.size <= 3 * 4096 else (a.shape, id(a))
+
+    rgb = None if part.rgb is None else tuple(np.asarray(part.rgb, dtype=float).round(4))
+    return (arr(part.vertices), arr(part.faces), rgb, arr(part.face_rgb))
 
 
 def _compact(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,211 @@
+"""The control panel: initial values, values from the browser, per-frame refresh, errors."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from ejsrl.view import _gui
+
+
+class Client:
+    """Stands in for a connected browser: records its notifications."""
+
+    def __init__(self) -> None:
+        self.notes: list[tuple[str, str, str]] = []
+
+    def add_notification(self, title, body, *, color=None, auto_close_seconds=None, **_kw):
+        self.notes.append((title, body, color))
+
+
+def binding(served, bind: str):
+    return next(b for b in served.view.panel.controls if b.control.bind == bind)
+
+
+def connect(served, monkeypatch) -> Client:
+    client = Client()
+    monkeypatch.setattr(served.server, "get_clients", lambda: {1: client})
+    return client
+
+
+def test_controls_start_at_the_model_values(served):
+    p = served.view.panel
+    assert binding(served, "L").handle.value == pytest.approx(1.0)
+    assert binding(served, "L").handle.label == "Length"
+    assert binding(served, "n").handle.value == 3
+    assert binding(served, "on").handle.value is True
+    assert binding(served, "name").handle.value == "lab"
+    assert binding(served, "mode").handle.value == "fast"
+    assert binding(served, "mode").handle.options == ("slow", "fast")
+    assert binding(served, "q[1]").handle.value == pytest.approx(0.5)
+    assert p.play_button.label == "Play"
+    assert set(p.buttons) == {"Double L"}
+    assert len(p.plots) == 1 and len(p.images) == 1 and len(p.labels) == 1
+
+
+def test_a_browser_value_is_clamped_then_applied(served):
+    b = binding(served, "L")
+    served.view.panel.set_from_client(b, 7.5, Client())
+    assert served.app.model.L == pytest.approx(2.0)
+    assert b.handle.value == pytest.approx(2.0)  # the panel shows the clamped value
+    assert served.app.model.x == pytest.approx(0.0)  # fixed relations ran: x = L sin(0)
+
+
+def test_an_array_element_control_writes_that_element(served):
+    served.view.panel.set_from_client(binding(served, "q[1]"), -0.25, Client())
+    assert served.app.model.q.tolist() == [0.0, -0.25, 1.0]
+
+
+def test_a_refused_value_is_not_applied_and_the_user_is_told(served):
+    client = Client()
+    b = binding(served, "n")
+    served.view.panel.set_from_client(b, float("nan"), client)
+    assert served.app.model.n == 3
+    assert b.handle.value == 3  # put back
+    assert client.notes and client.notes[0][2] == "red" and "Count" in client.notes[0][1]
+
+
+def test_an_unknown_dropdown_option_is_refused(served):
+    client = Client()
+    served.view.panel.set_from_client(binding(served, "mode"), "warp", client)
+    assert served.app.model.mode == "fast" and client.notes
+
+
+def test_model_changes_reach_the_controls_every_frame(served):
+    served.app.model.L = 0.5
+    served.app.model.name = "changed"
+    served.app.frame()
+    assert binding(served, "L").handle.value == pytest.approx(0.5)
+    assert binding(served, "name").handle.value == "changed"
+
+
+def test_a_control_the_user_just_moved_is_not_overwritten(served):
+    b = binding(served, "L")
+    served.view.panel.set_from_client(b, 1.5, Client())
+    served.app.model.L = 0.3  # the simulation changes it right away
+    served.app.frame()
+    assert b.handle.value == pytest.approx(1.5)
+    b.user_time = time.monotonic() - _gui.USER_HOLD_SECONDS - 0.01
+    served.app.frame()
+    assert b.handle.value == pytest.approx(0.3)
+
+
+def test_unchanged_values_are_not_resent(served):
+    served.app.frame()
+    served.sent.clear()
+    served.app.frame()  # paused, nothing changed
+    assert served.messages("GuiUpdateMessage") == []
+
+
+def test_label_text_is_interpolated_each_frame(served):
+    served.app.model.L = 2.0
+    served.app.play()
+    for _ in range(3):
+        served.app.frame()
+    label = served.view.panel.labels[0][1]
+    assert label.content == f"x = {served.app.model.x:.3f}"
+    assert served.view.panel.readout.content == "**t** = 0.3"
+
+
+def test_buttons_run_their_action(served):
+    served.view.panel.buttons["Double L"]._impl.update_cb[0](None)
+    assert served.app.model.L == pytest.approx(2.0)
+
+
+def test_play_step_reset(served):
+    p = served.view.panel
+    p.play_button._impl.update_cb[0](None)
+    assert served.app.is_playing()
+    served.app.frame()
+    assert p.play_button.label == "Pause"
+    p.play_button._impl.update_cb[0](None)
+    assert not served.app.is_playing()
+    p.step_button._impl.update_cb[0](None)
+    assert served.app.model.t == pytest.approx(0.2)
+    p.reset_button._impl.update_cb[0](None)
+    assert served.app.model.t == 0.0
+
+
+def test_plots_append_one_point_a_frame_within_the_window(served):
+    served.app.play()
+    for _ in range(30):
+        served.app.frame()
+    plot = served.view.panel.plots[0]
+    plot.push(force=True)
+    x, y, L = plot.handle.data
+    assert x[-1] == pytest.approx(3.0)
+    assert x[0] >= 3.0 - 2.0 - 1e-9  # window 2.0
+    assert np.allclose(y, np.sin(x)) and np.allclose(L, 1.0)
+    assert plot.handle.series[1]["stroke"] == "rgb(255, 0, 0)"
+    served.app.reset()
+    assert len(plot.handle.data[0]) == 0
+
+
+def test_plot_pushes_are_throttled_while_playing(served):
+    served.app.play()
+    served.app.frame()
+    before = len(served.messages("GuiUpdateMessage"))
+    for _ in range(10):
+        served.app.frame()  # all within far less than 1/15 s
+    pushes = [m for m in served.messages("GuiUpdateMessage")[before:] if "data" in m.updates]
+    assert len(pushes) <= 2
+
+
+def test_images_are_sent_only_when_they_change(served):
+    im = served.view.panel.images[0]
+    served.app.frame()
+    assert im.pushes == 1
+    assert im.handle.image.shape == (24, 32, 3)
+    assert tuple(im.handle.image[6, 5 + 2]) != (60, 60, 60)  # the marker is drawn over it
+    time.sleep(0.06)
+    served.app.frame()
+    assert im.pushes == 1
+    served.app.model.n = 5
+    time.sleep(0.06)
+    served.app.frame()
+    assert im.pushes == 2
+
+
+@pytest.mark.parametrize("served", [{"controls": False}], indirect=True)
+def test_the_control_bar_can_be_left_out(served):
+    assert served.view.panel.play_button is None
+
+
+@pytest.mark.parametrize("served", [{}], indirect=True)
+def test_errors_in_user_code_are_shown_and_cleared_on_reset(served, monkeypatch):
+    client = connect(served, monkeypatch)
+    app = served.app
+    # make the view evaluate a failing expression: a label calling ratio() with k == 1
+    from ejsrl.view.elements import Dynamic, Label
+
+    served.view.panel.labels.append((Label(Dynamic(lambda m: m.ratio(), "ratio()"), where="lab.ejs.yaml:50:9"),
+                                     served.server.gui.add_markdown("")))
+    app.play()
+    app.frame()
+    assert app.error is not None and not app.is_playing()
+    box = served.view.panel.error_box
+    assert box.visible
+    assert "lab.ejs.yaml:50:9" in box.content and "ZeroDivisionError" in box.content
+    assert any(color == "red" and "lab.ejs.yaml:50:9" in title for title, _, color in client.notes)
+    app.reset()
+    app.frame()
+    assert app.error is None and not box.visible
+
+
+def test_error_text_is_escaped(served, monkeypatch):
+    connect(served, monkeypatch)
+    from types import SimpleNamespace
+
+    served.app.error = SimpleNamespace(message="<script>alert(1)</script>", where="x:1:1")
+    served.app.error_rev += 1
+    served.app.frame()
+    assert "<script>" not in served.view.panel.error_box.content
+
+
+def test_alerts_become_notifications(served, monkeypatch):
+    client = connect(served, monkeypatch)
+    served.app.model.alert("Target reached")
+    served.app.frame()
+    assert ("Alert", "Target reached", "yellow") in client.notes
