@@ -1,1 +1,130 @@
-"""ejsrl.vision."""
+"""ejsrl.vision: image functions over NumPy arrays, SUSAN, pipelines, the camera model and visual servoing.
+
+Images are (H, W) uint8 grey or (H, W, 3) uint8 RGB arrays; features are ``(x, y)`` =
+(column, row) pixel coordinates, as in OpenCV. Everything public is importable from here:
+
+    from ejsrl.vision import Pipeline, susan, CameraModel, interaction_matrix, ibvs_velocity
+"""
+
+from __future__ import annotations
+
+from ejsrl.vision._susan import SUSAN_MASK, susan, susan_corners, susan_edges, usan_area
+from ejsrl.vision.camera import CameraModel, intrinsics_from_fov
+from ejsrl.vision.color import (
+    adjust_brightness_contrast,
+    adjust_gamma,
+    clahe,
+    equalize_histogram,
+    histogram,
+    hsv_to_rgb,
+    invert,
+    normalize,
+    rgb_to_hsv,
+    threshold,
+    threshold_adaptive,
+    threshold_otsu,
+    to_gray,
+    to_rgb,
+)
+from ejsrl.vision.draw import draw_boxes, draw_circles, draw_contours, draw_lines, draw_points, draw_text
+from ejsrl.vision.edges import canny, gradient_magnitude, laplacian, prewitt, roberts, scharr, sobel
+from ejsrl.vision.features import (
+    Region,
+    blobs,
+    centroid,
+    color_mask,
+    color_segment,
+    connected_components,
+    fast_corners,
+    find_contours,
+    harris_corners,
+    harris_response,
+    hough_circles,
+    hough_lines,
+    hough_segments,
+    lk_track,
+    match_template,
+    moments,
+    orb_features,
+    shi_tomasi_corners,
+)
+from ejsrl.vision.filters import (
+    add_gaussian_noise,
+    add_salt_pepper_noise,
+    bilateral_filter,
+    black_hat,
+    box_filter,
+    convolve,
+    dilate,
+    erode,
+    gaussian_blur,
+    median_blur,
+    morph_close,
+    morph_gradient,
+    morph_open,
+    sharpen,
+    structuring_element,
+    top_hat,
+)
+from ejsrl.vision.geometry import affine_matrix, crop, flip, perspective_matrix, resize, rotate, warp_affine, warp_perspective
+from ejsrl.vision.pipeline import STEPS, Pipeline, PipelineResult
+from ejsrl.vision.servo import (
+    camera_twist_to_world,
+    eih_joint_velocities,
+    feature_error,
+    ibvs_velocity,
+    integrate_twist,
+    interaction_matrix,
+    match_points,
+    skew,
+    twist_transform,
+)
+
+#: the image functions (each takes and/or returns images), for documentation and counting
+IMAGE_FUNCTIONS: tuple[str, ...] = (
+    # conversions and thresholds
+    "to_gray", "to_rgb", "rgb_to_hsv", "hsv_to_rgb", "threshold", "threshold_otsu", "threshold_adaptive", "invert",
+    "normalize",
+    # adjustment and histograms
+    "adjust_brightness_contrast", "adjust_gamma", "equalize_histogram", "clahe", "histogram",
+    # geometry
+    "resize", "rotate", "flip", "crop", "warp_affine", "warp_perspective", "affine_matrix", "perspective_matrix",
+    # filters and noise
+    "box_filter", "gaussian_blur", "median_blur", "bilateral_filter", "sharpen", "convolve", "add_gaussian_noise",
+    "add_salt_pepper_noise",
+    # morphology
+    "structuring_element", "erode", "dilate", "morph_open", "morph_close", "morph_gradient", "top_hat", "black_hat",
+    # edges
+    "sobel", "scharr", "prewitt", "roberts", "laplacian", "gradient_magnitude", "canny", "susan_edges",
+    # point features
+    "harris_response", "harris_corners", "shi_tomasi_corners", "fast_corners", "orb_features", "susan_corners",
+    "usan_area", "susan",
+    # lines, circles, regions
+    "hough_lines", "hough_segments", "hough_circles", "connected_components", "find_contours", "moments", "centroid",
+    "blobs", "color_mask", "color_segment",
+    # matching and tracking
+    "match_template", "lk_track",
+    # drawing
+    "draw_points", "draw_lines", "draw_boxes", "draw_circles", "draw_contours", "draw_text",
+)  # fmt: skip
+
+__all__ = [
+    *IMAGE_FUNCTIONS,
+    "IMAGE_FUNCTIONS",
+    "SUSAN_MASK",
+    "Region",
+    "Pipeline",
+    "PipelineResult",
+    "STEPS",
+    "CameraModel",
+    "intrinsics_from_fov",
+    "interaction_matrix",
+    "ibvs_velocity",
+    "feature_error",
+    "skew",
+    "twist_transform",
+    "camera_twist_to_world",
+    "eih_joint_velocities",
+    "integrate_twist",
+    "match_points",
+]
