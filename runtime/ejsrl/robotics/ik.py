@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ._kinematics import jacobian_from_frames
+from .transforms import tr2angvec_vec
 
 if TYPE_CHECKING:
     from .robot import Robot
@@ -52,28 +53,7 @@ class IKSolution:
         return iter((self.q, self.success, self.iterations, self.searches, self.residual, self.reason))
 
 
-def _rot_error(R: Array) -> Array:
-    """Angle-axis vector (3,) of the rotation R (3, 3), robust near 0 and pi."""
-    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    c = 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)
-    s = 0.5 * np.sqrt(v @ v)
-    theta = np.arctan2(s, c)
-    if s > 1e-6:
-        return v * (theta / (2.0 * s))
-    if c > 0:  # small angle: log(R) ~ vee(R - R^T)/2
-        return 0.5 * v
-    # theta ~ pi: R ~ 2 u u^T - I, so u from the symmetric part (largest diagonal first)
-    B = 0.5 * (R + R.T)
-    k = int(np.argmax(np.diag(B)))
-    axis = np.empty(3)
-    axis[k] = np.sqrt(max(0.5 * (B[k, k] + 1.0), 0.0))
-    for j in range(3):
-        if j != k:
-            axis[j] = B[j, k] / (2.0 * axis[k])
-    axis /= np.linalg.norm(axis)
-    if axis @ v < 0:
-        axis = -axis
-    return axis * theta
+_rot_error = tr2angvec_vec  # log of a rotation, robust near 0 and pi
 
 
 def pose_error(T_goal: ArrayLike, T: ArrayLike) -> Array:

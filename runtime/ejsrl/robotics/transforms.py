@@ -6,6 +6,9 @@ Conventions (as in Corke's Robotics Toolbox / spatialmath):
 - Roll-pitch-yaw is the ZYX convention: ``R = Rz(yaw) @ Ry(pitch) @ Rx(roll)``
   (rotate about the fixed x axis by roll, then fixed y by pitch, then fixed z by yaw).
 - Quaternions are ``wxyz`` (scalar first), the viser convention, unit norm.
+- Euler angles are ZYZ: ``R = Rz(phi) @ Ry(theta) @ Rz(psi)``.
+- Angle-axis: rotation by ``theta`` about the unit vector ``v``; a rotation vector is
+  ``theta * v``.
 - ``T_a_b`` names the pose of frame b expressed in frame a.
 """
 
@@ -30,6 +33,20 @@ __all__ = [
     "r2t",
     "t2r",
     "trinv",
+    "eul2r",
+    "eul2tr",
+    "tr2eul",
+    "angvec2r",
+    "angvec2tr",
+    "tr2angvec",
+    "tr2angvec_vec",
+    "skew",
+    "vex",
+    "q2tr",
+    "qmul",
+    "qconj",
+    "qslerp",
+    "trinterp",
 ]
 
 Array = NDArray[np.float64]
@@ -175,3 +192,149 @@ def trinv(T: ArrayLike) -> Array:
     Ti[:3, :3] = Rt
     Ti[:3, 3] = -Rt @ T[:3, 3]
     return Ti
+
+
+def skew(v: ArrayLike) -> Array:
+    """Skew-symmetric matrix (3, 3) of a 3-vector: ``skew(a) @ b == cross(a, b)``."""
+    x, y, z = np.asarray(v, dtype=float).reshape(3)
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+
+
+def vex(S: ArrayLike) -> Array:
+    """The 3-vector of a skew-symmetric matrix (inverse of :func:`skew`)."""
+    S = np.asarray(S, dtype=float)
+    return 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])
+
+
+def eul2r(phi: float | ArrayLike, theta: float | None = None, psi: float | None = None) -> Array:
+    """Rotation (3, 3) from ZYZ Euler angles: ``Rz(phi) @ Ry(theta) @ Rz(psi)``.
+
+    Accepts ``eul2r(phi, theta, psi)`` or ``eul2r([phi, theta, psi])``."""
+    if theta is None:
+        phi, theta, psi = np.asarray(phi, dtype=float).reshape(3)
+    return rotz(phi) @ roty(theta) @ rotz(psi)  # type: ignore[arg-type]
+
+
+def eul2tr(phi: float | ArrayLike, theta: float | None = None, psi: float | None = None) -> Array:
+    """Homogeneous transform (4, 4) from ZYZ Euler angles, no translation."""
+    return r2t(eul2r(phi, theta, psi))
+
+
+def tr2eul(T: ArrayLike, *, flip: bool = False) -> Array:
+    """ZYZ Euler angles ``[phi, theta, psi]`` of a (3, 3) or (4, 4) matrix, ``theta`` in
+    [0, pi] (or [-pi, 0] with ``flip``). At theta = 0 or pi, phi is 0 and psi takes the
+    whole rotation about z."""
+    R = np.asarray(T, dtype=float)[:3, :3]
+    st = np.hypot(R[0, 2], R[1, 2])
+    if st < 1e-12:
+        phi = 0.0
+        if R[2, 2] > 0:
+            theta, psi = 0.0, np.arctan2(R[1, 0], R[0, 0])
+        else:
+            # R = Ry(pi) @ Rz(psi) = [[-c, s, 0], [s, c, 0], [0, 0, -1]]
+            theta, psi = np.pi, np.arctan2(R[1, 0], -R[0, 0])
+        return np.array([phi, theta if not flip else -theta, psi])
+    sgn = -1.0 if flip else 1.0
+    phi = np.arctan2(sgn * R[1, 2], sgn * R[0, 2])
+    theta = np.arctan2(sgn * st, R[2, 2])
+    psi = np.arctan2(sgn * R[2, 1], -sgn * R[2, 0])
+    return np.array([phi, theta, psi])
+
+
+def angvec2r(theta: float, v: ArrayLike) -> Array:
+    """Rotation (3, 3) by ``theta`` rad about the axis ``v`` (normalised; Rodrigues)."""
+    v = np.asarray(v, dtype=float).reshape(3)
+    nv = np.linalg.norm(v)
+    if nv == 0 or theta == 0:
+        return np.eye(3)
+    K = skew(v / nv)
+    return np.eye(3) + np.sin(theta) * K + (1.0 - np.cos(theta)) * (K @ K)
+
+
+def angvec2tr(theta: float, v: ArrayLike) -> Array:
+    """Homogeneous transform (4, 4) of :func:`angvec2r`."""
+    return r2t(angvec2r(theta, v))
+
+
+def tr2angvec_vec(T: ArrayLike) -> Array:
+    """Rotation vector ``theta * v`` (3,) of a (3, 3) or (4, 4) matrix, theta in [0, pi];
+    the matrix logarithm, robust near 0 and pi."""
+    R = np.asarray(T, dtype=float)[:3, :3]
+    v = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    c = 0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0)
+    s = 0.5 * np.sqrt(v @ v)
+    theta = np.arctan2(s, c)
+    if s > 1e-6:
+        return v * (theta / (2.0 * s))
+    if c > 0:  # small angle: log(R) ~ vee(R - R^T) / 2
+        return 0.5 * v
+    # theta ~ pi: R ~ 2 u u^T - I, so u from the symmetric part (largest diagonal first)
+    B = 0.5 * (R + R.T)
+    k = int(np.argmax(np.diag(B)))
+    axis = np.empty(3)
+    axis[k] = np.sqrt(max(0.5 * (B[k, k] + 1.0), 0.0))
+    for j in range(3):
+        if j != k:
+            axis[j] = B[j, k] / (2.0 * axis[k])
+    axis /= np.linalg.norm(axis)
+    if axis @ v < 0:
+        axis = -axis
+    return axis * theta
+
+
+def tr2angvec(T: ArrayLike) -> tuple[float, Array]:
+    """Angle (rad, in [0, pi]) and unit axis (3,) of a rotation; axis ``[0, 0, 0]`` when
+    the angle is zero."""
+    w = tr2angvec_vec(T)
+    theta = float(np.linalg.norm(w))
+    return theta, (w / theta if theta > 0 else np.zeros(3))
+
+
+def q2tr(q: ArrayLike) -> Array:
+    """Homogeneous transform (4, 4) of a quaternion ``wxyz``."""
+    return r2t(q2r(q))
+
+
+def qmul(q1: ArrayLike, q2: ArrayLike) -> Array:
+    """Hamilton product ``q1 * q2`` of quaternions ``wxyz`` (rotation q2 then q1 in the fixed
+    frame: ``q2r(qmul(a, b)) == q2r(a) @ q2r(b)``)."""
+    w1, x1, y1, z1 = np.asarray(q1, dtype=float)
+    w2, x2, y2, z2 = np.asarray(q2, dtype=float)
+    return np.array([
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    ])
+
+
+def qconj(q: ArrayLike) -> Array:
+    """Conjugate of a quaternion ``wxyz`` (the inverse rotation for a unit quaternion)."""
+    w, x, y, z = np.asarray(q, dtype=float)
+    return np.array([w, -x, -y, -z])
+
+
+def qslerp(q0: ArrayLike, q1: ArrayLike, s: float) -> Array:
+    """Spherical linear interpolation of unit quaternions ``wxyz`` at ``s`` in [0, 1],
+    along the shorter arc (constant angular speed)."""
+    a = np.asarray(q0, dtype=float) / np.linalg.norm(q0)
+    b = np.asarray(q1, dtype=float) / np.linalg.norm(q1)
+    d = float(a @ b)
+    if d < 0:
+        b, d = -b, -d
+    if d > 1.0 - 1e-12:
+        out = a + s * (b - a)
+        return out / np.linalg.norm(out)
+    th = np.arccos(min(d, 1.0))
+    out = (np.sin((1 - s) * th) * a + np.sin(s * th) * b) / np.sin(th)
+    return out / np.linalg.norm(out)
+
+
+def trinterp(T0: ArrayLike, T1: ArrayLike, s: float) -> Array:
+    """Pose (4, 4) interpolated at ``s`` in [0, 1]: translation linearly, rotation by SLERP."""
+    T0 = np.asarray(T0, dtype=float)
+    T1 = np.asarray(T1, dtype=float)
+    out = np.eye(4)
+    out[:3, 3] = (1 - s) * T0[:3, 3] + s * T1[:3, 3]
+    out[:3, :3] = q2r(qslerp(r2q(T0), r2q(T1), s))
+    return out
