@@ -173,14 +173,13 @@ def test_the_control_bar_can_be_left_out(served):
     assert served.view.panel.play_button is None
 
 
-@pytest.mark.parametrize("served", [{}], indirect=True)
 def test_errors_in_user_code_are_shown_and_cleared_on_reset(served, monkeypatch):
     client = connect(served, monkeypatch)
     app = served.app
-    # make the view evaluate a failing expression: a label calling ratio() with k == 1
+    # a label that calls ratio() (1 / (k - 1), with k == 1) once the simulation runs
     from ejsrl.view.elements import Dynamic, Label
 
-    served.view.panel.labels.append((Label(Dynamic(lambda m: m.ratio(), "ratio()"), where="lab.ejs.yaml:50:9"),
+    served.view.panel.labels.append((Label(Dynamic(lambda m: m.ratio() if m.t > 0 else 0, "ratio()"), where="lab.ejs.yaml:50:9"),
                                      served.server.gui.add_markdown("")))
     app.play()
     app.frame()
