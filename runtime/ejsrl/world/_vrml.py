@@ -623,25 +623,28 @@ class _Builder:
         if index.size and (index.max() >= len(pts) or index.min() < -1):
             bad = int(index[(index >= len(pts)) | (index < -1)][0])
             raise self.p.error(f"coordIndex {bad} is out of range: the Coordinate node has {len(pts)} points", ipos)
-        polys = _split(index)
-        tris: list[tuple[int, int, int]] = []
-        owner: list[int] = []  # which polygon each triangle comes from
-        corners: list[tuple[int, int, int]] = []  # positions in the flat index (for colours)
-        for k, (poly, start) in enumerate(polys):
-            if len(poly) < 3:
-                continue
-            local = _polygon_triangles(list(range(len(poly))), pts[poly])
-            for a, b, c in local:
-                tris.append((poly[a], poly[b], poly[c]))
-                corners.append((start + a, start + b, start + c))
-                owner.append(k)
-        f = np.array(tris, dtype=np.int64).reshape(-1, 3)
+        starts, lengths = _split(index)
+        # triangles go straight through; larger polygons are triangulated one by one
+        k3 = np.flatnonzero(lengths == 3)
+        corner_parts = [starts[k3, None] + np.arange(3)]
+        owner_parts = [k3]
+        for k in np.flatnonzero(lengths > 3).tolist():
+            s0 = int(starts[k])
+            poly = index[s0 : s0 + lengths[k]]
+            local = np.array(_polygon_triangles(list(range(len(poly))), pts[poly]), dtype=np.int64).reshape(-1, 3)
+            corner_parts.append(s0 + local)
+            owner_parts.append(np.full(len(local), k))
+        owner = np.concatenate(owner_parts)
+        order = np.argsort(owner, kind="stable")  # faces in the file's polygon order
+        owner = owner[order]
+        corners = np.concatenate(corner_parts).astype(np.int64)[order]
+        f = index[corners] if len(corners) else np.zeros((0, 3), dtype=np.int64)
         if not self.num(geom, "ccw", True):
             f = f[:, ::-1]
-        face_rgb = self.face_colors(geom, polys, np.array(owner, dtype=np.int64), np.array(corners, dtype=np.int64).reshape(-1, 3), index)
+        face_rgb = self.face_colors(geom, len(starts), owner, corners, index)
         return pts, f, face_rgb
 
-    def face_colors(self, geom: VNode, polys: list[tuple[list[int], int]], owner: NDArray[np.int64], corners: NDArray[np.int64], index: NDArray[np.int64]) -> Array | None:
+    def face_colors(self, geom: VNode, n_polys: int, owner: NDArray[np.int64], corners: NDArray[np.int64], index: NDArray[np.int64]) -> Array | None:
         color = self.node_field(geom, "color")
         if color is None:
             return None
@@ -655,10 +658,10 @@ class _Builder:
         cpos = geom.field_pos.get("colorIndex", color.pos)
         per_vertex = self.num(geom, "colorPerVertex", True)
         if not per_vertex:
-            which = cindex if cindex.size else np.arange(len(polys))
-            if len(which) < len(polys):
-                raise self.p.error(f"colorPerVertex FALSE needs a colour for each of the {len(polys)} faces, got {len(which)}", cpos)
-            which = which[: len(polys)]
+            which = cindex if cindex.size else np.arange(n_polys)
+            if len(which) < n_polys:
+                raise self.p.error(f"colorPerVertex FALSE needs a colour for each of the {n_polys} faces, got {len(which)}", cpos)
+            which = which[:n_polys]
             if which.size and (which.max() >= len(cols) or which.min() < 0):
                 raise self.p.error(f"colour index out of range: the Color node has {len(cols)} colours", cpos)
             return cols[which[owner]]
@@ -674,21 +677,14 @@ class _Builder:
         return cols[per_corner].mean(axis=1)
 
 
-def _split(index: NDArray[np.int64]) -> list[tuple[list[int], int]]:
-    """Polygons of a ``coordIndex`` list (``-1`` ends each one) with their start offsets."""
-    polys = []
-    cur: list[int] = []
-    start = 0
-    for k, i in enumerate(index.tolist()):
-        if i == -1:
-            polys.append((cur, start))
-            cur = []
-            start = k + 1
-        else:
-            cur.append(i)
-    if cur:
-        polys.append((cur, start))
-    return polys
+def _split(index: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Start offsets and lengths of the polygons of a ``coordIndex`` list (``-1`` ends each)."""
+    ends = np.flatnonzero(index == -1)
+    starts = np.concatenate([[0], ends + 1])
+    stops = np.concatenate([ends, [len(index)]])
+    if starts[-1] == len(index):  # nothing after the last -1
+        starts, stops = starts[:-1], stops[:-1]
+    return starts.astype(np.int64), (stops - starts).astype(np.int64)
 
 
 def read_vrml(path: str | Path) -> tuple[list[MeshPart], list[str]]:
