@@ -1,0 +1,315 @@
+"""Parse spec snippets with ``ast``, resolve their names, and rewrite them for the model class.
+
+The language's rules (spec-language.md, "Values, expressions and code"):
+
+- model variables are read and assigned by bare name -> ``self.name``;
+- custom functions are called by bare name -> ``self.name(...)``; assigning to one is an error;
+- the prelude's simulation and world controls -> ``self.name(...)``;
+- ``np``, the ``math`` names, names bound by ``imports`` and Python's builtins stay globals;
+- any other name assigned in a block is a local of that block; function parameters,
+  lambda parameters and comprehension variables are locals of their own scope;
+- any other name is an error, reported at its spec location with the closest known name.
+"""
+
+from __future__ import annotations
+
+import ast
+import builtins
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+from ejsgen._suggest import did_you_mean
+from ejsgen.errors import Location, SpecError
+from ejsgen.yamlload import TextOrigin
+
+__all__ = ["Names", "Snippet", "parse_snippet", "rewrite", "BUILTIN_NAMES"]
+
+BUILTIN_NAMES = frozenset(n for n in dir(builtins) if not n.startswith("_")) - {
+    "eval",
+    "exec",
+    "compile",
+    "__import__",
+    "globals",
+    "locals",
+    "vars",
+    "open",
+    "input",
+    "breakpoint",
+    "exit",
+    "quit",
+    "help",
+    "copyright",
+    "credits",
+    "license",
+}
+
+
+@dataclass
+class Names:
+    """What names mean in a spec.
+
+    ``variables``: model variables; ``functions``: custom function names; ``controls``:
+    prelude names that become model methods; ``globals``: names that stay module globals
+    (``np``, math names, imported names); ``extra``: names valid only in some blocks
+    (e.g. a program's motion commands), which become model methods too.
+    """
+
+    variables: set[str]
+    functions: set[str]
+    controls: set[str]
+    globals: set[str]
+    extra: set[str] = field(default_factory=set)
+
+    def known(self) -> set[str]:
+        return self.variables | self.functions | self.controls | self.globals | self.extra | set(BUILTIN_NAMES)
+
+
+@dataclass
+class Snippet:
+    """Code or an expression from the spec: its ``text``, where it starts, and what it is."""
+
+    text: str
+    origin: TextOrigin
+    file: str
+    what: str  # e.g. "model.init", "view slider on_change"
+    mode: str = "exec"  # "exec" or "eval"
+
+    def location(self, lineno: int, col_offset: int) -> Location:
+        """The spec location of a position (1-based line, 0-based col) in the snippet."""
+        line = self.origin.line + max(lineno, 1) - 1
+        if self.origin.block or lineno <= 1:
+            return Location(self.file, line, self.origin.col + col_offset)
+        return Location(self.file, line, col_offset + 1)
+
+
+def parse_snippet(snippet: Snippet) -> ast.AST:
+    """Parse a snippet; a Python syntax error becomes a ``SpecError`` at its spec location."""
+    text = snippet.text
+    if snippet.mode == "eval":
+        if not text.strip():
+            raise SpecError(snippet.location(1, 0), f"empty expression in {snippet.what}")
+    if snippet.mode == "eval":
+        text = "(" + text + "\n)"  # allows leading spaces and line breaks; shifts line 1 by one column
+    try:
+        tree = ast.parse(text, mode=snippet.mode, type_comments=False)
+    except SyntaxError as exc:
+        lineno = exc.lineno or 1
+        col = (exc.offset or 1) - 1
+        if snippet.mode == "eval" and lineno == 1:
+            col = max(col - 1, 0)
+        msg = exc.msg
+        if msg.startswith("unexpected indent") or msg.startswith("unindent"):
+            msg += " (code in a YAML block starts at the block's indentation)"
+        if msg == "unexpected EOF while parsing" or "was never closed" in msg:
+            msg = msg.replace("'('", "a parenthesis") if snippet.mode == "eval" else msg
+        raise SpecError(snippet.location(lineno, col), f"Python syntax error in {snippet.what}: {msg}") from None
+    if snippet.mode == "eval":
+        for node in ast.walk(tree):
+            if getattr(node, "lineno", None) == 1:
+                node.col_offset = max(node.col_offset - 1, 0)  # type: ignore[attr-defined]
+            if getattr(node, "end_lineno", None) == 1 and node.end_col_offset is not None:  # type: ignore[attr-defined]
+                node.end_col_offset = max(node.end_col_offset - 1, 0)  # type: ignore[attr-defined]
+    return tree
+
+
+# -- scope analysis ---------------------------------------------------------------------------------
+
+
+def _target_names(node: ast.AST) -> Iterable[str]:
+    if isinstance(node, ast.Name):
+        yield node.id
+    elif isinstance(node, (ast.Tuple, ast.List)):
+        for elt in node.elts:
+            yield from _target_names(elt)
+    elif isinstance(node, ast.Starred):
+        yield from _target_names(node.value)
+
+
+def _assigned_in(body: list[ast.stmt] | ast.AST) -> set[str]:
+    """Names bound in a scope (not descending into nested functions, lambdas, comprehensions)."""
+    out: set[str] = set()
+    stack: list[ast.AST] = list(body) if isinstance(body, list) else [body]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            out.add(node.name)
+            for d in node.decorator_list:
+                stack.append(d)
+            if not isinstance(node, ast.ClassDef):
+                stack.extend(node.args.defaults)
+                stack.extend(d for d in node.args.kw_defaults if d is not None)
+            continue
+        if isinstance(node, (ast.Lambda, ast.ListComp, ast.SetComp, ast.DictComp, ast.GeneratorExp)):
+            continue
+        if isinstance(node, (ast.Assign,)):
+            for t in node.targets:
+                out.update(_target_names(t))
+        elif isinstance(node, (ast.AugAssign, ast.AnnAssign)):
+            out.update(_target_names(node.target))
+        elif isinstance(node, (ast.For, ast.AsyncFor)):
+            out.update(_target_names(node.target))
+        elif isinstance(node, ast.withitem) and node.optional_vars is not None:
+            out.update(_target_names(node.optional_vars))
+        elif isinstance(node, ast.ExceptHandler) and node.name:
+            out.add(node.name)
+        elif isinstance(node, ast.NamedExpr):
+            out.update(_target_names(node.target))
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            for alias in node.names:
+                out.add((alias.asname or alias.name).split(".")[0])
+        stack.extend(ast.iter_child_nodes(node))
+    return out
+
+
+def _arg_names(args: ast.arguments) -> set[str]:
+    names = {a.arg for a in args.posonlyargs + args.args + args.kwonlyargs}
+    if args.vararg:
+        names.add(args.vararg.arg)
+    if args.kwarg:
+        names.add(args.kwarg.arg)
+    return names
+
+
+class _Rewriter(ast.NodeTransformer):
+    """Rewrites names to model attributes and collects unknown-name errors."""
+
+    def __init__(self, names: Names, snippet: Snippet, block_locals: set[str]) -> None:
+        self.names = names
+        self.snippet = snippet
+        self.scopes: list[set[str]] = [block_locals]
+        self.errors: list[SpecError] = []
+        self.known = names.known()
+
+    # scope helpers
+    def _is_local(self, name: str) -> bool:
+        # innermost scopes first; function parameters shadow model names
+        for scope in reversed(self.scopes):
+            if name in scope:
+                return True
+        return False
+
+    def _err(self, node: ast.AST, message: str, hint: str = "") -> None:
+        self.errors.append(SpecError(self.snippet.location(node.lineno, node.col_offset), message, hint))  # type: ignore[attr-defined]
+
+    def _model_attr(self, node: ast.Name) -> ast.Attribute:
+        attr = ast.Attribute(value=ast.Name(id="self", ctx=ast.Load()), attr=node.id, ctx=node.ctx)
+        return ast.copy_location(attr, node)
+
+    def visit_Name(self, node: ast.Name) -> ast.AST:
+        name = node.id
+        store = isinstance(node.ctx, (ast.Store, ast.Del))
+        if name in self.names.functions:
+            if store:
+                self._err(node, f"cannot assign to '{name}': it is a custom function")
+                return node
+            return self._model_attr(node) if not self._is_local(name) else node
+        if self._is_local(name) and (name not in self.names.variables or self._shadowing(name)):
+            return node
+        if name in self.names.variables:
+            return self._model_attr(node)
+        if name in self.names.controls or name in self.names.extra:
+            if store:
+                self._err(node, f"cannot assign to '{name}': it is a prelude name")
+                return node
+            return self._model_attr(node)
+        if name in self.names.globals or name in BUILTIN_NAMES:
+            if store:
+                self._err(node, f"cannot assign to '{name}': it is a prelude or imported name")
+            return node
+        if name == "self":
+            self._err(node, "'self' is not a name in spec code", "use the variables' names directly")
+            return node
+        if name in ("eval", "exec", "compile", "__import__", "globals", "locals", "vars", "open", "input", "breakpoint"):
+            self._err(node, f"'{name}' is not available in spec code")
+            return node
+        self._err(node, f"unknown name '{name}'", did_you_mean(name, self.known | set().union(*self.scopes)))
+        return node
+
+    def _shadowing(self, name: str) -> bool:
+        """A parameter/comprehension/lambda scope (not the block) binds ``name``."""
+        return any(name in scope for scope in self.scopes[1:])
+
+    # nested scopes
+    def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> ast.AST:
+        node.args = self.visit(node.args)
+        if isinstance(node, ast.Lambda):
+            self.scopes.append(_arg_names(node.args))
+            node.body = self.visit(node.body)
+        else:
+            node.decorator_list = [self.visit(d) for d in node.decorator_list]
+            if node.returns is not None:
+                node.returns = self.visit(node.returns)
+            local = _arg_names(node.args) | (_assigned_in(node.body) - self.names.variables)
+            self.scopes.append(local)
+            node.body = [self.visit(s) for s in node.body]
+        self.scopes.pop()
+        return node
+
+    def visit_arguments(self, node: ast.arguments) -> ast.AST:
+        node.defaults = [self.visit(d) for d in node.defaults]
+        node.kw_defaults = [self.visit(d) if d is not None else None for d in node.kw_defaults]
+        return node
+
+    def visit_FunctionDef(self, node: ast.FunctionDef) -> ast.AST:
+        return self._function(node)
+
+    def visit_AsyncFunctionDef(self, node: ast.AsyncFunctionDef) -> ast.AST:
+        return self._function(node)
+
+    def visit_Lambda(self, node: ast.Lambda) -> ast.AST:
+        return self._function(node)
+
+    def _comprehension(self, node: ast.ListComp | ast.SetComp | ast.GeneratorExp | ast.DictComp) -> ast.AST:
+        bound: set[str] = set()
+        for gen in node.generators:
+            bound.update(_target_names(gen.target))
+        # the first iterable is evaluated in the enclosing scope
+        node.generators[0].iter = self.visit(node.generators[0].iter)
+        self.scopes.append(bound)
+        for i, gen in enumerate(node.generators):
+            gen.target = self.visit(gen.target)
+            if i:
+                gen.iter = self.visit(gen.iter)
+            gen.ifs = [self.visit(x) for x in gen.ifs]
+        if isinstance(node, ast.DictComp):
+            node.key = self.visit(node.key)
+            node.value = self.visit(node.value)
+        else:
+            node.elt = self.visit(node.elt)
+        self.scopes.pop()
+        return node
+
+    visit_ListComp = _comprehension
+    visit_SetComp = _comprehension
+    visit_GeneratorExp = _comprehension
+    visit_DictComp = _comprehension
+
+    def visit_Global(self, node: ast.Global) -> ast.AST:
+        self._err(node, "'global' is not needed in spec code", "model variables are assigned by their bare names")
+        return node
+
+    def visit_Nonlocal(self, node: ast.Nonlocal) -> ast.AST:
+        self._err(node, "'nonlocal' is not supported in spec code")
+        return node
+
+    def visit_Import(self, node: ast.Import) -> ast.AST:
+        self._err(node, "imports go in the spec's 'imports' list, not inside code")
+        return node
+
+    visit_ImportFrom = visit_Import  # type: ignore[assignment]
+
+    def visit_ClassDef(self, node: ast.ClassDef) -> ast.AST:
+        self._err(node, "class definitions are not supported in spec code")
+        return node
+
+
+def rewrite(tree: ast.AST, names: Names, snippet: Snippet, *, extra_locals: Iterable[str] = ()) -> tuple[ast.AST, list[SpecError]]:
+    """Resolve and rewrite the names of a parsed snippet; returns (tree, errors)."""
+    if isinstance(tree, ast.Module):
+        block_locals = (_assigned_in(tree.body) - names.variables - names.functions) | set(extra_locals)
+    else:
+        block_locals = set(extra_locals)
+    rw = _Rewriter(names, snippet, block_locals)
+    new = rw.visit(tree)
+    ast.fix_missing_locations(new)
+    return new, rw.errors

@@ -1,0 +1,513 @@
+"""Compile the view: each element becomes an ``ejsrl.view.elements`` record in ``VIEW``.
+
+Dynamic properties (expressions) become methods of the model, referenced as
+``E.Dynamic(Model._view3_position, "[x, 0, y]")``; bind targets become getter and setter
+methods; actions and ``on_change`` code become methods too.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+import string
+from typing import TYPE_CHECKING, Any
+
+from ejsgen._shapes import infer_shape, literal_shape
+from ejsgen._suggest import did_you_mean
+from ejsgen.errors import SpecError
+from ejsgen.plan import Line, Src, py
+from ejsgen.validate import ViewItem
+from ejsgen.yamlload import Path_
+
+if TYPE_CHECKING:
+    from ejsgen.compiler import Compiler
+
+__all__ = ["ViewCompiler"]
+
+# kind -> {property: type}; types: num, vec3, vec, mat, mat4, mat3, text, file, int, bool, files, expr, ints2
+_OWN_PROPS: dict[str, dict[str, str]] = {
+    "box": {"size": "vec3"},
+    "sphere": {"radius": "num"},
+    "cylinder": {"radius": "num", "height": "num"},
+    "arrow": {"start": "vec3", "vector": "vec3", "width": "num"},
+    "line": {"points": "mat", "width": "num"},
+    "trail": {"point": "vec3", "max_points": "int", "width": "num"},
+    "points": {"points": "mat", "size": "num"},
+    "frame": {"size": "num"},
+    "grid": {"size": "num", "cell": "num"},
+    "text3d": {"text": "text"},
+    "mesh": {"file": "file", "scale": "num"},
+    "group": {},
+    "robot": {"model": "expr", "q": "vec", "base": "mat4", "meshes": "files", "show_frames": "bool"},
+    "camera": {"fov": "num", "intrinsics": "mat3", "resolution": "ints2"},
+    "gizmo": {"scale": "num"},
+}
+_MAX_LEN = 100
+
+
+def _slug(text: str) -> str:
+    return re.sub(r"\W+", "_", text).strip("_") or "x"
+
+
+class ViewCompiler:
+    """Compiles the view tree using the model compiler's names, methods and errors."""
+
+    def __init__(self, compiler: Compiler) -> None:
+        self.c = compiler
+        self.n = 0
+        self.scene_names: set[str] = set()
+        self.auto_counts: dict[str, int] = {}
+        self.binds: dict[str, tuple[str, str, str]] = {}
+
+    # -- formatting ------------------------------------------------------------------------------
+    def call(self, fn: str, kwargs: dict[str, Any], indent: int) -> list[str]:
+        parts = [f"{k}={py(v) if not isinstance(v, list) or not v or not isinstance(v[0], _Block) else '...'}" for k, v in kwargs.items() if not isinstance(v, _Children)]
+        children = {k: v for k, v in kwargs.items() if isinstance(v, _Children)}
+        pad = " " * indent
+        one = f"{pad}{fn}(" + ", ".join(parts) + ")"
+        if not children and len(one) <= _MAX_LEN:
+            return [one + ","]
+        lines = [f"{pad}{fn}("]
+        for p in parts:
+            lines.append(f"{pad}    {p},")
+        for k, ch in children.items():
+            if not ch.items:
+                lines.append(f"{pad}    {k}=[],")
+                continue
+            lines.append(f"{pad}    {k}=[")
+            for item in ch.items:
+                lines.extend(item)
+            lines.append(f"{pad}    ],")
+        lines.append(f"{pad}),")
+        return lines
+
+    # -- properties --------------------------------------------------------------------------------
+    def dynamic(self, path: Path_, base: str, what: str, text: str) -> Src | None:
+        name = self.c.expr_method(path, base, what, f"View: {what}.")
+        if name is None:
+            return None
+        return Src(f"E.Dynamic(Model.{name}, {text!r})")
+
+    def interpolated(self, path: Path_, text: str, base: str, what: str) -> Any:
+        """A text with {expr} / {expr:fmt}: a constant if it has none, else a Dynamic f-string."""
+        try:
+            parsed = list(string.Formatter().parse(text))
+        except ValueError as exc:
+            self.c.errors.append(SpecError(self.c.loc(path), f"bad braces in {what}: {exc}", "write {{ and }} for literal braces"))
+            return text
+        if all(f is None for _, f, _, _ in parsed):
+            return text.replace("{{", "{").replace("}}", "}")
+        origin = self.c.doc.origins.get(path)
+        values: list[ast.expr] = []
+        pos = 0
+        for literal, field, spec, conv in parsed:
+            if literal:
+                values.append(ast.Constant(literal))
+            if field is None:
+                continue
+            if not field.strip():
+                self.c.errors.append(SpecError(self.c.loc(path), f"empty {{}} in {what}", "put an expression inside, e.g. {t:.2f}"))
+                continue
+            at = text.find("{" + field, pos)
+            pos = max(at, pos) + 1
+            sub_origin = None
+            if origin is not None:
+                from ejsgen.yamlload import TextOrigin
+
+                before = text[: max(at, 0) + 1]
+                line = origin.line + before.count("\n")
+                col = (origin.col + len(before)) if "\n" not in before else len(before.rsplit("\n", 1)[1]) + (origin.col if origin.block else 1)
+                sub_origin = TextOrigin(line, col, False)
+            res = self._expr_with_origin(field, sub_origin, path, f"{{{field}}} in {what}")
+            if res is None:
+                continue
+            fmt = None
+            if spec:
+                fmt = ast.JoinedStr([ast.Constant(spec)])
+            values.append(ast.FormattedValue(res, ord(conv) if conv else -1, fmt))
+        joined = ast.JoinedStr(values)
+        name = self.c.method_name(base)
+        self.c.add_method(name, "self", f"View: {what}.", [Line(f"return {ast.unparse(joined)}", self.c.loc(path))])
+        return Src(f"E.Dynamic(Model.{name}, {text!r})")
+
+    def _expr_with_origin(self, text: str, origin: Any, path: Path_, what: str) -> ast.expr | None:
+        from ejsgen._resolve import Snippet, parse_snippet, rewrite
+        from ejsgen.yamlload import TextOrigin
+
+        snippet = Snippet(text, origin or TextOrigin(*self.c.doc.positions.get(path, (1, 1)), False), self.c.doc.file, what, "eval")
+        try:
+            tree = parse_snippet(snippet)
+        except SpecError as err:
+            self.c.errors.append(err)
+            return None
+        new, errs = rewrite(tree, self.c.names, snippet)
+        self.c.errors.extend(errs)
+        assert isinstance(new, ast.Expression)
+        return new.body
+
+    def number(self, value: Any, path: Path_, base: str, what: str) -> Any:
+        if isinstance(value, str):
+            return self.dynamic(path, base, what, value)
+        return value
+
+    def vector(self, value: Any, path: Path_, base: str, what: str, length: int | None) -> Any:
+        """A list of numbers/expressions, or one expression; checked for ``length`` when known."""
+        if isinstance(value, str):
+            res = self.c.expr_source(path, what)
+            if res is None:
+                return None
+            shape = infer_shape(res[1], self.c.var_shapes)
+            if length is not None and shape is not None and shape != (length,):
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} needs {length} numbers, but '{value}' has shape {shape}"))
+            return self.dynamic(path, base, what, value)
+        if not isinstance(value, list):
+            self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be a list or an expression"))
+            return None
+        if length is not None and len(value) != length:
+            self.c.errors.append(SpecError(self.c.loc(path), f"{what} needs {length} numbers, got {len(value)}"))
+            return None
+        if all(not isinstance(v, str) for v in value):
+            if any(isinstance(v, list) for v in value):
+                return [[float(x) for x in row] for row in value]
+            return tuple(float(v) for v in value)
+        elts: list[str] = []
+        for i, v in enumerate(value):
+            if isinstance(v, str):
+                res = self.c.expr_source(path + (i,), what)
+                elts.append(res[0] if res else "0.0")
+            else:
+                elts.append(repr(float(v)))
+        name = self.c.method_name(base)
+        self.c.add_method(name, "self", f"View: {what}.", [Line(f"return [{', '.join(elts)}]", self.c.loc(path))])
+        return Src(f"E.Dynamic(Model.{name}, {_list_text(value)!r})")
+
+    def matrix(self, value: Any, path: Path_, base: str, what: str, shape: tuple[int, int] | None, cols: int | None = None) -> Any:
+        if isinstance(value, str):
+            res = self.c.expr_source(path, what)
+            if res is None:
+                return None
+            got = infer_shape(res[1], self.c.var_shapes)
+            if shape is not None and got is not None and got != shape:
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be {shape[0]}x{shape[1]}, but '{value}' has shape {got}"))
+            if cols is not None and got is not None and (len(got) != 2 or got[1] != cols):
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be N x {cols}, but '{value}' has shape {got}"))
+            return self.dynamic(path, base, what, value)
+        if isinstance(value, list) and value and all(isinstance(r, list) for r in value):
+            if any(isinstance(x, str) for r in value for x in r):
+                rows = []
+                for i, r in enumerate(value):
+                    items = []
+                    for j, x in enumerate(r):
+                        if isinstance(x, str):
+                            res = self.c.expr_source(path + (i, j), what)
+                            items.append(res[0] if res else "0.0")
+                        else:
+                            items.append(repr(float(x)))
+                    rows.append("[" + ", ".join(items) + "]")
+                name = self.c.method_name(base)
+                self.c.add_method(name, "self", f"View: {what}.", [Line(f"return [{', '.join(rows)}]", self.c.loc(path))])
+                return Src(f"E.Dynamic(Model.{name}, {_list_text(value)!r})")
+            got, err = literal_shape(value)
+            if err:
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what}: {err}"))
+                return None
+            if shape is not None and got != shape:
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be {shape[0]}x{shape[1]}, got {got[0]}x{got[1] if len(got) > 1 else 1}"))
+            if cols is not None and (got is None or len(got) != 2 or got[1] != cols):
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be a list of [x, y, z] points"))
+            return [[float(x) for x in r] for r in value]
+        self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be a list of rows or an expression"))
+        return None
+
+    def color(self, value: Any, path: Path_, base: str) -> Any:
+        from ejsrl.world.colors import is_color_literal
+
+        if value is None:
+            return None
+        if isinstance(value, str):
+            if is_color_literal(value):
+                return value
+            if re.fullmatch(r"#?[0-9a-fA-F]{3,8}", value) or (value.isalpha() and value.islower() and value not in self.c.names.variables and value not in self.c.names.functions):
+                from ejsrl.world.colors import CSS_COLORS
+
+                self.c.errors.append(SpecError(self.c.loc(path), f"unknown colour '{value}'", did_you_mean(value, CSS_COLORS) or "use a CSS name, '#rrggbb' or an RGB expression"))
+                return None
+            return self.dynamic(path, base, "a colour", value)
+        return self.vector(value, path, base, "a colour", 3)
+
+    # -- binds ------------------------------------------------------------------------------------------
+    def bind(self, text: str, path: Path_, kind: str) -> tuple[str, str, str] | None:
+        """Getter and setter methods for a bind target; returns (getter, setter, vtype)."""
+        c = self.c
+        tree = c.parse_rewrite(c.snippet(path, f"the bind target of a {kind}", "eval"))
+        if tree is None:
+            return None
+        assert isinstance(tree, ast.Expression)
+        node = tree.body
+        base = node.value if isinstance(node, ast.Subscript) else node
+        if not (isinstance(base, ast.Attribute) and isinstance(base.value, ast.Name) and base.value.id == "self" and base.attr in c.names.variables):
+            c.errors.append(SpecError(c.loc(path), f"the bind target '{text}' is not a variable", did_you_mean(text.split("[")[0].strip(), c.names.variables) or "bind names a model variable or one element, like q[2]"))
+            return None
+        var = base.attr
+        vtype = c.var_types.get(var, "auto")
+        shape = c.var_shapes.get(var)
+        if isinstance(node, ast.Subscript):
+            idx = _const_index(node.slice)
+            if idx is None:
+                c.errors.append(SpecError(c.loc(path), f"the bind target '{text}' must index with whole numbers, like q[2]"))
+                return None
+            if vtype not in ("array", "auto"):
+                c.errors.append(SpecError(c.loc(path), f"'{var}' is not an array, so '{text}' cannot be bound"))
+                return None
+            if shape is not None:
+                if len(idx) != len(shape) or any(not (-n <= i < n) for i, n in zip(idx, shape)):
+                    c.errors.append(SpecError(c.loc(path), f"'{text}' is out of range: '{var}' has shape {shape}"))
+                    return None
+            vtype = "float"
+        elif vtype == "array" and kind in ("slider", "number", "checkbox", "text", "dropdown"):
+            hint = f"bind one element, e.g. {var}[0]" if shape and len(shape) == 1 else ""
+            c.errors.append(SpecError(c.loc(path), f"a {kind} shows one value, but '{var}' is an array of shape {shape}", hint))
+            return None
+        key = ast.unparse(node)
+        if key in self.binds:
+            return self.binds[key]
+        slug = _slug(text)
+        getter = c.method_name(f"_get_{slug}")
+        c.add_method(getter, "self", f"Read the bound value {text}.", [Line(f"return {key}", c.loc(path))])
+        setter = c.method_name(f"_set_{slug}")
+        c.add_method(setter, "self, value", f"Write the bound value {text} (from the view).", [Line(f"{key} = value", c.loc(path))])
+        result = (getter, setter, "float" if vtype == "auto" else vtype)
+        self.binds[key] = result
+        return result
+
+    # -- elements ------------------------------------------------------------------------------------------
+    def compile(self, items: list[ViewItem]) -> list[str]:
+        lines = ["VIEW = ["]
+        for item in items:
+            lines.extend(self.element(item, 4))
+        lines.append("]")
+        return lines
+
+    def element(self, item: ViewItem, indent: int) -> list[str]:
+        self.n += 1
+        n = self.n
+        kind, p, path = item.kind, item.props, item.path
+        where = self.c.where(path)
+        c = self.c
+        base = f"_view{n}"
+        if kind == "folder":
+            kids = _Children([self.element(ch, indent + 8) for ch in item.children])
+            return self.call("E.Folder", {"label": p.label, "expanded": p.expanded, "where": where, "children": kids}, indent)
+        if kind == "tabs":
+            pad = " " * indent
+            lines = [f"{pad}E.Tabs(", f"{pad}    tabs=["]
+            for label, children in item.tabs:
+                lines.append(f"{pad}        ({label!r}, [")
+                for ch in children:
+                    lines.extend(self.element(ch, indent + 12))
+                lines.append(f"{pad}        ]),")
+            lines += [f"{pad}    ],", f"{pad}    where={where!r},", f"{pad}),"]
+            return lines
+        if kind == "markdown":
+            return self.call("E.Markdown", {"text": p.text, "where": where}, indent)
+        if kind == "label":
+            return self.call("E.Label", {"text": self.interpolated(path + ("text",), p.text, f"{base}_text", "a label"), "where": where}, indent)
+        if kind in ("slider", "number", "checkbox", "text", "dropdown"):
+            return self.control(item, n, indent)
+        if kind == "button":
+            lines = c.code_lines(p.action, path + ("action",), f"the action of button '{p.label}'")
+            name = c.add_method(c.method_name(f"_action_{_slug(p.label)}"), "self", f"Action of the button '{p.label}'.", lines)
+            return self.call("E.Button", {"label": p.label, "action": Src(f"Model.{name}"), "where": where}, indent)
+        if kind == "plot":
+            x = self.number(p.x, path + ("x",), f"{base}_x", "the plot's x")
+            series = []
+            for i, s in enumerate(p.series):
+                spath = path + ("series", i)
+                y = self.number(s.y, spath + ("y",), f"{base}_y{i}", f"series {i + 1} of the plot")
+                label = s.label if s.label is not None else str(s.y)
+                if s.color is not None:
+                    self.color(s.color, spath + ("color",), f"{base}_c{i}")
+                series.append(Src("E.Series(" + ", ".join([f"y={py(y)}", f"label={label!r}", f"color={s.color!r}", f"where={self.c.where(spath)!r}"]) + ")"))
+            if p.y_range is not None and (len(p.y_range) != 2 or p.y_range[0] >= p.y_range[1]):
+                c.errors.append(SpecError(c.loc(path + ("y_range",)), "y_range is [ymin, ymax] with ymin < ymax"))
+            y_range = tuple(float(v) for v in p.y_range) if p.y_range else None
+            kw = {"title": p.title, "x": x, "series": series, "window": p.window, "max_points": p.max_points, "y_range": y_range, "where": where}
+            return self.call("E.Plot", kw, indent)
+        if kind == "image":
+            src = self.dynamic(path + ("source",), f"{base}_source", "an image source", p.source)
+            pts = self.dynamic(path + ("points",), f"{base}_points", "the image's points", p.points) if p.points is not None else None
+            return self.call("E.Image", {"source": src, "label": p.label or "", "points": pts, "where": where}, indent)
+        if kind == "scene":
+            kids = _Children([self.node3d(ch, indent + 8) for ch in item.children])
+            return self.call("E.Scene", {"where": where, "children": kids}, indent)
+        raise AssertionError(kind)
+
+    def control(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        c = self.c
+        kind, p, path = item.kind, item.props, item.path
+        b = self.bind(p.bind, path + ("bind",), kind)
+        if b is None:
+            return []
+        getter, setter, vtype = b
+        want = {"checkbox": ("bool",), "text": ("str",), "slider": ("float", "int"), "number": ("float", "int")}.get(kind)
+        var = p.bind.split("[")[0].strip()
+        declared = c.var_types.get(var)
+        if want and declared not in ("auto", None) and "[" not in p.bind and vtype not in want:
+            c.errors.append(SpecError(c.loc(path + ("bind",)), f"a {kind} needs a {' or '.join(want)} variable, but '{var}' is {vtype}"))
+            return []
+        if declared == "auto" and want and "[" not in p.bind:
+            vtype = want[0]
+        on_change = None
+        if p.on_change is not None:
+            lines = c.code_lines(p.on_change, path + ("on_change",), f"the on_change of the {kind} of {p.bind}")
+            on_change = Src("Model." + c.add_method(c.method_name(f"_on_change_{_slug(p.bind)}"), "self", f"Runs after the user changes {p.bind}.", lines))
+        kw: dict[str, Any] = {"bind": p.bind, "get": Src(f"Model.{getter}"), "set": Src(f"Model.{setter}"), "label": p.label if p.label is not None else p.bind, "on_change": on_change, "vtype": vtype}
+        decl = c.var_decls.get(var)
+        if kind == "slider":
+            if p.min >= p.max:
+                c.errors.append(SpecError(c.loc(path + ("max",)), f"the slider's max ({p.max}) must be above its min ({p.min})"))
+            step = p.step if p.step is not None else (1 if vtype == "int" else (p.max - p.min) / 100)
+            if step <= 0:
+                c.errors.append(SpecError(c.loc(path + ("step",)), "the slider's step must be positive"))
+            kw.update(min=float(p.min), max=float(p.max), step=float(step))
+        elif kind == "number":
+            lo = p.min if p.min is not None else (decl.decl.min if decl else None)
+            hi = p.max if p.max is not None else (decl.decl.max if decl else None)
+            if lo is not None and hi is not None and lo > hi:
+                c.errors.append(SpecError(c.loc(path), f"min ({lo}) is above max ({hi})"))
+            kw.update(min=None if lo is None else float(lo), max=None if hi is None else float(hi), step=None if p.step is None else float(p.step))
+        elif kind == "dropdown":
+            if not p.options:
+                c.errors.append(SpecError(c.loc(path + ("options",)), "a dropdown needs at least one option"))
+            if vtype in ("float", "int") and any(isinstance(o, (str, bool)) for o in p.options):
+                c.errors.append(SpecError(c.loc(path + ("options",)), f"'{var}' is a number, so every option must be a number"))
+            if vtype == "str" and any(not isinstance(o, str) for o in p.options):
+                c.errors.append(SpecError(c.loc(path + ("options",)), f"'{var}' is text, so every option must be text"))
+            kw["options"] = list(p.options)
+        kw["where"] = c.where(path)
+        cls = {"slider": "E.Slider", "number": "E.Number", "checkbox": "E.Checkbox", "text": "E.Text", "dropdown": "E.Dropdown"}[kind]
+        return self.call(cls, kw, indent)
+
+    def node3d(self, item: ViewItem, indent: int) -> list[str]:
+        c = self.c
+        self.n += 1
+        n = self.n
+        kind, p, path = item.kind, item.props, item.path
+        base = f"_scene{n}"
+        name = p.name
+        if name is None:
+            self.auto_counts[kind] = self.auto_counts.get(kind, 0) + 1
+            name = f"{kind}{self.auto_counts[kind]}"
+            while name in self.scene_names:
+                self.auto_counts[kind] += 1
+                name = f"{kind}{self.auto_counts[kind]}"
+        elif name in self.scene_names:
+            c.errors.append(SpecError(c.loc(path + ("name",)), f"the scene already has an object named '{name}'"))
+        self.scene_names.add(name)
+        kw: dict[str, Any] = {"kind": kind, "name": name}
+        props: dict[str, Any] = {}
+        for prop, ptype in _OWN_PROPS[kind].items():
+            if prop not in p.model_fields_set and not (kind == "box" and prop == "size"):
+                if prop in ("radius", "height", "size", "cell", "width", "fov", "scale", "max_points", "start", "resolution", "show_frames"):
+                    value = getattr(p, prop)
+                    if isinstance(value, list):
+                        value = tuple(value)
+                    props[prop] = value
+                continue
+            value = getattr(p, prop)
+            ppath = path + (prop,)
+            what = f"the {prop} of {kind} '{name}'"
+            if value is None:
+                continue
+            if ptype == "num":
+                props[prop] = self.number(value, ppath, f"{base}_{prop}", what)
+            elif ptype == "vec3":
+                props[prop] = self.vector(value, ppath, f"{base}_{prop}", what, 3)
+            elif ptype == "vec":
+                props[prop] = self.vector(value, ppath, f"{base}_{prop}", what, None)
+            elif ptype == "mat":
+                props[prop] = self.matrix(value, ppath, f"{base}_{prop}", what, None, cols=3)
+            elif ptype == "mat4":
+                props[prop] = self.matrix(value, ppath, f"{base}_{prop}", what, (4, 4))
+            elif ptype == "mat3":
+                props[prop] = self.matrix(value, ppath, f"{base}_{prop}", what, (3, 3))
+            elif ptype == "text":
+                props[prop] = self.interpolated(ppath, value, f"{base}_{prop}", what)
+            elif ptype == "expr":
+                props[prop] = self.dynamic(ppath, f"{base}_{prop}", what, value)
+            elif ptype == "file":
+                props[prop] = c.asset(value, ppath, "mesh file")
+            elif ptype == "files":
+                props[prop] = [c.asset(f, ppath + (i,), "mesh file") for i, f in enumerate(value)]
+            elif ptype == "ints2":
+                if len(value) != 2 or any(v <= 0 or v > 8192 for v in value):
+                    c.errors.append(SpecError(c.loc(ppath), "resolution is [width, height] in pixels (1 to 8192)"))
+                props[prop] = tuple(int(v) for v in value)
+            else:
+                props[prop] = value
+        kw["props"] = props
+        if p.transform is not None:
+            if p.position is not None or p.rotation is not None:
+                c.errors.append(SpecError(c.loc(path + ("transform",)), "give either 'transform' or 'position'/'rotation', not both"))
+            kw["transform"] = self.matrix(p.transform, path + ("transform",), f"{base}_transform", f"the transform of '{name}'", (4, 4))
+        if p.position is not None:
+            kw["position"] = self.vector(p.position, path + ("position",), f"{base}_position", f"the position of '{name}'", 3)
+        if p.rotation is not None:
+            kw["rotation"] = self.vector(p.rotation, path + ("rotation",), f"{base}_rotation", f"the rotation of '{name}'", 3)
+        if kind == "gizmo":
+            b = self.bind(p.bind, path + ("bind",), "gizmo")
+            if b is not None:
+                var = p.bind.strip()
+                if c.var_shapes.get(var) not in (None, (4, 4)):
+                    c.errors.append(SpecError(c.loc(path + ("bind",)), f"a gizmo binds a 4x4 pose variable, but '{var}' has shape {c.var_shapes.get(var)}"))
+                kw["transform"] = Src(f"E.Dynamic(Model.{b[0]}, {p.bind!r})")
+                kw["set"] = Src(f"Model.{b[1]}")
+            if p.on_change is not None:
+                lines = c.code_lines(p.on_change, path + ("on_change",), f"the on_change of gizmo '{name}'")
+                kw["on_change"] = Src("Model." + c.add_method(c.method_name(f"_on_change_{_slug(name)}"), "self", f"Runs after the gizmo '{name}' is dragged.", lines))
+        if "visible" in p.model_fields_set:
+            kw["visible"] = self.dynamic(path + ("visible",), f"{base}_visible", f"the visibility of '{name}'", p.visible) if isinstance(p.visible, str) else bool(p.visible)
+        if p.color is not None:
+            kw["color"] = self.color(p.color, path + ("color",), f"{base}_color")
+        if "opacity" in p.model_fields_set:
+            kw["opacity"] = self.number(p.opacity, path + ("opacity",), f"{base}_opacity", f"the opacity of '{name}'")
+        if p.graspable:
+            kw["graspable"] = True
+        kw["where"] = c.where(path)
+        if item.children:
+            kw["children"] = _Children([self.node3d(ch, indent + 8) for ch in item.children])
+        return self.call("E.Node3D", kw, indent)
+
+
+def _list_text(value: Any) -> str:
+    """A list as the user wrote it: expressions unquoted."""
+    if isinstance(value, list):
+        return "[" + ", ".join(_list_text(v) for v in value) + "]"
+    return str(value)
+
+
+class _Children:
+    """Nested element lines, laid out one per line by ``call``."""
+
+    def __init__(self, items: list[list[str]]) -> None:
+        self.items = items
+
+
+class _Block:
+    pass
+
+
+def _const_index(node: ast.AST) -> tuple[int, ...] | None:
+    def one(n: ast.AST) -> int | None:
+        if isinstance(n, ast.Constant) and isinstance(n.value, int) and not isinstance(n.value, bool):
+            return n.value
+        if isinstance(n, ast.UnaryOp) and isinstance(n.op, ast.USub):
+            v = one(n.operand)
+            return -v if v is not None else None
+        return None
+
+    if isinstance(node, ast.Tuple):
+        vals = [one(e) for e in node.elts]
+        return None if any(v is None for v in vals) else tuple(vals)  # type: ignore[arg-type]
+    v = one(node)
+    return None if v is None else (v,)

@@ -1,0 +1,201 @@
+"""The ``ejsgen`` command: new, validate, build, run, schema.
+
+User errors (bad specs, missing files) print as ``FILE:LINE:COL: error: message`` without a
+traceback and exit with status 1; bad command lines exit with 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from pathlib import Path
+
+from ejsgen import __version__
+from ejsgen.errors import EjsError
+
+__all__ = ["main", "load_plan", "build"]
+
+STARTER = '''\
+# {title}: a starter spec made by `ejsgen new`. Build and serve it with
+#   ejsgen run {file}
+# The language is described in the ejsgen README and specs/reference.md.
+ejs: 1
+title: {title}
+description: |
+  A mass on a spring with damping. Move the sliders, press **Play**, and watch
+  the energy decay.
+
+model:
+  variables:
+    t: 0.0
+    dt: 0.01
+    x: {{value: 1.0, unit: m, doc: displacement}}
+    v: {{value: 0.0, unit: m/s}}
+    k: {{value: 4.0, unit: N/m}}
+    m: {{value: 1.0, unit: kg}}
+    c: {{value: 0.2, unit: N s/m, doc: damping}}
+    E: 0.0
+  evolution:
+    - ode:
+        method: rk4
+        equations:
+          x: v
+          v: -(k*x + c*v)/m
+  fixed_relations: |
+    E = 0.5*m*v**2 + 0.5*k*x**2
+
+view:
+  - slider: {{bind: k, min: 0.5, max: 20, label: "Stiffness k (N/m)"}}
+  - slider: {{bind: c, min: 0, max: 2, label: "Damping c (N s/m)"}}
+  - label: {{text: "t = {{t:.2f}} s   E = {{E:.4f}} J"}}
+  - plot: {{title: Displacement, x: t, series: [{{y: x, label: x}}], window: 10}}
+  - scene:
+      - box: {{position: [x, 0, 0], size: [0.2, 0.2, 0.2], color: steelblue}}
+      - line: {{points: "[[-1.5, 0, 0], [x, 0, 0]]", width: 3}}
+      - grid: {{size: 4, cell: 0.5}}
+
+simulation:
+  fps: 30
+  steps_per_display: 2
+'''
+
+
+def load_plan(spec_path: str | Path):  # -> AppPlan
+    """Load, validate and compile a spec (raises ``EjsError`` subclasses for the user)."""
+    from ejsgen.compiler import compile_spec
+    from ejsgen.validate import validate
+    from ejsgen.yamlload import load_yaml
+
+    path = Path(spec_path)
+    doc = load_yaml(path, display_name=str(spec_path))
+    checked = validate(doc)
+    return compile_spec(checked, path.resolve())
+
+
+def default_out_dir(spec_path: Path) -> Path:
+    name = spec_path.name
+    for suffix in (".ejs.yaml", ".ejs.yml", ".yaml", ".yml"):
+        if name.endswith(suffix):
+            name = name[: -len(suffix)]
+            break
+    return Path("dist") / name
+
+
+def build(spec_path: str | Path, out_dir: str | Path | None = None, *, bundle: bool = False) -> Path:
+    """Build an app folder from a spec; returns the folder."""
+    from ejsgen.generate import write_app
+
+    path = Path(spec_path)
+    plan = load_plan(path)
+    out = Path(out_dir) if out_dir is not None else default_out_dir(path)
+    write_app(plan, out, bundle=bundle)
+    return out
+
+
+def _cmd_new(args: argparse.Namespace) -> int:
+    name = args.name
+    file = Path(name if name.endswith((".ejs.yaml", ".ejs.yml")) else f"{name}.ejs.yaml")
+    if file.exists() and not args.force:
+        raise EjsError(f"{file} already exists (use --force to overwrite)")
+    title = file.name.split(".")[0].replace("_", " ").replace("-", " ").strip().capitalize() or "New simulation"
+    file.parent.mkdir(parents=True, exist_ok=True)
+    file.write_text(STARTER.format(title=title, file=file), encoding="utf-8")
+    print(f"wrote {file}; try: ejsgen run {file}")
+    return 0
+
+
+def _cmd_validate(args: argparse.Namespace) -> int:
+    failed = 0
+    for spec in args.specs:
+        try:
+            load_plan(spec)
+        except EjsError as exc:
+            print(exc, file=sys.stderr)
+            failed += 1
+        else:
+            print(f"{spec}: ok")
+    return 1 if failed else 0
+
+
+def _cmd_build(args: argparse.Namespace) -> int:
+    start = time.perf_counter()
+    out = build(args.spec, args.output, bundle=args.bundle)
+    took = time.perf_counter() - start
+    extra = f" and {out / (out.name + '.pyz')}" if args.bundle else ""
+    print(f"built {out}{extra} in {took:.2f} s; run: python {out / 'app.py'}")
+    return 0
+
+
+def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
+    if args.output:
+        out = build(args.spec, args.output)
+        return subprocess.call([sys.executable, str(out / "app.py"), *app_args])
+    with tempfile.TemporaryDirectory(prefix="ejsgen-run-") as tmp:
+        out = build(args.spec, Path(tmp) / "app")
+        return subprocess.call([sys.executable, str(out / "app.py"), *app_args])
+
+
+def _cmd_schema(args: argparse.Namespace) -> int:
+    from ejsgen.schema import json_schema
+
+    print(json.dumps(json_schema(), indent=2))
+    return 0
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="ejsgen", description="Turn .ejs.yaml simulation specs into interactive apps.")
+    p.add_argument("--version", action="version", version=f"ejsgen {__version__}")
+    sub = p.add_subparsers(dest="command", required=True)
+    n = sub.add_parser("new", help="write a starter spec that builds and runs")
+    n.add_argument("name", help="file name (NAME.ejs.yaml)")
+    n.add_argument("--force", action="store_true", help="overwrite an existing file")
+    v = sub.add_parser("validate", help="check specs without building")
+    v.add_argument("specs", nargs="+", metavar="SPEC")
+    b = sub.add_parser("build", help="build an app folder from a spec")
+    b.add_argument("spec", metavar="SPEC")
+    b.add_argument("-o", "--output", metavar="DIR", help="output folder (default dist/NAME)")
+    b.add_argument("--bundle", action="store_true", help="also write a single-file NAME.pyz that carries the runtime")
+    r = sub.add_parser("run", help="build a spec and run the app; options after the spec go to the app")
+    r.add_argument("spec", metavar="SPEC")
+    r.add_argument("-o", "--output", metavar="DIR", help="keep the built app in this folder")
+    sub.add_parser("schema", help="print the JSON Schema of the spec language")
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    app_args: list[str] = []
+    if argv and argv[0] == "run":
+        # everything after the spec (and our own -o DIR) belongs to the app
+        head, rest = argv[:2], argv[2:]
+        while rest[:1] and rest[0] in ("-o", "--output") and len(rest) > 1:
+            head += rest[:2]
+            rest = rest[2:]
+        argv, app_args = head, rest
+    args = _parser().parse_args(argv)
+    try:
+        if args.command == "new":
+            return _cmd_new(args)
+        if args.command == "validate":
+            return _cmd_validate(args)
+        if args.command == "build":
+            return _cmd_build(args)
+        if args.command == "run":
+            return _cmd_run(args, app_args)
+        if args.command == "schema":
+            return _cmd_schema(args)
+    except EjsError as exc:
+        print(exc, file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        return 130
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,525 @@
+"""Compile a validated spec into an ``AppPlan``: the model's methods, the view, the settings.
+
+Every code block and expression is parsed with ``ast``, its names resolved by the
+language's rules (``_resolve``), checked, and rewritten into a method of the generated
+``Model`` class. Nothing from the spec is evaluated here or at run time as text.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib.util
+from pathlib import Path
+from typing import Any
+
+from ejsgen._resolve import Names, Snippet, parse_snippet, rewrite
+from ejsgen._shapes import infer_shape, literal_shape
+from ejsgen._suggest import did_you_mean
+from ejsgen.errors import Location, SpecError, SpecErrors
+from ejsgen.plan import AppPlan, Line, Method, Src, body_lines, py
+from ejsgen.spec import Code, CodeEvolutionPage, OdePage
+from ejsgen.validate import CONTROL_NAMES, MATH_NAMES, Checked
+from ejsgen.yamlload import Path_, TextOrigin
+
+__all__ = ["compile_spec", "Compiler"]
+
+PROGRAM_NAMES = ("move_j", "move_l", "wait", "wait_until", "open_gripper", "close_gripper")
+
+
+class Compiler:
+    """Builds the plan; collects every error before raising them together."""
+
+    def __init__(self, checked: Checked, spec_path: Path) -> None:
+        self.checked = checked
+        self.doc = checked.doc
+        self.spec = checked.spec
+        self.spec_path = spec_path
+        self.spec_dir = spec_path.parent
+        self.errors: list[SpecError] = []
+        self.methods: list[Method] = []
+        self._method_names: set[str] = set()
+        self.var_types: dict[str, str] = {}
+        self.var_shapes: dict[str, tuple[int, ...] | None] = {}
+        self.var_decls = {v.name: v for v in checked.variables}
+        self.state_vars: set[str] = set()
+        self.independents: list[str] = []
+        self.assets: dict[str, Path] = {}
+        self.names = Names(variables=set(self.var_decls), functions=set(), controls=set(CONTROL_NAMES), globals={"np", *MATH_NAMES})
+
+    # -- helpers ----------------------------------------------------------------------------------
+    def loc(self, path: Path_) -> Location:
+        return self.doc.loc(path)
+
+    def where(self, path: Path_) -> str:
+        """A location for the generated app: the spec's file name (not the build's path)."""
+        loc = self.doc.loc(path)
+        return f"{self.spec_path.name}:{loc.line}:{loc.col}"
+
+    def snippet(self, path: Path_, what: str, mode: str = "exec", text: str | None = None) -> Snippet:
+        origin = self.doc.origins.get(path)
+        if origin is None:
+            line, col = self.doc.positions.get(path, (1, 1))
+            origin = TextOrigin(line, col, False)
+        value = text if text is not None else _get(self.doc.data, path)
+        return Snippet(str(value), origin, self.doc.file, what, mode)
+
+    def method_name(self, base: str) -> str:
+        name = base
+        i = 2
+        while name in self._method_names:
+            name = f"{base}_{i}"
+            i += 1
+        self._method_names.add(name)
+        return name
+
+    def add_method(self, name: str, params: str, doc: str, lines: list[Line], comment: str = "") -> str:
+        self.methods.append(Method(name, params, doc, lines or [Line("pass")], comment))
+        return name
+
+    def parse_rewrite(self, snippet: Snippet, *, extra_locals: tuple[str, ...] = (), names: Names | None = None) -> ast.AST | None:
+        try:
+            tree = parse_snippet(snippet)
+        except SpecError as err:
+            self.errors.append(err)
+            return None
+        new, errs = rewrite(tree, names or self.names, snippet, extra_locals=extra_locals)
+        self.errors.extend(errs)
+        return new
+
+    # -- code blocks ---------------------------------------------------------------------------------
+    def code_lines(self, code: Code | None, path: Path_, what: str, *, names: Names | None = None) -> list[Line]:
+        """The rewritten lines of a code block (a string or a list of pages)."""
+        if code is None:
+            return []
+        if isinstance(code, str):
+            return self._block_lines(path, what, names)
+        lines: list[Line] = []
+        for i, page in enumerate(code):
+            ppath = path + (i, "code")
+            title = page.name or f"page {i + 1}"
+            if not page.enabled:
+                lines.append(Line(f"# {title}: disabled"))
+                continue
+            lines.append(Line(f"# {title}"))
+            lines.extend(self._block_lines(ppath, f"{what} ({title})", names))
+        return lines
+
+    def _block_lines(self, path: Path_, what: str, names: Names | None = None) -> list[Line]:
+        snippet = self.snippet(path, what)
+        tree = self.parse_rewrite(snippet, names=names)
+        if tree is None or not isinstance(tree, ast.Module) or not tree.body:
+            return []
+        return body_lines(tree.body, lambda n: snippet.location(n.lineno, n.col_offset))
+
+    def expr_method(self, path: Path_, base: str, what: str, doc: str, *, text: str | None = None) -> str | None:
+        """Compile the expression at ``path`` into a method ``base(self)``; returns its name."""
+        snippet = self.snippet(path, what, "eval", text)
+        tree = self.parse_rewrite(snippet)
+        if tree is None:
+            return None
+        assert isinstance(tree, ast.Expression)
+        name = self.method_name(base)
+        where = snippet.location(tree.body.lineno, tree.body.col_offset)
+        self.add_method(name, "self", doc, [Line(f"return {ast.unparse(tree.body)}", where)])
+        return name
+
+    def expr_source(self, path: Path_, what: str, *, text: str | None = None) -> tuple[str, ast.expr] | None:
+        """The rewritten source of the expression at ``path`` (for inlining into a method)."""
+        snippet = self.snippet(path, what, "eval", text)
+        tree = self.parse_rewrite(snippet)
+        if tree is None:
+            return None
+        assert isinstance(tree, ast.Expression)
+        return ast.unparse(tree.body), tree.body
+
+    # -- imports --------------------------------------------------------------------------------------
+    def compile_imports(self) -> list[str]:
+        lines = []
+        for i, line in enumerate(self.spec.imports):
+            path = ("imports", i)
+            snippet = self.snippet(path, "imports")
+            try:
+                tree = parse_snippet(snippet)
+            except SpecError as err:
+                self.errors.append(err)
+                continue
+            assert isinstance(tree, ast.Module)
+            if len(tree.body) != 1 or not isinstance(tree.body[0], (ast.Import, ast.ImportFrom)):
+                self.errors.append(SpecError(self.loc(path), "an 'imports' entry must be one import statement", "e.g. 'from ejsrl.robotics import models'"))
+                continue
+            stmt = tree.body[0]
+            module = stmt.module if isinstance(stmt, ast.ImportFrom) else stmt.names[0].name
+            if isinstance(stmt, ast.ImportFrom) and stmt.level:
+                self.errors.append(SpecError(self.loc(path), "relative imports are not supported in specs"))
+                continue
+            try:
+                found = importlib.util.find_spec(module or "")
+            except (ModuleNotFoundError, ValueError):
+                found = None
+            if found is None:
+                self.errors.append(SpecError(self.loc(path), f"cannot find the module '{module}'", "install it, or check the spelling"))
+                continue
+            for alias in stmt.names:
+                if alias.name == "*":
+                    self.errors.append(SpecError(self.loc(path), "'import *' hides which names exist; import names explicitly"))
+                    continue
+                bound = (alias.asname or alias.name).split(".")[0]
+                if bound in self.var_decls:
+                    self.errors.append(SpecError(self.loc(path), f"the import binds '{bound}', which is also a variable"))
+                self.names.globals.add(bound)
+            lines.append(ast.unparse(stmt))
+            if module and module.startswith("ejsrl.robotics"):
+                self.uses_robotics = True
+        return lines
+
+    uses_robotics = False
+
+    # -- variables ------------------------------------------------------------------------------------
+    def compile_variables(self) -> None:
+        lines: list[Line] = []
+        declared: list[str] = []
+        for v in self.checked.variables:
+            decl = v.decl
+            where = self.doc.key_loc(v.path)
+            if decl.expr is not None:
+                epath = v.path + ("expr",)
+                res = self.expr_source(epath, f"the initial value of '{v.name}'")
+                if res is not None:
+                    src, node = res
+                    later = {a.attr for a in ast.walk(node) if _is_self_attr(a) and a.attr in self.var_decls and a.attr not in declared}
+                    for name in sorted(later):
+                        self.errors.append(SpecError(self.loc(epath), f"'{v.name}' uses '{name}' before '{name}' is declared", "variables are initialised in declaration order"))
+                    lines.append(Line(f"self.{v.name} = {src}", where))
+                self.var_types[v.name] = "auto"
+                self.var_shapes[v.name] = None
+            else:
+                src, vtype, shape, err = _literal_source(decl.value)
+                if err:
+                    vpath = v.path + ("value",) if isinstance(_get(self.doc.data, v.path), dict) else v.path
+                    self.errors.append(SpecError(self.loc(vpath), f"variable '{v.name}': {err}"))
+                    continue
+                lines.append(Line(f"self.{v.name} = {src}", where))
+                self.var_types[v.name] = vtype
+                self.var_shapes[v.name] = shape
+            declared.append(v.name)
+        self.add_method("_declare", "self", "Give every variable its initial value, in declaration order.", lines)
+
+    # -- custom functions -------------------------------------------------------------------------------
+    def collect_custom_names(self) -> list[tuple[ast.FunctionDef, Snippet, Path_]]:
+        out = []
+        code = self.spec.model.custom
+        if code is None:
+            return out
+        pages = [(("model", "custom"), code)] if isinstance(code, str) else [
+            (("model", "custom", i, "code"), p.code) for i, p in enumerate(code) if p.enabled
+        ]
+        for path, _ in pages:
+            snippet = self.snippet(path, "model.custom")
+            try:
+                tree = parse_snippet(snippet)
+            except SpecError as err:
+                self.errors.append(err)
+                continue
+            assert isinstance(tree, ast.Module)
+            for stmt in tree.body:
+                if not isinstance(stmt, ast.FunctionDef):
+                    self.errors.append(SpecError(snippet.location(stmt.lineno, stmt.col_offset), "'custom' holds function definitions only (def name(...): ...)"))
+                    continue
+                loc = snippet.location(stmt.lineno, stmt.col_offset)
+                if stmt.name in self.var_decls:
+                    self.errors.append(SpecError(loc, f"the function '{stmt.name}' has the name of a variable"))
+                elif stmt.name in CONTROL_NAMES or stmt.name in self.names.globals or stmt.name in PROGRAM_NAMES:
+                    self.errors.append(SpecError(loc, f"the function '{stmt.name}' would hide the prelude name '{stmt.name}'"))
+                elif stmt.name.startswith("_"):
+                    self.errors.append(SpecError(loc, f"custom function names cannot start with '_' ('{stmt.name}')"))
+                elif stmt.name in self.names.functions:
+                    self.errors.append(SpecError(loc, f"the function '{stmt.name}' is defined twice"))
+                self.names.functions.add(stmt.name)
+                out.append((stmt, snippet, path))
+        return out
+
+    def compile_custom(self, defs: list[tuple[ast.FunctionDef, Snippet, Path_]]) -> None:
+        for fn, snippet, _path in defs:
+            new, errs = rewrite(ast.Module(body=[fn], type_ignores=[]), self.names, snippet)
+            self.errors.extend(errs)
+            assert isinstance(new, ast.Module)
+            func = new.body[0]
+            assert isinstance(func, ast.FunctionDef)
+            func.args.args.insert(0, ast.arg(arg="self"))
+            doc = ast.get_docstring(func) or ""
+            body = func.body[1:] if doc and func.body and isinstance(func.body[0], ast.Expr) else func.body
+            where_of = lambda n, s=snippet: s.location(n.lineno, n.col_offset)  # noqa: E731
+            lines = body_lines(body, where_of) if body else [Line("pass")]
+            params = ast.unparse(func.args)
+            self._method_names.add(func.name)
+            for dec in func.decorator_list:
+                lines.insert(0, Line(f"# decorator @{ast.unparse(dec)} is applied below"))
+            self.add_method(func.name, params, doc or f"Custom function '{func.name}' of the spec.", lines, comment=f"from {snippet.location(fn.lineno, fn.col_offset)}")
+
+    # -- init, fixed relations --------------------------------------------------------------------------
+    def compile_blocks(self) -> None:
+        m = self.spec.model
+        self.add_method("_init", "self", "The spec's init code: runs at start and on reset().", self.code_lines(m.init, ("model", "init"), "model.init"))
+        self.add_method(
+            "_fixed_relations",
+            "self",
+            "The spec's fixed relations: run after init, every step and every change from the view.",
+            self.code_lines(m.fixed_relations, ("model", "fixed_relations"), "model.fixed_relations"),
+        )
+
+    # -- evolution ----------------------------------------------------------------------------------------
+    def compile_evolution(self) -> None:
+        page_lines = [Line("pages = []")]
+        for i, page in enumerate(self.spec.model.evolution):
+            path = ("model", "evolution", i)
+            title = page.name or f"page {i + 1}"
+            if isinstance(page, CodeEvolutionPage):
+                lines = self.code_lines(page.code, path + ("code",), f"evolution ({title})")
+                name = self.add_method(self.method_name(f"_evolution_{i}"), "self", f"Evolution page '{title}' (code).", lines)
+                page_lines.append(Line(f"pages.append(CodePage({title!r}, self.{name}, enabled={page.enabled!r}))"))
+            else:
+                assert isinstance(page, OdePage)
+                page_lines.extend(self.compile_ode(i, page, path + ("ode",), title))
+        page_lines.append(Line("return pages"))
+        self.add_method("_evolution", "self", "The evolution pages, run in order once per step (solvers built fresh).", page_lines)
+
+    def compile_ode(self, i: int, page: OdePage, path: Path_, title: str) -> list[Line]:
+        ode = page.ode
+        ind = ode.independent
+        if ind not in self.var_decls:
+            self.errors.append(SpecError(self.loc(path + ("independent",)) if "independent" in _get(self.doc.data, path) else self.loc(path), f"the independent variable '{ind}' is not a variable", did_you_mean(ind, self.var_decls) or f"declare it, e.g. '{ind}: 0.0'"))
+            return []
+        self.independents.append(ind)
+        states: list[str] = []
+        rates: list[tuple[str, str, Path_]] = []
+        for state, rate in ode.equations.items():
+            spath = path + ("equations", state)
+            if state not in self.var_decls:
+                self.errors.append(SpecError(self.doc.key_loc(spath), f"the state '{state}' is not a variable", did_you_mean(state, self.var_decls)))
+                continue
+            if state == ind:
+                self.errors.append(SpecError(self.doc.key_loc(spath), f"'{state}' is the independent variable and cannot also be a state"))
+                continue
+            if state in self.state_vars:
+                self.errors.append(SpecError(self.doc.key_loc(spath), f"the state '{state}' is already integrated by another ODE page"))
+                continue
+            if self.var_types.get(state) in ("bool", "str"):
+                self.errors.append(SpecError(self.doc.key_loc(spath), f"the state '{state}' must be a number or an array of numbers, not {self.var_types[state]}"))
+                continue
+            self.state_vars.add(state)
+            states.append(state)
+            if isinstance(rate, str):
+                res = self.expr_source(spath, f"the rate of '{state}'")
+                if res is None:
+                    continue
+                src, node = res
+                shape = infer_shape(node, self.var_shapes)
+            else:
+                src, shape = repr(float(rate)), ()
+            want = self.var_shapes.get(state)
+            if want is not None and shape is not None and shape != want and shape != ():
+                self.errors.append(SpecError(self.loc(spath), f"the rate of '{state}' has shape {_shape_text(shape)} but '{state}' has shape {_shape_text(want)}"))
+            if want == () and shape not in (None, ()):
+                self.errors.append(SpecError(self.loc(spath), f"the rate of '{state}' is an array of shape {_shape_text(shape)} but '{state}' is a number"))
+            rates.append((state, src, spath))
+        if not states:
+            if not ode.equations:
+                self.errors.append(SpecError(self.loc(path), "an ode page needs at least one equation"))
+            return []
+        for s in states + [ind]:
+            if self.var_types.get(s) == "int":
+                self.var_types[s] = "float"
+        k = i
+        scalar = all(self.var_shapes.get(s) == () for s in states)
+        where_eq = {s: self.loc(p) for s, _, p in rates}
+        # state / load
+        if scalar:
+            packed = ", ".join(f"self.{s}" for s in states) + ("," if len(states) == 1 else "")
+            self.add_method(f"_ode{k}_state", "self", f"The independent variable and the packed state ({', '.join(states)}).", [Line(f"return self.{ind}, np.array(({packed}), dtype=float)")])
+            targets = ", ".join(f"self.{s}" for s in states) + ("," if len(states) == 1 else "")
+            self.add_method(f"_ode{k}_load", "self, t, y", "Write the independent variable and the state into the model.", [Line(f"self.{ind} = t"), Line(f"{targets} = y.tolist()")])
+        else:
+            packed = ", ".join(f"np.ravel(self.{s})" for s in states)
+            self.add_method(f"_ode{k}_state", "self", f"The independent variable and the packed state ({', '.join(states)}).", [Line(f"return self.{ind}, np.concatenate(({packed},)).astype(float)")])
+            load = [Line(f"self.{ind} = t"), Line(f"layout = self._ejs_layout{k}")]
+            for j, s in enumerate(states):
+                load.append(Line(f"self.{s} = layout.take(y, {j})"))
+            self.add_method(f"_ode{k}_load", "self, t, y", "Write the independent variable and the state into the model.", load)
+        # rates
+        rate_lines = [Line(f"self._ode{k}_load(t, y)")]
+        if ode.preliminary is not None:
+            pre = self.code_lines(ode.preliminary, path + ("preliminary",), f"the preliminary code of {title}")
+            self.add_method(f"_ode{k}_preliminary", "self", f"Preliminary code of '{title}', run before each evaluation of the rates.", pre)
+            rate_lines.append(Line(f"self._ode{k}_preliminary()"))
+        if scalar:
+            if len(rates) == 1:
+                s, src, _ = rates[0]
+                rate_lines.append(Line(f"return np.array(({src},), dtype=float)", where_eq[s]))
+            else:
+                rate_lines.append(Line("return np.array(("))
+                for s, src, _ in rates:
+                    rate_lines.append(Line(f"    {src},  # d{s}/d{ind}", where_eq[s]))
+                rate_lines.append(Line("), dtype=float)"))
+        else:
+            rate_lines.append(Line(f"layout = self._ejs_layout{k}"))
+            rate_lines.append(Line("out = np.empty(layout.size)"))
+            for j, (s, src, _) in enumerate(rates):
+                rate_lines.append(Line(f"out[layout.slices[{j}]] = np.ravel({src})  # d{s}/d{ind}", where_eq[s]))
+            rate_lines.append(Line("return out"))
+        self.add_method(f"_ode{k}_rates", "self, t, y", f"The rates d/d{ind} of {', '.join(states)}.", rate_lines)
+        # step
+        if "step" not in _get(self.doc.data, path):
+            step_name = self._default_step(k, "dt", path)
+        elif isinstance(ode.step, str):
+            step_name = self.expr_method(path + ("step",), f"_ode{k}_step", f"the step of {title}", f"The step of '{title}'.") or ""
+        else:
+            step_name = self.add_method(self.method_name(f"_ode{k}_step"), "self", f"The step of '{title}'.", [Line(f"return {float(ode.step)!r}")])
+        # events
+        event_src = []
+        for j, ev in enumerate(ode.events):
+            epath = path + ("events", j)
+            ename = ev.name or f"event {j + 1}"
+            res = self.expr_source(epath + ("when",), f"the condition of event '{ename}'")
+            if res is None:
+                continue
+            when = self.add_method(f"_ode{k}_event{j}_when", "self, t, y", f"Event '{ename}': fires when this crosses zero.", [Line(f"self._ode{k}_load(t, y)"), Line(f"return {res[0]}", self.loc(epath + ("when",)))])
+            action_lines = [Line(f"self._ode{k}_load(t, y.copy())")]
+            action_lines += self.code_lines(ev.action, epath + ("action",), f"the action of event '{ename}'")
+            action_lines.append(Line(f"return self._ode{k}_state()[1]"))
+            action = self.add_method(f"_ode{k}_event{j}_action", "self, t, y", f"Event '{ename}': the action, at the event's time.", action_lines)
+            direction = {"up": 1, "down": -1, "both": 0}[ev.direction]
+            event_src.append(f"EventDef({ename!r}, self.{when}, {direction}, self.{action}, stop={ev.stop!r})")
+        lines = []
+        if not scalar:
+            lines.append(Line(f"self._ejs_layout{k} = StateLayout({', '.join(f'self.{s}' for s in states)},)"))
+        events = "[" + ", ".join(event_src) + "]"
+        lines.append(
+            Line(
+                f"pages.append(OdePage({title!r}, method={ode.method!r}, step=self.{step_name}, state=self._ode{k}_state, "
+                f"load=self._ode{k}_load, rates=self._ode{k}_rates, names={tuple(states)!r}, events={events}, "
+                f"tolerance={ode.tolerance!r}, max_step={ode.max_step!r}, enabled={page.enabled!r}))"
+            )
+        )
+        return lines
+
+    def _default_step(self, k: int, step: str, path: Path_) -> str:
+        res_name = self.method_name(f"_ode{k}_step")
+        if step not in self.var_decls:
+            self.errors.append(SpecError(self.loc(path), f"the default step '{step}' is not a variable", f"declare '{step}' or give 'step:'"))
+        self.add_method(res_name, "self", "The step (default: dt).", [Line(f"return self.{step}")])
+        return res_name
+
+    # -- assets ------------------------------------------------------------------------------------------
+    def asset(self, rel: str, path: Path_, what: str = "asset") -> str | None:
+        """Check that a file next to the spec exists; register it to copy; returns its relative path."""
+        p = Path(rel)
+        if p.is_absolute() or ".." in p.parts:
+            self.errors.append(SpecError(self.loc(path), f"the {what} '{rel}' must be a path inside the spec's folder"))
+            return None
+        src = self.spec_dir / p
+        if not src.is_file():
+            self.errors.append(SpecError(self.loc(path), f"the {what} '{rel}' does not exist", f"looked for {src}"))
+            return None
+        self.assets[p.as_posix()] = src
+        return p.as_posix()
+
+    # -- the whole spec -----------------------------------------------------------------------------------
+    def compile(self) -> AppPlan:
+        from ejsgen._view_compile import ViewCompiler
+
+        user_imports = self.compile_imports()
+        defs = self.collect_custom_names()
+        self.compile_variables()
+        for i, a in enumerate(self.spec.assets):
+            self.asset(a, ("assets", i))
+        self.compile_blocks()
+        self.compile_custom(defs)
+        self.compile_evolution()
+        view_lines = ViewCompiler(self).compile(self.checked.view)
+        if self.spec.model.programs:
+            from ejsgen._programs import compile_programs
+
+            compile_programs(self)
+        if self.errors:
+            raise SpecErrors(_dedupe(self.errors))
+        independent = self.independents[0] if self.independents else ("t" if "t" in self.var_decls else None)
+        sim = self.spec.simulation
+        return AppPlan(
+            spec_name=self.spec_path.name,
+            title=self.spec.title,
+            description=self.spec.description,
+            author=self.spec.author,
+            user_imports=user_imports,
+            variables=dict(self.var_types),
+            independent=independent,
+            methods=self.methods,
+            view_lines=view_lines,
+            sim={"fps": sim.fps, "steps_per_display": sim.steps_per_display, "autoplay": sim.autoplay, "realtime": sim.realtime, "controls": sim.controls},
+            assets=sorted((src, rel) for rel, src in self.assets.items()),
+            uses_robotics=self.uses_robotics,
+        )
+
+
+def _dedupe(errors: list[SpecError]) -> list[SpecError]:
+    seen = set()
+    out = []
+    for e in errors:
+        key = (str(e.where), e.message)
+        if key not in seen:
+            seen.add(key)
+            out.append(e)
+    return out
+
+
+def _is_self_attr(node: ast.AST) -> bool:
+    return isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "self"
+
+
+def _get(data: Any, path: Path_) -> Any:
+    cur = data
+    for key in path:
+        try:
+            cur = cur[key]
+        except (KeyError, IndexError, TypeError):
+            return {}
+    return cur
+
+
+def _shape_text(shape: tuple[int, ...]) -> str:
+    return "()" if not shape else "(" + ", ".join(str(s) for s in shape) + ("," if len(shape) == 1 else "") + ")"
+
+
+def _literal_source(value: Any) -> tuple[str, str, tuple[int, ...] | None, str]:
+    """Source, value type, shape and an error text ('' if fine) for a plain initial value."""
+    if isinstance(value, bool):
+        return repr(value), "bool", (), ""
+    if isinstance(value, int):
+        return repr(value), "int", (), ""
+    if isinstance(value, float):
+        return repr(value), "float", (), ""
+    if isinstance(value, str):
+        return repr(value), "str", (), ""
+    if value is None:
+        return "None", "object", None, ""
+    if isinstance(value, list):
+        shape, err = literal_shape(value)
+        if err:
+            return "", "", None, err
+        return f"np.array({py(_floats(value))}, dtype=float)", "array", shape, ""
+    if isinstance(value, dict):
+        return "", "", None, "a mapping is not a value; the long form takes 'value' or 'expr' (with doc, unit, min, max)"
+    return "", "", None, f"unsupported initial value {value!r}"
+
+
+def _floats(value: Any) -> Any:
+    if isinstance(value, list):
+        return [_floats(v) for v in value]
+    return float(value)
+
+
+def compile_spec(checked: Checked, spec_path: Path) -> AppPlan:
+    """Compile a validated spec (raises ``SpecErrors``)."""
+    return Compiler(checked, spec_path).compile()
+
+
+_ = Src  # re-exported for the view compiler

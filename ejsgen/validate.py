@@ -1,0 +1,311 @@
+"""Validate a loaded document against the language, with spec locations in every error.
+
+``validate(doc)`` returns a ``Checked`` spec: the pydantic ``Spec`` plus the view as a tree
+of ``ViewItem`` (kind, validated properties, path), and the variables in long form.
+Problems are collected and raised together as ``SpecErrors``.
+"""
+
+from __future__ import annotations
+
+import keyword
+from dataclasses import dataclass, field
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from ejsgen._suggest import did_you_mean
+from ejsgen.errors import SpecError, SpecErrors
+from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, VIEW_KINDS, Spec, Strict, Variable
+from ejsgen.yamlload import Document, Path_
+
+__all__ = ["Checked", "ViewItem", "VarDecl", "validate", "PRELUDE_NAMES", "CONTROL_NAMES", "MATH_NAMES"]
+
+MATH_NAMES = (
+    "sin cos tan asin acos atan atan2 sinh cosh tanh exp log log10 sqrt hypot floor ceil radians degrees pi e inf"
+).split()
+CONTROL_NAMES = (
+    "play pause step reset initialize is_playing capture alert start_program stop_program "
+    "world object_pose move_object attach release collisions"
+).split()
+PRELUDE_NAMES = ("np", *MATH_NAMES, *CONTROL_NAMES)
+
+
+@dataclass
+class ViewItem:
+    """One element of the view: ``kind``, validated ``props``, ``path`` in the document."""
+
+    kind: str
+    props: Any
+    path: Path_
+    children: list[ViewItem] = field(default_factory=list)
+    tabs: list[tuple[str, list[ViewItem]]] = field(default_factory=list)
+
+
+@dataclass
+class VarDecl:
+    """A variable in long form, with its ``path`` in the document."""
+
+    name: str
+    decl: Variable
+    path: Path_
+
+
+@dataclass
+class Checked:
+    """A validated spec."""
+
+    doc: Document
+    spec: Spec
+    variables: list[VarDecl]
+    view: list[ViewItem]
+
+
+_TYPE_WORDS = {
+    "float_type": "a number",
+    "float_parsing": "a number",
+    "int_type": "an integer",
+    "int_parsing": "an integer",
+    "int_from_float": "an integer",
+    "string_type": "text (an expression)",
+    "bool_type": "true or false",
+    "bool_parsing": "true or false",
+    "list_type": "a list",
+    "dict_type": "a mapping",
+    "model_type": "a mapping",
+    "model_attributes_type": "a mapping",
+    "literal_error": "one of the allowed values",
+}
+
+
+def _describe(value: Any) -> str:
+    if isinstance(value, dict):
+        return "a mapping"
+    if isinstance(value, list):
+        return "a list"
+    if isinstance(value, bool):
+        return f"{str(value).lower()}"
+    if value is None:
+        return "nothing (null)"
+    return repr(value)
+
+
+def _data_at(data: Any, path: Path_) -> tuple[Path_, Any]:
+    """Follow ``path`` through ``data`` as far as it goes; returns (path followed, value)."""
+    followed: list[Any] = []
+    cur = data
+    for key in path:
+        if isinstance(cur, dict) and isinstance(key, str) and key in cur:
+            cur = cur[key]
+        elif isinstance(cur, list) and isinstance(key, int) and 0 <= key < len(cur):
+            cur = cur[key]
+        else:
+            continue
+        followed.append(key)
+    return tuple(followed), cur
+
+
+def pydantic_errors(doc: Document, exc: ValidationError, base: Path_, model: type[BaseModel], data: Any) -> list[SpecError]:
+    """Turn a pydantic ``ValidationError`` into spec errors at the right places."""
+    grouped: dict[Path_, list[dict[str, Any]]] = {}
+    order: list[Path_] = []
+    for err in exc.errors(include_url=False):
+        loc = tuple(err["loc"])
+        if err["type"] in ("extra_forbidden", "missing"):
+            followed = loc
+        else:
+            followed, _ = _data_at(data, loc)
+        key = followed if err["type"] not in ("extra_forbidden", "missing") else loc
+        if key not in grouped:
+            grouped[key] = []
+            order.append(key)
+        grouped[key].append(err)
+    out: list[SpecError] = []
+    for key in order:
+        errs = grouped[key]
+        types = {e["type"] for e in errs}
+        path = base + key
+        if "extra_forbidden" in types:
+            name = key[-1]
+            parent_path, parent_val = _data_at(data, key[:-1])
+            fields = _fields_at(model, key[:-1], data)
+            hint = did_you_mean(str(name), fields)
+            allowed = "" if hint else (f"allowed: {', '.join(sorted(fields))}" if fields else "")
+            out.append(SpecError(doc.key_loc(path), f"unknown key '{name}'", hint or allowed))
+            continue
+        if "missing" in types:
+            name = key[-1]
+            parent, _ = _data_at(data, key[:-1])
+            out.append(SpecError(doc.key_loc(base + parent) if parent else doc.loc(base + parent), f"missing required key '{name}'"))
+            continue
+        _, value = _data_at(data, key)
+        lit = [e for e in errs if e["type"] == "literal_error"]
+        if lit and isinstance(value, str):
+            expected = lit[0].get("ctx", {}).get("expected", "")
+            options = [o.strip().strip("'") for o in expected.replace(" or ", ", ").split(",") if o.strip()]
+            hint = did_you_mean(value, options)
+            field_name = key[-1] if key else ""
+            out.append(
+                SpecError(doc.loc(path), f"'{value}' is not a valid {field_name}", hint or f"choose one of: {', '.join(options)}")
+            )
+            continue
+        if lit and key == ("ejs",):
+            out.append(SpecError(doc.loc(path), f"unsupported format version {_describe(value)}", "this ejsgen reads 'ejs: 1'"))
+            continue
+        custom = [e for e in errs if e["type"] in ("value_error", "assertion_error")]
+        if custom:
+            msg = str(custom[0]["msg"]).removeprefix("Value error, ")
+            out.append(SpecError(doc.loc(path), msg))
+            continue
+        bounds = [e for e in errs if e["type"] in ("greater_than", "greater_than_equal", "less_than", "less_than_equal")]
+        if bounds:
+            msg = str(bounds[0]["msg"]).replace("Input should be", "must be")
+            out.append(SpecError(doc.loc(path), f"'{key[-1]}' {msg}, got {_describe(value)}"))
+            continue
+        words = []
+        for e in errs:
+            w = _TYPE_WORDS.get(e["type"])
+            if w and w not in words:
+                words.append(w)
+        expected = " or ".join(words) if words else errs[0]["msg"]
+        what = f"'{key[-1]}'" if key and isinstance(key[-1], str) else "this value"
+        out.append(SpecError(doc.loc(path), f"{what} must be {expected}, got {_describe(value)}"))
+    return out
+
+
+def _fields_at(model: type[BaseModel], loc: Path_, data: Any) -> list[str]:
+    """The field names of the model that validates the mapping at ``loc``."""
+    cur: Any = model
+    for key in loc:
+        if isinstance(key, int):
+            continue
+        if isinstance(cur, type) and issubclass(cur, BaseModel):
+            info = cur.model_fields.get(str(key))
+            if info is None:
+                return []
+            cur = _model_in(info.annotation)
+        else:
+            return []
+    if isinstance(cur, type) and issubclass(cur, BaseModel):
+        return list(cur.model_fields)
+    return []
+
+
+def _model_in(annotation: Any) -> Any:
+    import typing
+
+    if isinstance(annotation, type) and issubclass(annotation, BaseModel):
+        return annotation
+    for arg in typing.get_args(annotation):
+        found = _model_in(arg)
+        if found is not None:
+            return found
+    return None
+
+
+def _check_name(doc: Document, name: str, path: Path_, what: str, errors: list[SpecError]) -> bool:
+    loc = doc.key_loc(path)
+    if not name.isidentifier():
+        errors.append(SpecError(loc, f"'{name}' is not a valid {what} name", "use letters, digits and _ (not starting with a digit)"))
+        return False
+    if keyword.iskeyword(name):
+        errors.append(SpecError(loc, f"'{name}' is a Python keyword and cannot name a {what}"))
+        return False
+    if name in PRELUDE_NAMES:
+        errors.append(SpecError(loc, f"'{name}' is a prelude name and cannot name a {what}", "choose another name"))
+        return False
+    if name.startswith("_ejs"):
+        errors.append(SpecError(loc, f"names starting with '_ejs' are reserved for the runtime ('{name}')"))
+        return False
+    return True
+
+
+def _validate_model(doc: Document, cls: type[Strict], data: Any, path: Path_, errors: list[SpecError]) -> Any:
+    if not isinstance(data, dict):
+        errors.append(SpecError(doc.loc(path), f"expected a mapping of properties, got {_describe(data)}"))
+        return None
+    try:
+        return cls.model_validate(data)
+    except ValidationError as exc:
+        errors.extend(pydantic_errors(doc, exc, path, cls, data))
+        return None
+
+
+def _view_items(doc: Document, items: Any, path: Path_, errors: list[SpecError], *, scene: bool) -> list[ViewItem]:
+    kinds = SCENE_ELEMENT_MODELS if scene else {**GUI_ELEMENT_MODELS, "scene": None}
+    where = "3D element" if scene else "view element"
+    if not isinstance(items, list):
+        errors.append(SpecError(doc.loc(path), f"expected a list of {where}s, got {_describe(items)}"))
+        return []
+    out: list[ViewItem] = []
+    for i, item in enumerate(items):
+        ipath = path + (i,)
+        if not isinstance(item, dict) or len(item) != 1:
+            errors.append(
+                SpecError(doc.loc(ipath), f"each {where} is a one-key mapping 'kind: {{properties}}'", f"kinds: {', '.join(kinds)}")
+            )
+            continue
+        (kind, props), = item.items()
+        kpath = ipath + (kind,)
+        if kind not in kinds:
+            other = GUI_ELEMENT_MODELS if scene else SCENE_ELEMENT_MODELS
+            if kind in other:
+                msg = f"'{kind}' is a {'GUI' if scene else '3D'} element and cannot stand {'in a scene' if scene else 'outside a scene'}"
+                errors.append(SpecError(doc.key_loc(kpath), msg))
+            else:
+                errors.append(SpecError(doc.key_loc(kpath), f"unknown {where} kind '{kind}'", did_you_mean(kind, kinds) or f"kinds: {', '.join(kinds)}"))
+            continue
+        if kind == "scene":
+            children = _view_items(doc, props, kpath, errors, scene=True)
+            out.append(ViewItem(kind, None, kpath, children=children))
+            continue
+        cls = kinds[kind]
+        assert cls is not None
+        model = _validate_model(doc, cls, props, kpath, errors)
+        if model is None:
+            continue
+        vi = ViewItem(kind, model, kpath)
+        if kind == "folder":
+            vi.children = _view_items(doc, model.children, kpath + ("children",), errors, scene=False)
+        elif kind == "tabs":
+            for label, children in model.tabs.items():
+                vi.tabs.append((label, _view_items(doc, children, kpath + ("tabs", label), errors, scene=False)))
+        elif kind == "group":
+            vi.children = _view_items(doc, model.children, kpath + ("children",), errors, scene=True)
+        out.append(vi)
+    return out
+
+
+def validate(doc: Document) -> Checked:
+    """Check a loaded document against the language; raises ``SpecErrors``."""
+    errors: list[SpecError] = []
+    data = doc.data
+    if not isinstance(data, dict):
+        raise SpecErrors([SpecError(doc.loc(()), "a spec is a mapping with 'ejs', 'title', 'model' and 'view'")])
+    try:
+        spec = Spec.model_validate(data)
+    except ValidationError as exc:
+        raise SpecErrors(pydantic_errors(doc, exc, (), Spec, data)) from None
+
+    variables: list[VarDecl] = []
+    for name, raw in spec.model.variables.items():
+        vpath = ("model", "variables", name)
+        if not _check_name(doc, name, vpath, "variable", errors):
+            continue
+        if isinstance(raw, dict):
+            decl = _validate_model(doc, Variable, raw, vpath, errors)
+            if decl is None:
+                continue
+        else:
+            decl = Variable(value=raw)
+        variables.append(VarDecl(name, decl, vpath))
+
+    seen_programs = {v.name for v in variables}
+    for pname in spec.model.programs:
+        ppath = ("model", "programs", pname)
+        if _check_name(doc, pname, ppath, "program", errors) and pname in seen_programs:
+            errors.append(SpecError(doc.key_loc(ppath), f"the program '{pname}' has the name of a variable"))
+
+    view = _view_items(doc, data.get("view", []), ("view",), errors, scene=False)
+    if errors:
+        raise SpecErrors(errors)
+    return Checked(doc, spec, variables, view)

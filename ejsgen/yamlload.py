@@ -1,0 +1,153 @@
+"""Read a ``.ejs.yaml`` file into plain Python values, keeping where every node stands.
+
+``load_yaml`` returns a ``Document``: ``data`` (dicts, lists, scalars) and ``positions``,
+a map from a node's path (a tuple of mapping keys and list indices) to its 1-based line
+and column, plus for every string scalar where its *text* starts (so code snippets can
+point at their own lines and columns in the spec).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from ejsgen.errors import Location, SpecError
+
+__all__ = ["Document", "TextOrigin", "load_yaml", "Path_"]
+
+Path_ = tuple[Any, ...]
+
+
+@dataclass(frozen=True)
+class TextOrigin:
+    """Where a string scalar's text starts: ``line``/``col`` (1-based) of its first character.
+
+    ``block``: a literal/folded block (``|``/``>``), whose text lines are the file's lines
+    one for one, all starting at ``col``; otherwise the text is on one line (quoted or
+    plain) and later lines, if any, are approximate.
+    """
+
+    line: int
+    col: int
+    block: bool
+
+
+@dataclass
+class Document:
+    """A loaded spec: ``data``, node ``positions``, string ``origins``, and the ``file`` name."""
+
+    file: str
+    data: Any
+    positions: dict[Path_, tuple[int, int]] = field(default_factory=dict)
+    origins: dict[Path_, TextOrigin] = field(default_factory=dict)
+
+    def loc(self, path: Path_) -> Location:
+        """The location of the node at ``path``, or of its nearest ancestor that has one."""
+        p = tuple(path)
+        while p and p not in self.positions:
+            p = p[:-1]
+        line, col = self.positions.get(p, (1, 1))
+        return Location(self.file, line, col)
+
+    def key_loc(self, path: Path_) -> Location:
+        """The location of the *key* of the mapping entry at ``path`` (falls back to ``loc``)."""
+        key = ("__key__",) + tuple(path)
+        if key in self.positions:
+            line, col = self.positions[key]
+            return Location(self.file, line, col)
+        return self.loc(path)
+
+
+class _Builder:
+    def __init__(self, file: str, text: str) -> None:
+        self.file = file
+        self.lines = text.splitlines()
+        self.positions: dict[Path_, tuple[int, int]] = {}
+        self.origins: dict[Path_, TextOrigin] = {}
+
+    def error(self, mark: Any, message: str, hint: str = "") -> SpecError:
+        return SpecError(Location(self.file, mark.line + 1, mark.column + 1), message, hint)
+
+    def build(self, node: yaml.Node, path: Path_) -> Any:
+        self.positions[path] = (node.start_mark.line + 1, node.start_mark.column + 1)
+        if isinstance(node, yaml.MappingNode):
+            out: dict[str, Any] = {}
+            for key_node, value_node in node.value:
+                if not isinstance(key_node, yaml.ScalarNode):
+                    raise self.error(key_node.start_mark, "a key must be a plain name")
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    raise self.error(key_node.start_mark, "YAML merge keys ('<<') are not supported in specs")
+                key = str(key_node.value)
+                if key in out:
+                    raise self.error(key_node.start_mark, f"duplicate key '{key}'")
+                self.positions[("__key__",) + path + (key,)] = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
+                out[key] = self.build(value_node, path + (key,))
+            return out
+        if isinstance(node, yaml.SequenceNode):
+            return [self.build(item, path + (i,)) for i, item in enumerate(node.value)]
+        assert isinstance(node, yaml.ScalarNode)
+        value = yaml.SafeLoader.construct_scalar(_LOADER, node)  # raw text
+        resolved = _resolve(node)
+        if isinstance(resolved, str):
+            self.origins[path] = self._origin(node)
+            return value
+        return resolved
+
+    def _origin(self, node: yaml.ScalarNode) -> TextOrigin:
+        line, col = node.start_mark.line, node.start_mark.column
+        if node.style in ("|", ">"):
+            indent = None
+            for i in range(line + 1, min(len(self.lines), node.end_mark.line + 1)):
+                src = self.lines[i]
+                if src.strip():
+                    indent = len(src) - len(src.lstrip(" "))
+                    break
+            return TextOrigin(line + 2, (indent or 0) + 1, True)
+        if node.style in ("'", '"'):
+            return TextOrigin(line + 1, col + 2, False)
+        return TextOrigin(line + 1, col + 1, False)
+
+
+_LOADER = yaml.SafeLoader("")
+
+
+def _resolve(node: yaml.ScalarNode) -> Any:
+    if node.tag == "tag:yaml.org,2002:str":
+        return str(node.value)
+    try:
+        return _LOADER.construct_object(node, deep=True)
+    except yaml.YAMLError:
+        return str(node.value)
+
+
+def load_yaml(path: str | Path, *, text: str | None = None, display_name: str | None = None) -> Document:
+    """Load a spec file (or ``text``) keeping positions; raises ``SpecError`` on YAML errors."""
+    p = Path(path)
+    name = display_name or str(path)
+    if text is None:
+        try:
+            text = p.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise SpecError(Location(name, 1, 1), "no such file") from None
+        except UnicodeDecodeError as exc:
+            raise SpecError(Location(name, 1, 1), f"the file is not UTF-8 text ({exc.reason})") from None
+    builder = _Builder(name, text)
+    try:
+        nodes = list(yaml.compose_all(text, Loader=yaml.SafeLoader))
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        problem = exc.problem or "invalid YAML"
+        if exc.context and "found character '\\t'" in problem:
+            problem = "a tab character cannot indent YAML; use spaces"
+        line = mark.line + 1 if mark else 1
+        col = mark.column + 1 if mark else 1
+        raise SpecError(Location(name, line, col), f"invalid YAML: {problem}") from None
+    except yaml.YAMLError as exc:
+        raise SpecError(Location(name, 1, 1), f"invalid YAML: {exc}") from None
+    if len(nodes) != 1 or nodes[0] is None:
+        raise SpecError(Location(name, 1, 1), "a spec is one YAML document (a mapping with 'ejs', 'title', 'model', 'view')")
+    data = builder.build(nodes[0], ())
+    return Document(name, data, builder.positions, builder.origins)
