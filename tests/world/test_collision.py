@@ -303,3 +303,26 @@ def test_cylinder_gjk_matches_sampled_surface() -> None:
         got = distance(cyl, pose, CollisionShape.sphere(0.05), T(c))
         # sampling overestimates by at most the grid spacing (about 2 mm here)
         assert ref - 2.5e-3 <= got <= ref + 1e-9
+
+
+def test_collisions_follows_a_world_as_it_changes() -> None:
+    from ejsrl.world.collision import collisions
+
+    world = World()
+    world.add(Box("table", size=(1.0, 1.0, 0.1)))
+    gripper = world.add(Box("gripper", size=(0.1, 0.1, 0.1), T_parent_local=T((0, 0, 0.5))))
+    world.add(Sphere("cube", radius=0.05, T_parent_local=T((0.3, 0, 0.1))))
+    assert collisions(world) == [("cube", "table")]  # the cube rests 0 above the table top
+    # the gripper picks the cube up: it now touches the gripper, its parent, which is not reported
+    world.reparent("cube", "gripper")
+    world.set_world_pose("cube", T((0, 0, 0.4)))
+    assert collisions(world) == []
+    gripper.set(T_parent_local=T((0, 0, 0.15)))  # lowered: the cube (a child) reaches the table
+    assert collisions(world) == [("cube", "table")]
+    assert collisions(world, ignore=[("table", "cube")]) == []
+    world["cube"].set(visible=False)  # a hidden object is not there
+    assert collisions(world) == []  # the gripper's bottom (z = 0.10) is clear of the table top (0.05)
+    world["cube"].set(visible=True)
+    assert collisions(world) == [("cube", "table")]
+    world.add(Cylinder("post", radius=0.05, height=1.0, T_parent_local=T((0.5, 0.5, 0))))
+    assert ("post", "table") in collisions(world)

@@ -32,6 +32,7 @@ Example::
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Iterable, Mapping, Sequence
 from typing import Any
 
@@ -52,6 +53,7 @@ __all__ = [
     "distance",
     "intersects",
     "shape_from_node",
+    "collisions",
     "CONTACT_TOL",
 ]
 
@@ -397,6 +399,28 @@ class CollisionWorld:
                 added.append(self.add_node(node))
         return added
 
+    def follow_world(self, world: Any) -> None:
+        """Track every visible solid node of a scene ``World``: add new ones, drop removed or
+        hidden ones, ignore each node against its direct parent (a grasped object and the
+        gripper, nested robot links), then :meth:`sync`. Shapes added by hand stay as they are."""
+        wanted = {}
+        for node in world.walk():
+            if world.is_visible(node) and (node.kind in ("box", "sphere", "cylinder") or node.parts()):
+                wanted[node.name] = node
+        for key in [k for k, (node, _) in self._nodes.items() if wanted.get(k) is not node]:
+            self.remove(key)
+        for key, node in wanted.items():
+            if key not in self._nodes:
+                if key in self._index:
+                    raise ValueError(f"the collision world already has a shape named {key!r} that is not the scene node")
+                self.add_node(node)
+        ignore = {_pair(k, node.parent.name) for k, node in wanted.items() if node.parent is not None and node.parent.name in wanted}
+        stale = {p for p in self._ignore if p[0] in self._nodes and p[1] in self._nodes} - ignore
+        if ignore - self._ignore or stale:
+            self._ignore = (self._ignore - stale) | ignore
+            self._rebuild_mask()
+        self.sync()
+
     def sync(self) -> None:
         """Update the shapes added from scene nodes to the nodes' current poses and sizes."""
         for key, (node, rev) in self._nodes.items():
@@ -491,6 +515,26 @@ class CollisionWorld:
 
     def __repr__(self) -> str:
         return f"<CollisionWorld of {len(self._names)} shapes>"
+
+
+_FOLLOWERS: weakref.WeakKeyDictionary[Any, CollisionWorld] = weakref.WeakKeyDictionary()
+
+
+def collisions(world: Any, *, margin: float = 0.0, ignore: Iterable[tuple[str, str]] = ()) -> list[tuple[str, str]]:
+    """The pairs of visible solid scene nodes in contact, sorted, as ``(a, b)`` with ``a < b``.
+
+    What model code gets from ``collisions()``. Boxes, spheres and cylinders collide as
+    exact primitives, every other solid node (meshes, robot links) as the convex hull of
+    its geometry. A node never collides with its direct parent; ``ignore`` names more
+    pairs to leave out; ``margin`` (m) also reports pairs closer than that. The checker
+    kept for each world is updated incrementally, so calling this every frame is cheap.
+    """
+    cw = _FOLLOWERS.get(world)
+    if cw is None:
+        cw = _FOLLOWERS[world] = CollisionWorld()
+    cw.follow_world(world)
+    skip = {_pair(a, b) for a, b in ignore}
+    return [p for p in cw.pairs(margin=margin) if p not in skip]
 
 
 def _pose(T: ArrayLike, name: str) -> Array:
