@@ -168,7 +168,7 @@ class EventTracker:
 
             tol = 1e-12 * (1.0 + abs(t0))
             a, ya = locate(g_at, t0, self.g[i], y0, t1, g1[i], tol)
-            hits.append(Hit(i, a, ya, s0))
+            hits.append(Hit(i, float(a), ya, s0))
         if hits:
             return min(hits, key=lambda h: (h.t, h.index))
         for i in range(len(events)):
