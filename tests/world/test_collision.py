@@ -326,3 +326,21 @@ def test_collisions_follows_a_world_as_it_changes() -> None:
     assert collisions(world) == [("cube", "table")]
     world.add(Cylinder("post", radius=0.05, height=1.0, T_parent_local=T((0.5, 0.5, 0))))
     assert ("post", "table") in collisions(world)
+
+
+def test_gjk_handles_flat_segment_and_point_hulls() -> None:
+    """Degenerate hulls (points, segments, flat polygons) make degenerate GJK simplices."""
+    rng = np.random.default_rng(5)
+    for _ in range(40):
+        pa = rng.normal(size=(rng.integers(1, 6), 3))
+        pa[:, 2] = 0
+        pb = rng.normal(size=(rng.integers(1, 6), 3)) * 0.5
+        pb[:, 1] = 0
+        a, b = CollisionShape.convex(pa), CollisionShape.convex(pb)
+        Ta, Tb = random_pose(rng, 1.0), random_pose(rng, 1.0)
+        A, B = world_vertices(a, Ta), world_vertices(b, Tb)
+        d = distance(a, Ta, b, Tb)
+        if hulls_intersect_lp(A, B):
+            assert d < 1e-9
+        else:
+            assert d == pytest.approx(hull_distance_reference(A, B), abs=2e-6)
