@@ -376,6 +376,7 @@ class Compiler:
             step_name = self.add_method(self.method_name(f"_ode{k}_step"), "self", f"The step of '{title}'.", [Line(f"return {float(ode.step)!r}")])
         # events
         event_src = []
+        event_where: dict[str, str] = {}
         for j, ev in enumerate(ode.events):
             epath = path + ("events", j)
             ename = ev.name or f"event {j + 1}"
@@ -387,6 +388,7 @@ class Compiler:
             action_lines += self.code_lines(ev.action, epath + ("action",), f"the action of event '{ename}'")
             action_lines.append(Line(f"return self._ode{k}_state()[1]"))
             action = self.add_method(f"_ode{k}_event{j}_action", "self, t, y", f"Event '{ename}': the action, at the event's time.", action_lines)
+            event_where[ename] = self.where(epath)
             direction = {"up": 1, "down": -1, "both": 0}[ev.direction]
             event_src.append(f"EventDef({ename!r}, self.{when}, {direction}, self.{action}, stop={ev.stop!r})")
         lines = []
@@ -397,7 +399,8 @@ class Compiler:
             Line(
                 f"pages.append(OdePage({title!r}, method={ode.method!r}, step=self.{step_name}, state=self._ode{k}_state, "
                 f"load=self._ode{k}_load, rates=self._ode{k}_rates, names={tuple(states)!r}, events={events}, "
-                f"tolerance={ode.tolerance!r}, max_step={ode.max_step!r}, enabled={page.enabled!r}))"
+                f"tolerance={ode.tolerance!r}, max_step={ode.max_step!r}, enabled={page.enabled!r}, "
+                f"where={self.where(path + ('equations',))!r}, event_where={event_where!r}))"
             )
         )
         return lines

@@ -118,6 +118,8 @@ class OdePage:
         tolerance: float = 1e-6,
         max_step: float | None = None,
         enabled: bool = True,
+        where: str = "",
+        event_where: dict[str, str] | None = None,
     ) -> None:
         from ejsrl.sim.ode import OdeIntegrator
 
@@ -128,6 +130,8 @@ class OdePage:
         self.load = load
         self.names = tuple(names)
         self.enabled = enabled
+        self.where = where
+        self.event_where = dict(event_where or {})
         self.integrator = OdeIntegrator(rates, method, tolerance=tolerance, max_step=max_step, events=events)
         self.fired: list[tuple[str, float]] = []
 
@@ -137,11 +141,21 @@ class OdePage:
             return False
         h = float(self.step_fn())
         t, y = self.state()
-        result = self.integrator.step(t, y, h)
+        from ejsrl.sim.ode import ZenoError
+
+        try:
+            result = self.integrator.step(t, y, h)
+        except ZenoError as exc:
+            where = next((w for name, w in self.event_where.items() if f"'{name}'" in str(exc)), self.where)
+            raise UserCodeError(str(exc), where) from None
         y_new = result.y
         if not np.all(np.isfinite(y_new)):
             bad = int(np.flatnonzero(~np.isfinite(y_new))[0])
-            raise FloatingPointError(f"the state became non-finite (element {bad} of {', '.join(self.names)}) near t = {result.t:.6g}")
+            raise UserCodeError(
+                f"the state became non-finite (element {bad} of {', '.join(self.names)}) near t = {result.t:.6g}; "
+                "check the rates for a division by zero or an overflow, or use a smaller step",
+                self.where,
+            )
         self.load(result.t, y_new.copy())
         self.fired = result.fired
         return bool(result.stop)
