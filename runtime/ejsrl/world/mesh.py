@@ -8,8 +8,8 @@ the vertices, so each part's vertices are in the file's frame and ``T_node_part`
 Colours: a part takes the file's colour as ``rgb`` when the whole part has one colour
 (an OBJ ``.mtl`` ``Kd``, a glTF ``baseColorFactor``, a VRML ``Material.diffuseColor``),
 or ``face_rgb`` (F, 3) when faces differ (PLY face or vertex colours, VRML ``Color``
-nodes; vertex colours are averaged over each face). trimesh reads no colours from OFF. A part with no colour in the file
-has ``rgb = None`` and ``face_rgb = None``, so the node's own ``color`` shows.
+nodes; vertex colours are averaged over each face); trimesh reads no colours from OFF.
+A part with no colour in the file has ``rgb = None`` and ``face_rgb = None``, so the node's own ``color`` shows.
 
 Problems: a missing file raises ``FileNotFoundError``; an unknown extension or a file that
 cannot be parsed raises :class:`MeshFormatError` (a ``ValueError``) whose message starts
