@@ -18,6 +18,15 @@ class Client:
 
     def add_notification(self, title, body, *, color=None, auto_close_seconds=None, **_kw):
         self.notes.append((title, body, color))
+        return Note(self, (title, body, color))
+
+
+class Note:
+    def __init__(self, client, note):
+        self.client, self.note = client, note
+
+    def remove(self):
+        self.client.notes.remove(self.note)
 
 
 def binding(served, bind: str):
@@ -191,6 +200,7 @@ def test_errors_in_user_code_are_shown_and_cleared_on_reset(served, monkeypatch)
     app.reset()
     app.frame()
     assert app.error is None and not box.visible
+    assert not any(color == "red" for _, _, color in client.notes)  # the error notification is closed
 
 
 def test_error_text_is_escaped(served, monkeypatch):

@@ -45,7 +45,8 @@ log = logging.getLogger("ejsrl.view")
 #: after the user changes a control, the model's value is not pushed back to it for this long
 USER_HOLD_SECONDS = 0.6
 
-Notify = Callable[[Any, str, str, str], None]
+#: ``notify(client or None, title, body, color)`` -> the notification handles it made
+Notify = Callable[[Any, str, str, str], list]
 
 
 def _finite(x: Any) -> bool:
@@ -132,6 +133,7 @@ class Panel:
         self.buttons: dict[str, Any] = {}
         self.handles_by_label: dict[str, Any] = {}
         self._error_rev_shown: int | None = None
+        self._error_notes: list[Any] = []
         self._playing_shown: bool | None = None
         self._readout_shown: str | None = None
         self.play_button: Any = None
@@ -376,6 +378,12 @@ class Panel:
             return
         self._error_rev_shown = rev
         err = getattr(self.app, "error", None)
+        for note in self._error_notes:
+            try:
+                note.remove()
+            except Exception:
+                pass
+        self._error_notes = []
         if err is None:
             self.error_box.visible = False
             return
@@ -391,4 +399,4 @@ class Panel:
             "<br><i>The simulation is paused; press Reset to start again.</i></div>"
         )
         self.error_box.visible = True
-        self.notify(None, head, message, "red")
+        self._error_notes = self.notify(None, head, message, "red")

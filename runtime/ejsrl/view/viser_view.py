@@ -87,15 +87,20 @@ class ViserView:
         self._guarded("reset", self.panel.on_reset)
 
     # -- helpers ----------------------------------------------------------------------------
-    def notify(self, client: Any, title: str, body: str, color: str = "blue") -> None:
-        """Show a notification to ``client``, or to every connected client if None."""
+    def notify(self, client: Any, title: str, body: str, color: str = "blue") -> list[Any]:
+        """Show a notification to ``client``, or to every connected client if None.
+
+        Red ones (errors) stay until closed; returns the notification handles.
+        """
         clients = [client] if client is not None else list(self.server.get_clients().values())
         auto_close = None if color == "red" else 6.0
+        handles = []
         for c in clients:
             try:
-                c.add_notification(title, body, color=color, auto_close_seconds=auto_close)
+                handles.append(c.add_notification(title, body, color=color, auto_close_seconds=auto_close))
             except Exception:
                 log.debug("notification to a client failed", exc_info=True)
+        return handles
 
     def _show_alerts(self) -> None:
         pop = getattr(self.app, "pop_alerts", None)
