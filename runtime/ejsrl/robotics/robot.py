@@ -73,6 +73,8 @@ class Robot:
         self.poses: dict[str, Array] = {}
         self._payload: tuple[float, Array, Array] | None = None
         self._cache_key: tuple[int, ...] | None = None
+        self._lists_key = -1
+        self._gen = 0
         for key, value in (poses or {}).items():
             self.addconfiguration(key, value)
 
@@ -173,6 +175,7 @@ class Robot:
         if self._payload is not None:
             self._apply_payload()
         self._cache_key = key
+        self._gen += 1  # generation of the cached arrays
 
     def _apply_payload(self) -> None:
         mp, rp, Ip = self._payload  # type: ignore[misc]
@@ -190,6 +193,16 @@ class Robot:
         self._m[-1] = mt
         self._r[-1] = c
         self._I[-1] = I0 + m0 * _parallel_axis(r0 - c) + I_n + mp * _parallel_axis(r_n - c)
+
+    def _rne_rigid(self, A: Array, Qd: Array, Qdd: Array, a0: Array) -> Array:
+        """Rigid-body RNE (m, n): plain floats for one configuration, NumPy for batches."""
+        if len(Qd) == 1:
+            if self._lists_key != self._gen:
+                self._lists = (self._m.tolist(), self._r.tolist(), self._I.tolist(), self._prism.tolist())
+                self._lists_key = self._gen
+            m, r, I, pr = self._lists
+            return _dynamics.rne_rigid_single(A[0], Qd[0], Qdd[0], a0, m, r, I, pr, self.mdh)[None]
+        return _dynamics.rne_rigid(A, Qd, Qdd, a0, self._m, self._r, self._I, self._prism, self.mdh)
 
     def _A(self, q: Array) -> Array:
         self._params()
@@ -338,8 +351,7 @@ class Robot:
         Qd = np.zeros_like(Q) if qd is None else np.broadcast_to(np.asarray(qd, float), Q.shape)
         Qdd = np.zeros_like(Q) if qdd is None else np.broadcast_to(np.asarray(qdd, float), Q.shape)
         A = self._A(Q)
-        tau = _dynamics.rne_rigid(A, Qd, Qdd, -self._gravity_base(gravity), self._m, self._r, self._I,
-                                  self._prism, self.mdh)
+        tau = self._rne_rigid(A, Qd, Qdd, -self._gravity_base(gravity))
         if armature:
             tau += self._armature * Qdd
         if friction:
@@ -350,17 +362,22 @@ class Robot:
         return tau[0] if single else tau
 
     def inertia(self, q: ArrayLike) -> Array:
-        """Joint-space inertia matrix (n, n) or (m, n, n), motor armature included."""
+        """Joint-space inertia matrix (n, n) or (m, n, n), motor armature included
+        (composite rigid body: centre-of-mass Jacobians of all links, batched)."""
         q = self._q(q)
         single = q.ndim == 1
         Q = np.atleast_2d(q)
-        m, n = Q.shape
-        Qr = np.repeat(Q, n, axis=0)
-        E = np.tile(np.eye(n), (m, 1))
-        tau = self.rne(Qr, np.zeros_like(Qr), E, gravity=np.zeros(3), friction=False)
-        M = tau.reshape(m, n, n).swapaxes(-1, -2)  # column j is the response to qdd = e_j
-        M = 0.5 * (M + M.swapaxes(-1, -2))
+        M = self._inertia(Q)
         return M[0] if single else M
+
+    def _inertia(self, Q: Array, A: Array | None = None) -> Array:
+        if A is None:
+            A = self._A(Q)
+        F = _kinematics.chain_all(A, np.eye(4))  # M does not depend on the base pose
+        M = _dynamics.inertia_composite(F, self._m, self._r, self._I, self._prism, self.mdh)
+        n = self.n
+        M[:, np.arange(n), np.arange(n)] += self._armature
+        return 0.5 * (M + np.swapaxes(M, -1, -2))
 
     def coriolis(self, q: ArrayLike, qd: ArrayLike) -> Array:
         """Coriolis/centripetal matrix C (n, n) or (m, n, n): velocity torques are ``C @ qd``."""
@@ -394,29 +411,17 @@ class Robot:
     def accel(self, q: ArrayLike, qd: ArrayLike, tau: ArrayLike, *, gravity: ArrayLike | None = None) -> Array:
         """Forward dynamics: joint accelerations (n,) or (m, n) for applied forces ``tau``.
 
-        Walker-Orin method 1: one batched RNE gives the bias ``C qd + g - friction`` and the
-        columns of M (composite inertia), then ``qdd = M^-1 (tau - bias)``.
+        Walker-Orin style: RNE with ``qdd = 0`` gives the bias ``C qd + g - friction``, the
+        composite-rigid-body inertia M, then ``qdd = M^-1 (tau - bias)`` (batched solve).
         """
         q = self._q(q)
         single = q.ndim == 1
         Q = np.atleast_2d(q)
         Qd = np.broadcast_to(np.asarray(qd, float), Q.shape)
         T = np.broadcast_to(np.asarray(tau, float), Q.shape)
-        m, n = Q.shape
-        self._params()
         A = self._A(Q)
-        # rows 0..n-1 of each block: qdd = e_j, qd = 0, no gravity; row n: the bias.
-        Ab = np.repeat(A, n + 1, axis=0)
-        QD = np.zeros((m, n + 1, n))
-        QD[:, n, :] = Qd
-        QDD = np.zeros((m, n + 1, n))
-        QDD[:, np.arange(n), np.arange(n)] = 1.0
-        a0 = np.zeros((m, n + 1, 3))
-        a0[:, n, :] = -self._gravity_base(gravity)
-        tau = _dynamics.rne_rigid(Ab, QD.reshape(-1, n), QDD.reshape(-1, n), a0.reshape(-1, 3), self._m,
-                                  self._r, self._I, self._prism, self.mdh).reshape(m, n + 1, n)
-        M = tau[:, :n, :] + np.eye(n) * self._armature
-        bias = tau[:, n, :] - self.friction(Qd)
+        M = self._inertia(Q, A)
+        bias = self._rne_rigid(A, Qd, np.zeros_like(Qd), -self._gravity_base(gravity)) - self.friction(Qd)
         qdd = np.linalg.solve(M, (T - bias)[..., None])[..., 0]
         return qdd[0] if single else qdd
 
