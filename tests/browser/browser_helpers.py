@@ -4,6 +4,10 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
+from pathlib import Path
+
+#: where screenshots go (git-ignored)
+ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 
 
 def wait_until(condition: Callable[[], bool], *, timeout: float = 15.0, what: str = "condition") -> None:

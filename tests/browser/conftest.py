@@ -6,12 +6,11 @@ new page. Screenshots go to ``test-artifacts/`` at the repository root.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
 
+from browser_helpers import ARTIFACTS
+
 CHROMIUM = "/usr/bin/chromium"
-ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 ARGS = [
     "--headless",
     "--no-sandbox",

@@ -5,9 +5,11 @@ from __future__ import annotations
 import pytest
 
 from browser_lab import make_app
-from browser_helpers import wait_until
+from browser_helpers import ARTIFACTS, wait_until
 
 
+# served_app comes first in the tests' arguments so that it is torn down after the page's
+# screenshot is taken (with the server still up).
 @pytest.fixture
 def served_app():
     app = make_app()
@@ -24,7 +26,7 @@ def open_app(page, url: str) -> None:
 
 
 @pytest.mark.browser
-def test_panel_scene_slider_play_and_reset(page, served_app):
+def test_panel_scene_slider_play_and_reset(served_app, page):
     app, url = served_app
     open_app(page, url)
 
@@ -56,7 +58,7 @@ def test_panel_scene_slider_play_and_reset(page, served_app):
 
 
 @pytest.mark.browser
-def test_user_code_errors_are_shown_in_the_panel(page, served_app):
+def test_user_code_errors_are_shown_in_the_panel(served_app, page):
     app, url = served_app
     open_app(page, url)
     page.get_by_role("button", name="Break it").click()
@@ -68,6 +70,8 @@ def test_user_code_errors_are_shown_in_the_panel(page, served_app):
     note.wait_for()
     assert "ZeroDivisionError" in page.content()
     assert not app.is_playing()
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / "error_shown.png"))
     page.get_by_role("button", name="Reset").click()
     box.wait_for(state="hidden", timeout=10_000)
     note.wait_for(state="detached", timeout=10_000)

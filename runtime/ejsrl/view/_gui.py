@@ -251,6 +251,8 @@ class Panel:
                 init = 0 if shown is None else int(shown)
                 if lo is not None and init < lo:
                     init = int(math.ceil(lo))
+                if hi is not None and init > hi:
+                    init = int(math.floor(hi))
                 handle = gui.add_number(label, init, min=lo, max=hi, step=step or 1, hint=hint)
             else:
                 init = 0.0 if shown is None else float(shown)

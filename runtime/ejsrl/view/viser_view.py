@@ -57,7 +57,7 @@ class ViserView:
         with server.atomic():
             self.panel = Panel(app, server.gui, self.notify)
             self.scene = SceneMirror(server.scene, on_gizmo=self._on_gizmo)
-            world = getattr(app, "world", None)
+            world = self._world()
             if world is not None:
                 with app.lock:
                     self.scene.sync(world)
@@ -77,7 +77,7 @@ class ViserView:
         self.frames += 1
         with self.server.atomic():
             self._guarded("panel", self.panel.refresh)
-            world = getattr(self.app, "world", None)
+            world = self._world()
             if world is not None:
                 self._guarded("scene", lambda: self.scene.sync(world))
             self._guarded("alerts", self._show_alerts)
@@ -108,6 +108,13 @@ class ViserView:
             return
         for text in pop():
             self.notify(None, "Alert", str(text), "yellow")
+
+    def _world(self) -> Any:
+        """The app's world, or None for an app without a scene."""
+        try:
+            return getattr(self.app, "world", None)
+        except RuntimeError:
+            return None
 
     def _on_gizmo(self, name: str, T_world: np.ndarray) -> None:
         self.app.apply_gizmo(name, T_world)
