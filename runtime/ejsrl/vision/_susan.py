@@ -63,21 +63,68 @@ def _usan(gray: NDArray[np.uint8], t: float) -> tuple[NDArray[np.uint16], NDArra
     return acc, pad, lut
 
 
-def _local_max(resp: NDArray[np.float32], radius: int) -> NDArray[np.bool_]:
-    """Pixels that are the maximum of ``resp`` in a (2r+1)^2 window, one per plateau (the first in raster order)."""
-    k = np.ones((2 * radius + 1, 2 * radius + 1), np.uint8)
-    peak = (resp > 0) & (resp >= cv2.dilate(resp, k))
-    # break ties on plateaus deterministically: among equal maxima keep the first pixel
-    H, W = resp.shape
-    prio = np.where(peak, (H * W - np.arange(H * W, dtype=np.float32).reshape(H, W)), 0).astype(np.float32)
-    return peak & (prio >= cv2.dilate(prio, k))
+def _local_max(resp: NDArray[np.float32], radius: int, ys: NDArray, xs: NDArray) -> NDArray[np.bool_]:
+    """Which of the pixels (ys, xs) are maxima of ``resp`` in their (2r+1)^2 window.
+
+    On a plateau only the first pixel in raster order is kept: a pixel must be >= every
+    neighbour and > those before it (rows above, or to its left on its row).
+    """
+    if len(ys) == 0:
+        return np.zeros(0, bool)
+    r = int(radius)
+    rp = np.pad(resp, r)
+    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
+    dy, dx = dy.ravel(), dx.ravel()
+    centre = (dy == 0) & (dx == 0)
+    before = (dy < 0) | ((dy == 0) & (dx < 0))
+    win = rp[(ys + r)[:, None] + dy[None, :], (xs + r)[:, None] + dx[None, :]]
+    v = resp[ys, xs][:, None]
+    ok_after = (win <= v) | centre[None, :]
+    ok_before = (win < v) | ~before[None, :]
+    return (v[:, 0] > 0) & ok_after.all(axis=1) & ok_before.all(axis=1)
 
 
 def _gather(pad: NDArray[np.uint8], gray: NDArray[np.uint8], lut: NDArray[np.uint8], ys: NDArray, xs: NDArray):
-    """c (K, 37) in [0, 100] of the mask pixels around the candidate pixels (ys, xs)."""
-    vals = pad[ys[:, None] + _R + SUSAN_MASK[None, :, 1], xs[:, None] + _R + SUSAN_MASK[None, :, 0]].astype(np.int16)
-    diff = np.abs(vals - gray[ys, xs].astype(np.int16)[:, None])
-    return lut[diff].astype(np.float64)
+    """c (K, 37) uint8 in [0, 100] of the mask pixels around the candidate pixels (ys, xs)."""
+    Wp = pad.shape[1]
+    offs = SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0]
+    base = (ys + _R) * Wp + (xs + _R)
+    vals = pad.ravel()[base[:, None] + offs[None, :]].astype(np.int16)
+    diff = np.abs(vals - gray.ravel()[ys * gray.shape[1] + xs].astype(np.int16)[:, None])
+    return np.take(lut, diff)
+
+
+def _candidates(gray: NDArray[np.uint8], t: float, g100: float):
+    """Pixels whose USAN area (x100) is below ``g100``: rows, columns, their c (K, 37) and n (K,).
+
+    Only pixels whose 7x7 neighbourhood spans enough grey levels can have a small USAN:
+    with every difference at most ``r``, ``n >= 37 exp(-(r / t)^6)``. Those few pixels are
+    evaluated by gathering their 37 neighbours; if they are many (a busy or noisy image),
+    the whole-image pass of ``_usan`` is cheaper and is used instead. Same result either way.
+    """
+    H, W = gray.shape
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, len(SUSAN_MASK))), np.zeros(0))
+    pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
+    lut = _lut(t)
+    if H <= 2 * _R + 2 or W <= 2 * _R + 2:
+        return (*empty, pad, lut)
+    nmax = len(SUSAN_MASK) * _SCALE
+    if g100 >= nmax:
+        maybe = np.ones((H, W), bool)
+    else:
+        need = 0.9 * float(t) * np.log(nmax / g100) ** (1.0 / 6.0)
+        k = np.ones((2 * _R + 1, 2 * _R + 1), np.uint8)
+        spread = cv2.subtract(cv2.dilate(gray, k), cv2.erode(gray, k))
+        maybe = spread > need
+    _clear_border(maybe, _R + 1)
+    if maybe.mean() > 0.25:
+        acc, _, _ = _usan(gray, t)
+        maybe &= acc < g100
+    ys, xs = np.divmod(np.flatnonzero(maybe), W)
+    c8 = _gather(pad, gray, lut, ys, xs)
+    n = c8.sum(axis=1, dtype=np.int32)
+    small = np.flatnonzero(n < g100)
+    return ys[small], xs[small], c8[small].astype(np.float64), n[small].astype(np.float64), pad, lut
 
 
 def _clear_border(resp: NDArray, b: int) -> None:
@@ -120,18 +167,10 @@ def susan_corners(
     gray = as_gray(img)
     H, W = gray.shape
     gthr = 0.5 * len(SUSAN_MASK) if g is None else float(g)
-    acc, pad, lut = _usan(gray, t)
     g100 = gthr * _SCALE
-    cand = acc < g100
-    if H > 2 * _R + 2 and W > 2 * _R + 2:
-        _clear_border(cand, _R + 1)
-    else:
-        cand.fill(False)
-    ys, xs = np.nonzero(cand)
+    ys, xs, c, n, pad, lut = _candidates(gray, t, g100)
     resp = np.zeros((H, W), np.float32)
     if len(ys):
-        c = _gather(pad, gray, lut, ys, xs)
-        n = c.sum(axis=1)
         sx = c @ SUSAN_MASK[:, 0]
         sy = c @ SUSAN_MASK[:, 1]
         far_enough = sx * sx + sy * sy > 0.5 * n * n
@@ -149,9 +188,10 @@ def susan_corners(
             v = pad[ys + _R + oy, xs + _R + ox].astype(np.int16)
             total += lut[np.abs(v - gray[ys, xs].astype(np.int16))]
         ok = far_enough & (total > 2.9 * _SCALE)
-        resp[ys[ok], xs[ok]] = (g100 - acc[ys[ok], xs[ok]]).astype(np.float32) / _SCALE
-    peaks = _local_max(resp, nms_radius)
-    py, px = np.nonzero(peaks)
+        resp[ys[ok], xs[ok]] = ((g100 - n[ok]) / _SCALE).astype(np.float32)
+    cy, cx = (ys[ok], xs[ok]) if len(ys) else (ys, xs)
+    peak = _local_max(resp, nms_radius, cy, cx)
+    py, px = cy[peak], cx[peak]
     strength = resp[py, px]
     if len(strength) and quality > 0:
         strong = strength >= quality * strength.max()
@@ -192,19 +232,12 @@ def susan_edges(
     gray = as_gray(img)
     H, W = gray.shape
     gthr = 0.75 * len(SUSAN_MASK) if g is None else float(g)
-    acc, pad, lut = _usan(gray, t)
     g100 = gthr * _SCALE
-    cand = acc < g100
-    if H > 2 * _R + 2 and W > 2 * _R + 2:
-        _clear_border(cand, _R + 1)
-    else:
-        cand.fill(False)
-    resp = np.where(cand, (g100 - acc.astype(np.float32)) / _SCALE, 0).astype(np.float32)
-    ys, xs = np.nonzero(cand)
+    ys, xs, c, n, pad, lut = _candidates(gray, t, g100)
+    resp = np.zeros((H, W), np.float32)
+    resp[ys, xs] = ((g100 - n) / _SCALE).astype(np.float32)
     edges = np.zeros((H, W), np.uint8)
     if len(ys):
-        c = _gather(pad, gray, lut, ys, xs)
-        n = c.sum(axis=1)
         dx, dy = SUSAN_MASK[:, 0].astype(np.float64), SUSAN_MASK[:, 1].astype(np.float64)
         sx, sy = c @ dx, c @ dy
         mxx, myy, mxy = c @ (dx * dx), c @ (dy * dy), c @ (dx * dy)

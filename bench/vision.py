@@ -1,0 +1,151 @@
+"""Benchmark of the vision runtime, measured side by side in one run.
+
+    python bench/vision.py [--repeat N]
+
+1. SUSAN corners at 640x480 against ``cv2.goodFeaturesToTrack`` on the same image
+   (target: SUSAN at most 4x its time).
+2. Virtual-camera rendering, frames per second at 320x240 and 640x480, for a ~200-triangle
+   and a ~20,000-triangle scene (target: at least 30 frames/s at 640x480 for 20,000
+   triangles with the NumPy rasterizer), and the OpenGL back end when it is available.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import time
+from collections.abc import Callable
+
+import cv2
+import numpy as np
+import trimesh
+
+from ejsrl.robotics.transforms import r2t, rotx, roty, rotz, transl
+from ejsrl.vision import CameraModel, add_gaussian_noise, susan_corners, to_gray
+from ejsrl.world import World, render
+from ejsrl.world.scene import Box, Cylinder, MeshNode, Part, Sphere
+
+
+def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
+    eye = np.asarray(eye, float)
+    z = np.asarray(target, float) - eye
+    z /= np.linalg.norm(z)
+    x = np.cross(z, up)
+    x /= np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(z, x), z, eye
+    return T
+
+
+def timeit(fn: Callable[[], object], repeat: int) -> tuple[float, float]:
+    """(median, best) seconds over ``repeat`` runs after one warm-up."""
+    fn()
+    ts = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        ts.append(time.perf_counter() - t0)
+    return statistics.median(ts), min(ts)
+
+
+def small_scene() -> World:
+    w = World()
+    w.add(Box("floor", size=(3, 3, 0.02), color="gray", T_parent_local=transl(0, 0, -0.01)))
+    m = trimesh.creation.icosphere(subdivisions=1, radius=0.2)
+    w.add(MeshNode("ball", mesh_parts=(Part(m.vertices, m.faces, (0.9, 0.1, 0.1)),), T_parent_local=transl(-0.2, 0.1, 0.2)))
+    for i in range(4):
+        w.add(Box(f"crate{i}", size=(0.15, 0.15, 0.15), color="blue", T_parent_local=transl(0.3, -0.3 + 0.2 * i, 0.075) @ r2t(rotz(0.3 * i))))
+    w.add(Cylinder("can", radius=0.08, height=0.3, color="green", T_parent_local=transl(0.1, 0.35, 0.15)))
+    return w
+
+
+def big_scene() -> World:
+    w = World()
+    w.add(Box("floor", size=(3, 3, 0.02), color="gray", T_parent_local=transl(0, 0, -0.01)))
+    m = trimesh.creation.icosphere(subdivisions=5, radius=0.45)
+    w.add(MeshNode("blob", mesh_parts=(Part(m.vertices, m.faces, (0.2, 0.7, 0.3)),), T_parent_local=transl(0, 0, 0.45)))
+    return w
+
+
+def count_tris(w: World) -> int:
+    return len(w.triangles()[0])
+
+
+def susan_image() -> np.ndarray:
+    """A 640x480 rendered view: a tilted white square and a few objects, with mild noise."""
+    w = World()
+    V = np.array([[-0.1, -0.1, 0], [0.1, -0.1, 0], [0.1, 0.1, 0], [-0.1, 0.1, 0]])
+    w.add(MeshNode("square", mesh_parts=(Part(V, [[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]], (1, 1, 1)),), T_parent_local=r2t(rotx(0.4) @ roty(-0.3))))
+    w.add(Box("crate", size=(0.08, 0.08, 0.08), color="orange", T_parent_local=transl(0.17, 0.12, 0.04)))
+    w.add(Sphere("ball", radius=0.05, color="red", T_parent_local=transl(-0.17, -0.12, 0.05)))
+    cam = CameraModel(640, 480, fov_deg=50)
+    T = r2t(rotx(np.pi), [0.01, 0.0, 0.6])
+    rgb, _ = render(w, cam, T, background=(0.15, 0.15, 0.18))
+    return add_gaussian_noise(to_gray(rgb), 3.0, seed=0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=15)
+    args = ap.parse_args()
+    n = args.repeat
+    cv2.setNumThreads(cv2.getNumThreads())  # OpenCV's default threading, as apps run it
+
+    print("== SUSAN corners vs cv2.goodFeaturesToTrack, 640x480 grey ==")
+    img = susan_image()
+    t_susan, b_susan = timeit(lambda: susan_corners(img, t=25), n)
+    t_susan_px, _ = timeit(lambda: susan_corners(img, t=25, subpixel=False), n)
+    t_gftt, b_gftt = timeit(lambda: cv2.goodFeaturesToTrack(img, 100, 0.01, 5), n)
+    n_s = len(susan_corners(img, t=25))
+    n_g = len(cv2.goodFeaturesToTrack(img, 100, 0.01, 5))
+    print(f"{'detector':34s} {'median ms':>10s} {'best ms':>9s} {'corners':>8s}")
+    print(f"{'susan_corners (t=25, subpixel)':34s} {t_susan * 1e3:10.2f} {b_susan * 1e3:9.2f} {n_s:8d}")
+    print(f"{'susan_corners (t=25, pixel)':34s} {t_susan_px * 1e3:10.2f} {'':9s} {'':8s}")
+    print(f"{'cv2.goodFeaturesToTrack(100,.01,5)':34s} {t_gftt * 1e3:10.2f} {b_gftt * 1e3:9.2f} {n_g:8d}")
+    ratio = t_susan / t_gftt
+    print(f"ratio SUSAN / goodFeaturesToTrack = {ratio:.2f}x  (target <= 4x: {'met' if ratio <= 4 else 'NOT met'})")
+
+    print()
+    print("== Virtual camera rendering (render(world, CameraModel, T)) ==")
+    from ejsrl.world.render import _pick_backend
+
+    backends = ["numpy"]
+    try:
+        from ejsrl.world._raster_gl import gl_available
+
+        if gl_available():
+            backends.append("gl")
+    except Exception:  # noqa: BLE001
+        pass
+    scenes = [("small", small_scene()), ("large", big_scene())]
+    T = look_at((0.0, -1.6, 1.1), (0.0, 0.0, 0.3))
+    print(f"{'scene':8s} {'triangles':>9s} {'resolution':>10s} {'backend':>7s} {'median ms':>10s} {'fps':>7s}")
+    results = {}
+    for name, w in scenes:
+        for res in [(320, 240), (640, 480)]:
+            cam = CameraModel(*res, fov_deg=50)
+            for be in backends:
+                med, best = timeit(lambda w=w, cam=cam, be=be: render(w, cam, T, backend=be), n)
+                results[(name, res, be)] = med
+                print(f"{name:8s} {count_tris(w):9d} {res[0]:>4d}x{res[1]:<5d} {be:>7s} {med * 1e3:10.2f} {1 / med:7.1f}")
+    fps = 1 / results[("large", (640, 480), "numpy")]
+    print(f"NumPy rasterizer, 20k triangles at 640x480: {fps:.1f} frames/s (target >= 30: {'met' if fps >= 30 else 'NOT met'})")
+    print(f"(auto back end picks: {_pick_backend('auto')})")
+
+    # where the time goes, large scene at 640x480
+    from ejsrl.world._raster import rasterize
+    from ejsrl.world.render import shade_faces
+
+    w = scenes[1][1]
+    cam = CameraModel(640, 480, fov_deg=50)
+    t_tris, _ = timeit(lambda: w.triangles(), n)
+    tris, rgb = w.triangles()
+    R, t = T[:3, :3], T[:3, 3]
+    t_xf, _ = timeit(lambda: shade_faces((tris - t) @ R, rgb), n)
+    tc = (tris - t) @ R
+    t_ras, _ = timeit(lambda: rasterize(tc, cam.K, 640, 480, near=cam.near, far=cam.far), n)
+    print(f"breakdown (large, 640x480): world.triangles {t_tris * 1e3:.2f} ms, transform+shade {t_xf * 1e3:.2f} ms, rasterize {t_ras * 1e3:.2f} ms")
+
+
+if __name__ == "__main__":
+    main()
