@@ -88,6 +88,12 @@ def test_dragging_a_gizmo_calls_apply_gizmo(served):
     for cb in gizmo._impl_aux.update_cb:
         cb(Event())
     assert served.app.model.k == pytest.approx(2.5)  # the element's set: k = T[0, 3] + 2
+    # while dragging, the server's pose (identity here) does not snap the gizmo back
+    served.app.frame()
+    assert gizmo.position == pytest.approx((0.5, 0.0, 0.0))
+    served.view.scene._dragging["handle"] = 0.0  # the drag ended long ago
+    served.app.frame()
+    assert gizmo.position == pytest.approx((0.0, 0.0, 0.0))
 
 
 # -- the mirror on its own world -------------------------------------------------------

@@ -140,11 +140,12 @@ class SceneMirror:
             m = self._create(node, T, visible)
             self._nodes[node.name] = m
             return
-        if m.T is None or not np.array_equal(m.T, T):
-            if not (m.kind == "gizmo" and self._is_dragging(node.name)):
-                m.frame.position = T[:3, 3]
-                m.frame.wxyz = r2q(T)
-                self.counters["pose"] += 1
+        if m.kind == "gizmo" and self._is_dragging(node.name):
+            m.T = None  # the user moves it; send the model's pose again once the drag is over
+        elif m.T is None or not np.array_equal(m.T, T):
+            m.frame.position = T[:3, 3]
+            m.frame.wxyz = r2q(T)
+            self.counters["pose"] += 1
             m.T = np.array(T)
         if visible != m.visible:
             m.frame.visible = visible
@@ -393,9 +394,10 @@ class SceneMirror:
         def _(event: Any) -> None:
             phase = getattr(event, "phase", "update")
             with self._gizmo_lock:
-                # while the user drags, the server's poses must not snap the gizmo back;
-                # after the release keep ignoring them briefly, for frames already in flight
-                self._dragging[name] = float("inf") if phase != "end" else time.monotonic() + 0.3
+                # while the user drags (and briefly after, for frames already in flight) the
+                # server's poses must not snap the gizmo back; a drag whose end never comes
+                # (a closed tab) stops counting a second after its last move
+                self._dragging[name] = time.monotonic() + (0.3 if phase == "end" else 1.0)
             T = np.eye(4)
             T[:3, :3] = q2r(np.asarray(handle.wxyz, dtype=float))
             T[:3, 3] = np.asarray(handle.position, dtype=float)

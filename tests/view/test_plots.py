@@ -1,0 +1,76 @@
+"""Plot buffers, uPlot options, image preparation and the server helper."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ejsrl.view._plots import PlotBinding, PlotBuffer, prepare_image
+from ejsrl.view.elements import Dynamic, Plot, Series
+from ejsrl.view.viser_view import make_server
+
+
+def test_the_buffer_keeps_the_window_span():
+    b = PlotBuffer(1, window=1.0)
+    for i in range(50):
+        b.append(i * 0.1, [i])
+    x, y = b.data()
+    assert x[0] == pytest.approx(3.9) and x[-1] == pytest.approx(4.9)
+    assert y.tolist() == list(range(39, 50))
+
+
+def test_the_buffer_keeps_at_most_max_points_over_many_appends():
+    b = PlotBuffer(2, max_points=10)
+    for i in range(1000):
+        b.append(float(i), [i, -i])
+    x, y1, y2 = b.data()
+    assert x.tolist() == [float(i) for i in range(990, 1000)]
+    assert (y2 == -x).all()
+
+
+def test_the_same_instant_replaces_the_last_point_and_going_back_starts_over():
+    b = PlotBuffer(1)
+    b.append(0.0, [1.0])
+    b.append(1.0, [2.0])
+    b.append(1.0, [5.0])  # paused, a slider moved
+    assert b.data()[1].tolist() == [1.0, 5.0]
+    b.append(0.5, [3.0])  # t went back
+    assert b.data()[0].tolist() == [0.5]
+
+
+def test_non_finite_points_are_skipped():
+    b = PlotBuffer(1)
+    assert not b.append(0.0, [float("nan")])
+    assert not b.append(float("inf"), [0.0])
+    assert len(b) == 0
+
+
+def test_fixed_y_range_and_numeric_x_axis(served):
+    plot = Plot("p", Dynamic(lambda m: m.t, "t"), [Series(Dynamic(lambda m: m.x), "x", "#00ff00")], y_range=(-2, 3))
+    binding = PlotBinding(served.server.gui, plot, x_label="t")
+    assert binding.handle.scales["y"] == {"auto": False, "range": [-2.0, 3.0]}
+    assert binding.handle.scales["x"]["time"] is False
+    assert binding.handle.series[0]["label"] == "t"
+    assert binding.handle.series[1]["stroke"] == "rgb(0, 255, 0)"
+
+
+def test_images_become_rgb_uint8_with_markers():
+    gray = np.zeros((40, 50), dtype=np.uint8)
+    out = prepare_image(gray, np.array([[10.0, 20.0]]))
+    assert out.shape == (40, 50, 3) and out.dtype == np.uint8
+    assert out[:, :, 0].max() > 200 and gray.max() == 0  # drawn on a copy
+    assert prepare_image(np.ones((4, 4, 3)) * 0.5)[0, 0].tolist() == [127, 127, 127]
+    assert prepare_image(np.zeros((3,))) is None and prepare_image(None) is None
+
+
+def test_make_server_takes_the_next_free_port():
+    first, url1 = make_server("127.0.0.1", 0)
+    try:
+        second, url2 = make_server("127.0.0.1", first.get_port())
+        try:
+            assert second.get_port() != first.get_port()
+            assert url2 == f"http://127.0.0.1:{second.get_port()}"
+        finally:
+            second.stop()
+    finally:
+        first.stop()
