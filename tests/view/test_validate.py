@@ -92,3 +92,9 @@ def test_dropdown_maps_shown_text_back_to_numeric_options():
     out = validate_control(d, "5")
     assert out.ok and out.value == 5 and isinstance(out.value, int)
     assert not validate_control(d, "3").ok
+
+
+def test_a_text_field_bound_to_a_number_takes_numerals_only():
+    t = Text("x", _get, _set, vtype="float")
+    assert validate_control(t, "2.5").value == 2.5
+    assert not validate_control(t, "two").ok

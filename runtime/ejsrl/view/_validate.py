@@ -138,7 +138,7 @@ def validate_control(control: Control, raw: Any) -> Checked:
         except Exception:  # pragma: no cover
             pass
         return _refuse(control, f"{_show(raw)} is not true or false")
-    if isinstance(control, Text) or control.vtype == "str":
+    if control.vtype == "str" or (isinstance(control, Text) and control.vtype not in ("float", "int")):
         if not isinstance(raw, str):
             return _refuse(control, f"{_show(raw)} is not text")
         if len(raw) > MAX_TEXT_LENGTH:
