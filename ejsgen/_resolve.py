@@ -95,7 +95,10 @@ def parse_snippet(snippet: Snippet) -> ast.AST:
     except SyntaxError as exc:
         lineno = exc.lineno or 1
         col = (exc.offset or 1) - 1
-        if snippet.mode == "eval" and lineno == 1:
+        lines = snippet.text.splitlines() or [""]
+        if lineno > len(lines):  # at the end of the text (e.g. a trailing operator)
+            lineno, col = len(lines), len(lines[-1].rstrip())
+        elif snippet.mode == "eval" and lineno == 1:
             col = max(col - 1, 0)
         msg = exc.msg
         if msg.startswith("unexpected indent") or msg.startswith("unindent"):

@@ -239,8 +239,9 @@ class ViewCompiler:
     def bind(self, text: str, path: Path_, kind: str) -> tuple[str, str, str] | None:
         """Getter and setter methods for a bind target; returns (getter, setter, vtype)."""
         c = self.c
+        before = len(c.errors)
         tree = c.parse_rewrite(c.snippet(path, f"the bind target of a {kind}", "eval"))
-        if tree is None:
+        if tree is None or len(c.errors) > before:
             return None
         assert isinstance(tree, ast.Expression)
         node = tree.body
@@ -366,8 +367,8 @@ class ViewCompiler:
         if kind == "slider":
             if p.min >= p.max:
                 c.errors.append(SpecError(c.loc(path + ("max",)), f"the slider's max ({p.max}) must be above its min ({p.min})"))
-            step = p.step if p.step is not None else (1 if vtype == "int" else (p.max - p.min) / 100)
-            if step <= 0:
+            step = p.step if p.step is not None else (1 if vtype == "int" else abs(p.max - p.min) / 100)
+            if step <= 0 and p.min < p.max:
                 c.errors.append(SpecError(c.loc(path + ("step",)), "the slider's step must be positive"))
             kw.update(min=float(p.min), max=float(p.max), step=float(step))
         elif kind == "number":

@@ -254,7 +254,7 @@ class Compiler:
             self._method_names.add(func.name)
             for dec in func.decorator_list:
                 lines.insert(0, Line(f"# decorator @{ast.unparse(dec)} is applied below"))
-            self.add_method(func.name, params, doc or f"Custom function '{func.name}' of the spec.", lines, comment=f"from {snippet.location(fn.lineno, fn.col_offset)}")
+            self.add_method(func.name, params, doc or f"Custom function '{func.name}' of the spec.", lines, comment=f"from {self.spec_path.name}:{fn.lineno + snippet.origin.line - 1}")
 
     # -- init, fixed relations --------------------------------------------------------------------------
     def compile_blocks(self) -> None:
@@ -340,7 +340,13 @@ class Compiler:
             self.add_method(f"_ode{k}_load", "self, t, y", "Write the independent variable and the state into the model.", [Line(f"self.{ind} = t"), Line(f"{targets} = y.tolist()")])
         else:
             packed = ", ".join(f"np.ravel(self.{s})" for s in states)
-            self.add_method(f"_ode{k}_state", "self", f"The independent variable and the packed state ({', '.join(states)}).", [Line(f"return self.{ind}, np.concatenate(({packed},)).astype(float)")])
+            values = ", ".join(f"self.{s}" for s in states)
+            self.add_method(
+                f"_ode{k}_state",
+                "self",
+                f"The independent variable and the packed state ({', '.join(states)}); the layout follows any change of size.",
+                [Line(f"self._ejs_layout{k} = StateLayout({values},)"), Line(f"return self.{ind}, np.concatenate(({packed},)).astype(float)")],
+            )
             load = [Line(f"self.{ind} = t"), Line(f"layout = self._ejs_layout{k}")]
             for j, s in enumerate(states):
                 load.append(Line(f"self.{s} = layout.take(y, {j})"))
@@ -392,8 +398,6 @@ class Compiler:
             direction = {"up": 1, "down": -1, "both": 0}[ev.direction]
             event_src.append(f"EventDef({ename!r}, self.{when}, {direction}, self.{action}, stop={ev.stop!r})")
         lines = []
-        if not scalar:
-            lines.append(Line(f"self._ejs_layout{k} = StateLayout({', '.join(f'self.{s}' for s in states)},)"))
         events = "[" + ", ".join(event_src) + "]"
         lines.append(
             Line(
@@ -421,7 +425,7 @@ class Compiler:
             return None
         src = self.spec_dir / p
         if not src.is_file():
-            self.errors.append(SpecError(self.loc(path), f"the {what} '{rel}' does not exist", f"looked for {src}"))
+            self.errors.append(SpecError(self.loc(path), f"the {what} '{rel}' does not exist", "paths are relative to the spec's folder"))
             return None
         self.assets[p.as_posix()] = src
         return p.as_posix()

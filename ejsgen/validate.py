@@ -25,7 +25,7 @@ MATH_NAMES = (
 ).split()
 CONTROL_NAMES = (
     "play pause step reset initialize is_playing capture alert start_program stop_program "
-    "world object_pose move_object attach release collisions"
+    "object_pose move_object attach release collisions"
 ).split()
 PRELUDE_NAMES = ("np", *MATH_NAMES, *CONTROL_NAMES)
 
@@ -166,9 +166,14 @@ def pydantic_errors(doc: Document, exc: ValidationError, base: Path_, model: typ
             w = _TYPE_WORDS.get(e["type"])
             if w and w not in words:
                 words.append(w)
+        if "a number" in words and "an integer" in words:
+            words.remove("an integer")
         expected = " or ".join(words) if words else errs[0]["msg"]
         what = f"'{key[-1]}'" if key and isinstance(key[-1], str) else "this value"
-        out.append(SpecError(doc.loc(path), f"{what} must be {expected}, got {_describe(value)}"))
+        hint = ""
+        if isinstance(value, (list, dict)) and "text (an expression)" in words:
+            hint = "write an expression as text in quotes, e.g. \"[x, 0, y]\""
+        out.append(SpecError(doc.loc(path), f"{what} must be {expected}, got {_describe(value)}", hint))
     return out
 
 

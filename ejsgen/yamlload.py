@@ -144,7 +144,10 @@ def load_yaml(path: str | Path, *, text: str | None = None, display_name: str | 
             problem = "a tab character cannot indent YAML; use spaces"
         line = mark.line + 1 if mark else 1
         col = mark.column + 1 if mark else 1
-        raise SpecError(Location(name, line, col), f"invalid YAML: {problem}") from None
+        hint = ""
+        if "flow mapping" in str(exc.context or "") or "expected ',' or '}'" in problem:
+            hint = "inside {...}, text with [ ] { } , or : must be quoted, e.g. bind: \"q[2]\""
+        raise SpecError(Location(name, line, col), f"invalid YAML: {problem}", hint) from None
     except yaml.YAMLError as exc:
         raise SpecError(Location(name, 1, 1), f"invalid YAML: {exc}") from None
     if len(nodes) != 1 or nodes[0] is None:

@@ -86,6 +86,7 @@ class App(Controller):
         self._wall0: float | None = None
         self._t0: float = 0.0
         self._stopped = threading.Event()
+        self._world_functions: Any = None
         self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
         self.model = model_cls(self, overrides, start=False)
         self.guard(self.model._ejs_reset)
@@ -219,6 +220,14 @@ class App(Controller):
     @property
     def world(self) -> Any:  # type: ignore[override]
         return self.scene.world
+
+    def world_functions(self) -> Any:
+        """The implementation of the prelude's world functions (made on first use)."""
+        if self._world_functions is None:
+            from ejsrl.world.functions import WorldFunctions
+
+            self._world_functions = WorldFunctions(self.scene)
+        return self._world_functions
 
     def capture(self, name: str) -> np.ndarray:
         """Render what camera ``name`` sees now (the scene is brought up to date first)."""

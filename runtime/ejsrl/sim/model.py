@@ -73,6 +73,12 @@ class Controller:
     def capture(self, name: str) -> np.ndarray:
         raise RuntimeError("capture() needs a scene; this model runs without one")
 
+    def world_functions(self) -> Any:
+        raise RuntimeError("this model runs without a scene")
+
+    def programs(self) -> Any:
+        raise RuntimeError("this model runs without robot programs")
+
     @property
     def world(self) -> Any:
         raise RuntimeError("this model runs without a scene")
@@ -232,12 +238,36 @@ class ModelBase:
     # -- lifecycle ------------------------------------------------------------------------
     def _ejs_reset(self) -> None:
         """Initial values, ``--set`` overrides, fresh solvers, ``init``, fixed relations."""
-        self._declare()
-        for name, value in self._ejs_overrides.items():
-            setattr(self, name, value)
+        self._ejs_declare()
         self._ejs_pages = self._evolution()
         self._init()
         self._fixed_relations()
+
+    def _ejs_declare(self) -> None:
+        """``_declare`` with the ``--set`` overrides taking each variable's place as it is declared.
+
+        So a later ``expr:`` variable sees the overridden value (``--set N=10`` sizes arrays
+        declared from ``N``). The interception lives in a throwaway subclass used only while
+        declaring, so attribute writes elsewhere (the hot path) pay nothing.
+        """
+        overrides = self._ejs_overrides
+        if not overrides:
+            self._declare()
+            return
+        cls = type(self)
+
+        def __setattr__(obj: Any, name: str, value: Any) -> None:
+            object.__setattr__(obj, name, overrides.get(name, value))
+
+        declaring = type(f"{cls.__name__}Declaring", (cls,), {"__setattr__": __setattr__})
+        self.__class__ = declaring
+        try:
+            self._declare()
+        finally:
+            self.__class__ = cls
+        for name, value in overrides.items():  # variables not declared (cannot happen after validation)
+            if not hasattr(self, name):
+                setattr(self, name, value)
 
     def _ejs_initialize(self) -> None:
         """Run ``init`` and the fixed relations again on the current values."""
@@ -302,3 +332,35 @@ class ModelBase:
     def capture(self, name: str) -> np.ndarray:
         """The current RGB image (H, W, 3) uint8 seen by the virtual camera ``name``."""
         return self._ejs_ctl.capture(name)
+
+    # -- the prelude's world functions (named scene objects) --------------------------------------
+    def object_pose(self, name: str) -> np.ndarray:
+        """The (4, 4) pose in the world of the scene object ``name``."""
+        return self._ejs_ctl.world_functions().object_pose(name)
+
+    def move_object(self, name: str, pose: Any) -> None:
+        """Place the scene object ``name``: a (4, 4) world pose or an [x, y, z] position."""
+        self._ejs_ctl.world_functions().move_object(name, pose)
+
+    def attach(self, name: str, robot: str, link: int | None = None) -> None:
+        """Attach the object ``name`` to a link of the robot element ``robot`` (default: its last link).
+
+        The object keeps its pose relative to the link from now on (as when grasped).
+        """
+        self._ejs_ctl.world_functions().attach(name, robot, link)
+
+    def release(self, name: str) -> None:
+        """Release an attached object where it is now."""
+        self._ejs_ctl.world_functions().release(name)
+
+    def collisions(self) -> list[tuple[str, str]]:
+        """The pairs of named scene objects and robot links that touch now (sorted)."""
+        return self._ejs_ctl.world_functions().collisions()
+
+    def start_program(self, name: str) -> None:
+        """Start the robot program ``name`` (from its first line)."""
+        self._ejs_ctl.programs().start(name)
+
+    def stop_program(self, name: str) -> None:
+        """Stop the robot program ``name``."""
+        self._ejs_ctl.programs().stop(name)
