@@ -6,7 +6,7 @@
    (target: SUSAN at most 4x its time).
 2. Virtual-camera rendering, frames per second at 320x240 and 640x480, for a ~200-triangle
    and a ~20,000-triangle scene (target: at least 30 frames/s at 640x480 for 20,000
-   triangles with the NumPy rasterizer), and the OpenGL back end when it is available.
+   triangles with the NumPy rasterizer).
 """
 
 from __future__ import annotations
@@ -109,27 +109,24 @@ def main() -> None:
     print("== Virtual camera rendering (render(world, CameraModel, T)) ==")
     from ejsrl.world.render import _pick_backend
 
-    backends = ["numpy"]
-    try:
-        from ejsrl.world._raster_gl import gl_available
-
-        if gl_available():
-            backends.append("gl")
-    except Exception:  # noqa: BLE001
-        pass
+    backends = ["numpy"]  # the OpenGL back end is not built yet
     scenes = [("small", small_scene()), ("large", big_scene())]
     T = look_at((0.0, -1.6, 1.1), (0.0, 0.0, 0.3))
-    print(f"{'scene':8s} {'triangles':>9s} {'resolution':>10s} {'backend':>7s} {'median ms':>10s} {'fps':>7s}")
+    print(f"{'scene':8s} {'triangles':>9s} {'resolution':>10s} {'backend':>7s} {'median ms':>10s} {'fps':>7s} {'best fps':>8s}")
     results = {}
     for name, w in scenes:
         for res in [(320, 240), (640, 480)]:
             cam = CameraModel(*res, fov_deg=50)
             for be in backends:
                 med, best = timeit(lambda w=w, cam=cam, be=be: render(w, cam, T, backend=be), n)
-                results[(name, res, be)] = med
-                print(f"{name:8s} {count_tris(w):9d} {res[0]:>4d}x{res[1]:<5d} {be:>7s} {med * 1e3:10.2f} {1 / med:7.1f}")
-    fps = 1 / results[("large", (640, 480), "numpy")]
-    print(f"NumPy rasterizer, 20k triangles at 640x480: {fps:.1f} frames/s (target >= 30: {'met' if fps >= 30 else 'NOT met'})")
+                results[(name, res, be)] = (med, best)
+                print(f"{name:8s} {count_tris(w):9d} {res[0]:>4d}x{res[1]:<5d} {be:>7s} {med * 1e3:10.2f} {1 / med:7.1f} {1 / best:8.1f}")
+    med, best = results[("large", (640, 480), "numpy")]
+    fps = 1 / med
+    print(
+        f"NumPy rasterizer, 20k triangles at 640x480: {fps:.1f} frames/s median, {1 / best:.1f} best "
+        f"(target >= 30: {'met' if fps >= 30 else 'NOT met'} on the median; the machine is shared, so the median moves with load)"
+    )
     print(f"(auto back end picks: {_pick_backend('auto')})")
 
     # where the time goes, large scene at 640x480

@@ -1,10 +1,9 @@
 """Virtual-camera rendering of the world: RGB and depth images from a camera pose.
 
 ``render(world, "cam")`` is what ``capture("cam")`` returns in apps, with or without a
-browser. The default back end is the NumPy z-buffer rasterizer of ``_raster.py``
-(deterministic, flat shading); an OpenGL back end (moderngl on a headless EGL context) is
-used when ``backend="gl"`` is asked for, or by ``"auto"`` when it works and
-``EJSRL_RENDER_BACKEND=gl`` is set.
+browser. The back end is the NumPy z-buffer rasterizer of ``_raster.py`` (deterministic,
+flat shading). ``backend`` is kept as a parameter ("auto" and "numpy" both pick it) for an
+OpenGL back end (moderngl on a headless EGL context) that is not built yet.
 
 Shading: each face gets its colour times ``ambient + (1 - ambient) * |cos a|`` where ``a``
 is the angle between its normal and ``LIGHT_DIR``, a light attached to the camera (so
@@ -79,40 +78,19 @@ def render_triangles(
     tris_cam = (tris - t) @ R  # world -> camera: R^T (p - t)
     shaded = shade_faces(tris_cam, cols)
     bg = _bg_uint8(background)
-    if backend == "gl":
-        from ejsrl.world._raster_gl import rasterize_gl
-
-        face, depth = rasterize_gl(
-            tris_cam, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, cull_backfaces=cull_backfaces
-        )
-    elif backend == "numpy":
-        face, depth = rasterize(
-            tris_cam, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, cull_backfaces=cull_backfaces
-        )
-    else:
-        raise ValueError(f"unknown render backend {backend!r}; use 'numpy', 'gl' or 'auto'")
+    if backend not in ("numpy", "auto"):
+        raise ValueError(f"unknown render backend {backend!r}; only 'numpy' (or 'auto') is available")
+    face, depth = rasterize(
+        tris_cam, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, cull_backfaces=cull_backfaces
+    )
     table = np.concatenate([shaded, bg[None, :]])
     image = table[face]  # face == -1 picks the background row
     return image, depth
 
 
-_GL_STATE: dict[str, Any] = {}
-
-
 def _pick_backend(backend: str) -> str:
-    if backend != "auto":
-        return backend
-    choice = os.environ.get("EJSRL_RENDER_BACKEND", "numpy").strip().lower()
-    if choice != "gl":
-        return "numpy"
-    if "ok" not in _GL_STATE:
-        try:
-            from ejsrl.world._raster_gl import gl_available
-
-            _GL_STATE["ok"] = gl_available()
-        except Exception:  # noqa: BLE001 - any failure means: no GL here
-            _GL_STATE["ok"] = False
-    return "gl" if _GL_STATE["ok"] else "numpy"
+    """The back end that ``backend`` ("auto", "numpy") resolves to: the NumPy rasterizer."""
+    return "numpy" if backend == "auto" else backend
 
 
 def render(
@@ -134,7 +112,7 @@ def render(
     link that carries the camera). ``background``: RGB in [0, 1] (default ``BACKGROUND``,
     light grey-blue). ``cull_backfaces``: skip faces seen from behind, as the browser view
     (three.js, front side) does; set False for open meshes seen from both sides.
-    ``backend``: "numpy", "gl" or "auto" (see the module docstring).
+    ``backend``: "auto" or "numpy" (see the module docstring).
 
     Depth is Z in the camera frame (metres along the optical axis), inf where nothing is
     seen. The output is deterministic.
