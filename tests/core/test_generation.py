@@ -26,7 +26,7 @@ REGEN = os.environ.get("EJSGEN_REGEN_GOLDEN") == "1"
 @pytest.mark.parametrize("name", CORE_EXAMPLES)
 def test_generated_app_matches_golden(name: str) -> None:
     text = render_app(load_plan(EXAMPLES / f"{name}.ejs.yaml"))
-    golden = GOLDEN / f"test_generated_app_matches_golden-{name}.app.py"
+    golden = GOLDEN / f"test_generated_app_matches_golden-{name}.app.py.golden"
     if REGEN or not golden.exists():
         golden.write_text(text)
     assert text == golden.read_text(), f"{golden.name} differs; if intended, rerun with EJSGEN_REGEN_GOLDEN=1"
