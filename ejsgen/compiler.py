@@ -23,7 +23,7 @@ from ejsgen.yamlload import Path_, TextOrigin
 
 __all__ = ["compile_spec", "Compiler"]
 
-PROGRAM_NAMES = ("move_j", "move_l", "wait", "wait_until", "open_gripper", "close_gripper")
+from ejsgen._programs import PROGRAM_NAMES  # noqa: E402
 
 
 class Compiler:
@@ -44,6 +44,9 @@ class Compiler:
         self.state_vars: set[str] = set()
         self.independents: list[str] = []
         self.assets: dict[str, Path] = {}
+        self.after_class: list[str] = []
+        self.runtime_imports: list[str] = []
+        self.program_labels: list[str] = []
         self.names = Names(variables=set(self.var_decls), functions=set(), controls=set(CONTROL_NAMES), globals={"np", *MATH_NAMES})
 
     # -- helpers ----------------------------------------------------------------------------------
@@ -447,6 +450,7 @@ class Compiler:
             from ejsgen._programs import compile_programs
 
             compile_programs(self)
+            view_lines = view_lines[:-1] + self.program_labels + view_lines[-1:]
         if self.errors:
             raise SpecErrors(_dedupe(self.errors))
         independent = self.independents[0] if self.independents else ("t" if "t" in self.var_decls else None)
@@ -464,6 +468,8 @@ class Compiler:
             sim={"fps": sim.fps, "steps_per_display": sim.steps_per_display, "autoplay": sim.autoplay, "realtime": sim.realtime, "controls": sim.controls},
             assets=sorted((src, rel) for rel, src in self.assets.items()),
             uses_robotics=self.uses_robotics,
+            after_class=self.after_class,
+            runtime_imports=self.runtime_imports,
         )
 
 

@@ -106,6 +106,8 @@ def render_app(plan: AppPlan) -> str:
         independent=repr(plan.independent),
         methods=methods,
         view_lines=plan.view_lines,
+        after_class=plan.after_class,
+        runtime_imports=plan.runtime_imports,
         sim=sim,
         spec_lines="@@SPEC_LINES@@",
     )

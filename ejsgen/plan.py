@@ -51,6 +51,8 @@ class AppPlan:
     sim: dict[str, Any]
     assets: list[tuple[Path, str]] = field(default_factory=list)
     uses_robotics: bool = False
+    after_class: list[str] = field(default_factory=list)
+    runtime_imports: list[str] = field(default_factory=list)
 
 
 class Src(str):

@@ -27,7 +27,8 @@ CONTROL_NAMES = (
     "play pause step reset initialize is_playing capture alert start_program stop_program "
     "object_pose move_object attach release collisions"
 ).split()
-PRELUDE_NAMES = ("np", *MATH_NAMES, *CONTROL_NAMES)
+PROGRAM_COMMANDS = ("move_j", "move_l", "wait", "wait_until", "open_gripper", "close_gripper")
+PRELUDE_NAMES = ("np", *MATH_NAMES, *CONTROL_NAMES, *PROGRAM_COMMANDS)
 
 
 @dataclass

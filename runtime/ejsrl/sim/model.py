@@ -76,9 +76,6 @@ class Controller:
     def world_functions(self) -> Any:
         raise RuntimeError("this model runs without a scene")
 
-    def programs(self) -> Any:
-        raise RuntimeError("this model runs without robot programs")
-
     @property
     def world(self) -> Any:
         raise RuntimeError("this model runs without a scene")
@@ -209,6 +206,7 @@ class ModelBase:
     SPEC_LINES: ClassVar[dict[int, tuple[int, int]]] = {}
     VARIABLES: ClassVar[dict[str, str]] = {}
     INDEPENDENT: ClassVar[str | None] = None
+    PROGRAMS: ClassVar[dict[str, Any]] = {}
 
     def __init__(
         self, controller: Controller | None = None, overrides: dict[str, Any] | None = None, *, start: bool = True
@@ -218,6 +216,11 @@ class ModelBase:
             self._ejs_ctl.model = self
         self._ejs_overrides = dict(overrides or {})
         self._ejs_pages: list[Any] = []
+        self._ejs_programs: Any = None
+        if self.PROGRAMS:
+            from ejsrl.sim.programs import Programs
+
+            self._ejs_programs = Programs(self, self.PROGRAMS)
         if start:
             self._ejs_reset()
 
@@ -242,6 +245,8 @@ class ModelBase:
         self._ejs_pages = self._evolution()
         self._init()
         self._fixed_relations()
+        if self._ejs_programs is not None:
+            self._ejs_programs.reset()
 
     def _ejs_declare(self) -> None:
         """``_declare`` with the ``--set`` overrides taking each variable's place as it is declared.
@@ -283,6 +288,8 @@ class ModelBase:
         stop = False
         for page in self._ejs_pages:
             stop = page.run() or stop
+        if self._ejs_programs is not None:
+            self._ejs_programs.advance()
         self._fixed_relations()
         return stop
 
@@ -359,8 +366,16 @@ class ModelBase:
 
     def start_program(self, name: str) -> None:
         """Start the robot program ``name`` (from its first line)."""
-        self._ejs_ctl.programs().start(name)
+        self._ejs_program_runner().start(name)
 
     def stop_program(self, name: str) -> None:
         """Stop the robot program ``name``."""
-        self._ejs_ctl.programs().stop(name)
+        self._ejs_program_runner().stop(name)
+
+    def _ejs_program_runner(self) -> Any:
+        if self._ejs_programs is None:
+            raise RuntimeError("this model has no robot programs")
+        return self._ejs_programs
+
+    def _ejs_program_status(self, name: str) -> str:
+        return self._ejs_program_runner().status(name)
