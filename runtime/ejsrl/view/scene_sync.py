@@ -85,6 +85,12 @@ class SceneSync:
         self.world = world if world is not None else World()
         self.base_dir = Path(base_dir)
         self.bindings: list[_Binding] = []
+        #: names of objects that model code placed (move_object, attach): their spec pose no
+        #: longer applies until a reset
+        self.placed: set[str] = set()
+        #: the model of the last update (world functions use it to bring robots up to date)
+        self.model: Any = None
+        self._home: dict[str, Node | None] = {}
         for element in elements:
             self._build(element, None)
 
@@ -93,6 +99,12 @@ class SceneSync:
         node = self._make_node(element)
         self.world.add(node, parent)
         self.bindings.append(_Binding(element, node))
+        self._home[node.name] = parent
+        if not any(is_dynamic(p) for p in (element.position, element.rotation, element.transform)):
+            try:  # constant poses hold from the start (for object_pose() in init)
+                node.set(T_parent_local=pose_from(element.position, element.rotation, element.transform))
+            except ValueError:
+                pass  # reported by the first update
         for child in element.children:
             self._build(child, node)
 
@@ -104,9 +116,20 @@ class SceneSync:
             if value is not None and not is_dynamic(value):
                 common[key] = value
         if kind == "robot":
-            from ejsrl.view._robot_node import RobotNode
+            from ejsrl.world.mesh import load_mesh
+            from ejsrl.world.robot_node import RobotNode
 
-            return RobotNode(element.name, **common)
+            props = element.props
+            meshes = [str(f) for f in (props.get("meshes") or ())]
+            const = {k: props[k] for k in ("q", "base") if props.get(k) is not None and not is_dynamic(props[k])}
+            return RobotNode(
+                element.name,
+                mesh_parts=[load_mesh(self.base_dir / f) for f in meshes] or None,
+                meshes=tuple(meshes),
+                show_frames=bool(props.get("show_frames", False)),
+                **const,
+                **common,
+            )
         if kind == "mesh":
             from ejsrl.world.mesh import load_mesh
 
@@ -124,10 +147,23 @@ class SceneSync:
 
     # -- every frame ----------------------------------------------------------------------------
     def reset(self) -> None:
-        """Clear what accumulates over time (trails)."""
+        """Clear what accumulates over time (trails); put objects that model code moved,
+        attached or released back where the spec has them."""
         for b in self.bindings:
             if isinstance(b.node, Trail):
                 b.node.clear()
+        for b in self.bindings:
+            node = b.node
+            home = self._home.get(node.name)
+            if node.parent is not home:
+                self.world.reparent(node.name, home, keep_world_pose=False)
+            if node.name in self.placed and not b.dynamic_pose:
+                e = b.element
+                try:
+                    node.set(T_parent_local=pose_from(e.position, e.rotation, e.transform))
+                except ValueError:
+                    pass
+        self.placed.clear()
 
     def update(self, model: Any, evaluate: Evaluate | None = None, *, first: bool = False) -> None:
         """Evaluate every dynamic property against ``model`` and write it into the world.
@@ -137,6 +173,7 @@ class SceneSync:
         applies constant poses (done once).
         """
         ev = evaluate or (lambda prop, where: prop(model) if isinstance(prop, Dynamic) else prop)
+        self.model = model
         for b in self.bindings:
             e = b.element
             values: dict[str, Any] = {}
@@ -148,7 +185,7 @@ class SceneSync:
                 v = ev(prop, e.where)
                 if v is not None:
                     values[key] = v
-            if b.dynamic_pose or first:
+            if (b.dynamic_pose or first) and b.node.name not in self.placed:
                 parts = [ev(p, e.where) if is_dynamic(p) else p for p in (e.position, e.rotation, e.transform)]
                 if not any(is_dynamic(p) and v is None for p, v in zip((e.position, e.rotation, e.transform), parts)):
                     try:
@@ -166,6 +203,24 @@ class SceneSync:
                 p = ev(b.trail_point, e.where) if is_dynamic(b.trail_point) else b.trail_point
                 if p is not None:
                     b.node.push(p)  # type: ignore[attr-defined]
+
+    def refresh_poses(self, model: Any) -> None:
+        """Bring poses up to date with ``model`` now (robots, and elements whose pose is an
+        expression), for world functions called between frames. Errors propagate to the
+        caller (the user code that called the world function)."""
+        self.model = model
+        for b in self.bindings:
+            e = b.element
+            values: dict[str, Any] = {}
+            if e.kind == "robot":
+                for key in ("model", "q", "base"):
+                    prop = b.dynamic_props.get(key)
+                    if prop is not None:
+                        values[key] = prop(model)
+            if b.dynamic_pose and b.node.name not in self.placed:
+                values["T_parent_local"] = pose_from(*(p(model) if is_dynamic(p) else p for p in (e.position, e.rotation, e.transform)))
+            if values:
+                b.node.set(**values)
 
 
 def _raiser(exc: Exception) -> Callable[[Any], Any]:
