@@ -348,12 +348,10 @@ class Compiler:
                 f"_ode{k}_state",
                 "self",
                 f"The independent variable and the packed state ({', '.join(states)}); the layout follows any change of size.",
-                [Line(f"self._ejs_layout{k} = StateLayout({values},)"), Line(f"return self.{ind}, np.concatenate(({packed},)).astype(float)")],
+                [Line(f"self._ejs_layout{k} = StateLayout.of(self._ejs_layout{k}, {values})"), Line(f"return self.{ind}, np.concatenate(({packed},)).astype(float)")],
             )
-            load = [Line(f"self.{ind} = t"), Line(f"layout = self._ejs_layout{k}")]
-            for j, s in enumerate(states):
-                load.append(Line(f"self.{s} = layout.take(y, {j})"))
-            self.add_method(f"_ode{k}_load", "self, t, y", "Write the independent variable and the state into the model.", load)
+            targets = ", ".join(f"self.{s}" for s in states) + ("," if len(states) == 1 else "")
+            self.add_method(f"_ode{k}_load", "self, t, y", "Write the independent variable and the state into the model.", [Line(f"self.{ind} = t"), Line(f"{targets} = self._ejs_layout{k}.unpack(y)")])
         # rates
         rate_lines = [Line(f"self._ode{k}_load(t, y)")]
         if ode.preliminary is not None:
@@ -372,8 +370,9 @@ class Compiler:
         else:
             rate_lines.append(Line(f"layout = self._ejs_layout{k}"))
             rate_lines.append(Line("out = np.empty(layout.size)"))
+            rate_lines.append(Line("rates = layout.views(out)"))
             for j, (s, src, _) in enumerate(rates):
-                rate_lines.append(Line(f"out[layout.slices[{j}]] = np.ravel({src})  # d{s}/d{ind}", where_eq[s]))
+                rate_lines.append(Line(f"rates[{j}][...] = {src}  # d{s}/d{ind}", where_eq[s]))
             rate_lines.append(Line("return out"))
         self.add_method(f"_ode{k}_rates", "self, t, y", f"The rates d/d{ind} of {', '.join(states)}.", rate_lines)
         # step
@@ -400,7 +399,7 @@ class Compiler:
             event_where[ename] = self.where(epath)
             direction = {"up": 1, "down": -1, "both": 0}[ev.direction]
             event_src.append(f"EventDef({ename!r}, self.{when}, {direction}, self.{action}, stop={ev.stop!r})")
-        lines = []
+        lines = [] if scalar else [Line(f"self._ejs_layout{k} = None")]
         events = "[" + ", ".join(event_src) + "]"
         lines.append(
             Line(

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from operator import itemgetter
 from typing import Any
 
 import numpy as np
@@ -9,31 +11,72 @@ import numpy as np
 __all__ = ["StateLayout"]
 
 
+def _shape(value: Any) -> tuple[int, ...]:
+    shape = getattr(value, "shape", None)
+    return tuple(shape) if shape is not None else np.shape(value)
+
+
 class StateLayout:
     """Slices and shapes of each state variable in the packed state vector.
 
-    Built from the variables' current values when the evolution pages are built (at
-    start and on reset), so array sizes may come from ``expr`` initial values.
+    Made from the variables' current values (so array sizes may come from ``expr`` initial
+    values or change at run time); :meth:`of` reuses a layout while the shapes stay the same.
+
+    ``unpack(y)`` gives the variables from a packed vector (floats for numbers, views of
+    ``y`` for arrays); ``views(out)`` gives writable views of a packed output vector, one
+    per variable, each of the variable's shape (length 1 for numbers), so a rate of the
+    wrong shape fails to broadcast.
     """
 
-    __slots__ = ("slices", "shapes", "size")
+    __slots__ = ("slices", "shapes", "size", "unpack", "views")
 
     def __init__(self, *values: Any) -> None:
         self.slices: list[slice] = []
-        self.shapes: list[tuple[int, ...]] = []
+        self.shapes: tuple[tuple[int, ...], ...] = tuple(_shape(v) for v in values)
         start = 0
-        for v in values:
-            shape = np.shape(v)
+        for shape in self.shapes:
             n = int(np.prod(shape)) if shape else 1
             self.slices.append(slice(start, start + n))
-            self.shapes.append(shape)
             start += n
         self.size = start
+        self.unpack: Callable[[np.ndarray], tuple[Any, ...]]
+        self.views: Callable[[np.ndarray], tuple[np.ndarray, ...]]
+        if all(len(s) == 1 for s in self.shapes):
+            # every state a 1-D array: slicing in C
+            if len(self.slices) == 1:
+                only = self.slices[0]
+                self.unpack = self.views = lambda y: (y[only],)
+            else:
+                self.unpack = self.views = itemgetter(*self.slices)  # type: ignore[assignment]
+        else:
+            self.unpack = self._unpack
+            self.views = self._views
+
+    @classmethod
+    def of(cls, previous: StateLayout | None, *values: Any) -> StateLayout:
+        """``previous`` if the values still have its shapes, else a new layout."""
+        if previous is not None and len(values) == len(previous.shapes):
+            for v, shape in zip(values, previous.shapes):
+                if _shape(v) != shape:
+                    break
+            else:
+                return previous
+        return cls(*values)
+
+    def _unpack(self, y: np.ndarray) -> tuple[Any, ...]:
+        out = []
+        for sl, shape in zip(self.slices, self.shapes):
+            if not shape:
+                out.append(float(y[sl.start]))
+            elif len(shape) == 1:
+                out.append(y[sl])
+            else:
+                out.append(y[sl].reshape(shape))
+        return tuple(out)
+
+    def _views(self, out: np.ndarray) -> tuple[np.ndarray, ...]:
+        return tuple(out[sl] if len(shape) <= 1 else out[sl].reshape(shape) for sl, shape in zip(self.slices, self.shapes))
 
     def take(self, y: np.ndarray, j: int) -> Any:
-        """Variable ``j`` from the packed vector: a float, or an array view of its shape."""
-        shape = self.shapes[j]
-        if not shape:
-            return float(y[self.slices[j].start])
-        part = y[self.slices[j]]
-        return part if len(shape) == 1 else part.reshape(shape)
+        """Variable ``j`` alone (see ``unpack``)."""
+        return self._unpack(y)[j]
