@@ -1,0 +1,36 @@
+"""The distribution maps every package folder on disk, and ships the templates."""
+
+from __future__ import annotations
+
+import tomllib
+
+from tests.conftest import ROOT
+
+
+def test_every_package_folder_is_listed_in_pyproject() -> None:
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    listed = set(config["packages"])
+    dirs = config["package-dir"]
+    on_disk = set()
+    for package, folder in dirs.items():
+        base = ROOT / folder
+        for init in base.rglob("__init__.py"):
+            rel = init.parent.relative_to(base)
+            if "__pycache__" in rel.parts:
+                continue
+            on_disk.add(".".join((package, *rel.parts)) if rel.parts else package)
+    assert on_disk == listed
+
+
+def test_templates_are_package_data() -> None:
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert "*.j2" in config["package-data"]["ejsgen.templates"]
+    assert sorted(p.name for p in (ROOT / "templates").glob("*.j2")) == ["README.md.j2", "app.py.j2", "bundle_main.py.j2", "requirements.txt.j2"]
+
+
+def test_readme_starts_with_the_two_commands_and_ci_runs_the_second() -> None:
+    lines = (ROOT / "README.md").read_text().splitlines()
+    block = lines[lines.index("```") + 1 : lines.index("```") + 3]
+    assert "ejsgen run examples/" in block[0]
+    second = block[1].split("#")[0].strip()
+    assert second in (ROOT / ".ci" / "run").read_text()
