@@ -126,19 +126,19 @@ def robot_geometry(model: Any) -> tuple[list[list[Part]], list[list[LinkShape]]]
                 body.append(trimesh.creation.icosphere(subdivisions=1, radius=r).apply_translation(p))
             sh.append(LinkShape("capsule", p0=p0, p1=p1, radius=r))
         for _joint, is_prismatic in housings[i]:
+            # the housing is centred on the joint, except the first one, which stands on the base plate
+            T = _tz(r + hj / 2) if i == 0 else np.eye(4)
             if is_prismatic:
-                dark.append(trimesh.creation.box(extents=(2 * rj, 2 * rj, hj)))
+                dark.append(trimesh.creation.box(extents=(2 * rj, 2 * rj, hj), transform=T))
             else:
-                dark.append(trimesh.creation.cylinder(radius=rj, height=hj, sections=24))
-            sh.append(LinkShape("cylinder", radius=rj * (np.sqrt(2) if is_prismatic else 1.0), height=hj))
-        if i == 0:  # a base plate under frame 0
-            T = np.eye(4)
-            T[2, 3] = -hj / 2 - r / 2
+                dark.append(trimesh.creation.cylinder(radius=rj, height=hj, sections=24, transform=T))
+            sh.append(LinkShape("cylinder", radius=rj * (np.sqrt(2) if is_prismatic else 1.0), height=hj, T_link_shape=T))
+        if i == 0:  # a base plate on frame 0's xy plane
+            T = _tz(r / 2)
             dark.append(trimesh.creation.cylinder(radius=2.2 * rj, height=r, sections=32, transform=T))
             sh.append(LinkShape("cylinder", radius=2.2 * rj, height=r, T_link_shape=T))
         if i == n:  # a tool flange on frame n
-            T = np.eye(4)
-            T[2, 3] = r / 2
+            T = _tz(r / 2)
             dark.append(trimesh.creation.cylinder(radius=0.9 * rj, height=r, sections=24, transform=T))
             sh.append(LinkShape("cylinder", radius=0.9 * rj, height=r, T_link_shape=T))
         out: list[Part] = []
@@ -151,6 +151,12 @@ def robot_geometry(model: Any) -> tuple[list[list[Part]], list[list[LinkShape]]]
         parts.append(out)
         shapes.append(sh)
     return parts, shapes
+
+
+def _tz(z: float) -> Array:
+    T = np.eye(4)
+    T[2, 3] = z
+    return T
 
 
 def _geometry_key(model: Any) -> tuple:
