@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 import tempfile
 from pathlib import Path
@@ -18,9 +17,6 @@ def build_and_import(spec: Path, out_root: Path | None = None) -> tuple[ModuleTy
 
     out_root = out_root or Path(tempfile.mkdtemp(prefix="ejsgen-bench-"))
     out = build(spec, out_root / spec.name.split(".")[0])
-    name = f"bench_app_{spec.name.split('.')[0]}"
-    mod_spec = importlib.util.spec_from_file_location(name, out / "app.py")
-    module = importlib.util.module_from_spec(mod_spec)  # type: ignore[arg-type]
-    sys.modules[name] = module
-    mod_spec.loader.exec_module(module)  # type: ignore[union-attr]
-    return module, out
+    from ejsrl.app import load_app
+
+    return sys.modules[load_app(out).model_cls.__module__], out

@@ -12,6 +12,8 @@ from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 
+from ejsrl.sim.ode import METHODS
+
 __all__ = [
     "Spec",
     "Model",
@@ -30,18 +32,7 @@ __all__ = [
     "ODE_METHODS",
 ]
 
-ODE_METHODS = (
-    "euler",
-    "euler_richardson",
-    "rk4",
-    "bogacki_shampine",
-    "cash_karp",
-    "fehlberg",
-    "dopri5",
-    "dop853",
-    "radau",
-    "bdf",
-)
+ODE_METHODS = METHODS  # the runtime's solvers are the language's methods
 
 
 class Strict(BaseModel):
@@ -127,9 +118,7 @@ class Ode(Strict):
     """The independent variable (time)."""
     step: NumOrExpr = "dt"
     """How much the independent variable advances each step (an expression)."""
-    method: Literal[
-        "euler", "euler_richardson", "rk4", "bogacki_shampine", "cash_karp", "fehlberg", "dopri5", "dop853", "radau", "bdf"
-    ] = "rk4"
+    method: Literal[METHODS] = "rk4"  # type: ignore[valid-type]
     """The solver: explicit fixed-step, explicit adaptive, or implicit (radau, bdf) for stiff models."""
     tolerance: float = Field(default=1e-6, gt=0)
     """Absolute and relative tolerance of adaptive and implicit methods."""

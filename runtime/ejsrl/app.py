@@ -30,7 +30,7 @@ from ejsrl.sim.model import Controller, ModelBase, UserCodeError, describe_error
 from ejsrl.view.elements import Button, Control, Dynamic
 from ejsrl.view.scene_sync import SceneSync, scene_elements
 
-__all__ = ["App", "SimConfig", "AppMeta", "main", "parse_set", "csv_columns"]
+__all__ = ["App", "SimConfig", "AppMeta", "main", "parse_set", "csv_columns", "load_app"]
 
 
 @dataclass
@@ -379,6 +379,25 @@ class App(Controller):
         if not self.playing:
             print(f"stopped at {model.INDEPENDENT} = {model._ejs_time():g} (the simulation paused itself)", file=log)
         return 0
+
+
+def load_app(app_dir: Path | str, *, overrides: dict[str, Any] | None = None) -> App:
+    """Import a built app folder's ``app.py`` and make its ``App`` (not serving, not playing).
+
+    For scripting a lab from Python (notebooks, tests, benchmarks): ``app.model`` is the
+    model, ``app.step_once()`` steps it, ``app.serve(block=False)`` serves it.
+    """
+    import importlib.util
+
+    folder = Path(app_dir).resolve()
+    name = f"ejs_app_{abs(hash(str(folder)))}"
+    spec = importlib.util.spec_from_file_location(name, folder / "app.py")
+    if spec is None or spec.loader is None:
+        raise FileNotFoundError(f"no app.py in {folder}")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # so tracebacks and SPEC_LINES find the module
+    spec.loader.exec_module(module)
+    return App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides)
 
 
 def _format_error(err: UserCodeError) -> str:

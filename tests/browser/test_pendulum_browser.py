@@ -7,9 +7,7 @@ Reset (back to the start).
 
 from __future__ import annotations
 
-import importlib.util
 import io
-import sys
 
 import numpy as np
 import pytest
@@ -22,19 +20,13 @@ from tests.conftest import EXAMPLES
 @pytest.fixture
 def pendulum_app(tmp_path):
     from ejsgen.cli import build
-    from ejsrl.app import App
+    from ejsrl.app import load_app
 
-    out = build(EXAMPLES / "pendulum.ejs.yaml", tmp_path / "pendulum")
-    spec = importlib.util.spec_from_file_location("pendulum_app_under_test", out / "app.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    app = App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=out)
+    app = load_app(build(EXAMPLES / "pendulum.ejs.yaml", tmp_path / "pendulum"))
     server = app.serve("127.0.0.1", 0, block=False)
     yield app, f"http://127.0.0.1:{server.get_port()}"
     app.stop()
     server.stop()
-    sys.modules.pop(spec.name, None)
 
 
 def canvas_pixels(page) -> np.ndarray:

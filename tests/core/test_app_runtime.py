@@ -3,7 +3,6 @@ changes from the view, realtime pacing, alerts, and the command line's checks.""
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 import threading
 import time
@@ -13,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ejsrl.app import App, SimConfig, parse_set
+from ejsrl.app import App, SimConfig, load_app, parse_set
 from ejsrl.view.elements import Button, Slider, Text
 from tests.conftest import run_app
 
@@ -25,12 +24,7 @@ def checks_module(tmp_path_factory):
     from ejsgen.cli import build
 
     out = build(SPECS / "runtime_checks.ejs.yaml", tmp_path_factory.mktemp("rt") / "checks")
-    spec = importlib.util.spec_from_file_location("runtime_checks_app", out / "app.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module, out
-    sys.modules.pop(spec.name, None)
+    return sys.modules[load_app(out).model_cls.__module__], out
 
 
 def make_app(module, out, **sim) -> App:

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
-from ejsrl.app import App
+from ejsrl.app import App, load_app
 from ejsrl.view.elements import Button, Label
 
 SPECS = Path(__file__).parent / "specs"
@@ -20,12 +19,7 @@ def moves(tmp_path_factory):
     from ejsgen.cli import build
 
     out = build(SPECS / "program_moves.ejs.yaml", tmp_path_factory.mktemp("prog") / "moves")
-    spec = importlib.util.spec_from_file_location("program_moves_app", out / "app.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    yield module, out
-    sys.modules.pop(spec.name, None)
+    return sys.modules[load_app(out).model_cls.__module__], out
 
 
 def make(module, out, **overrides) -> App:

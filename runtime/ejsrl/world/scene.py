@@ -10,6 +10,7 @@ view can send only what changed since it last looked.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterator, Sequence
 from typing import Any, ClassVar
 
@@ -334,9 +335,16 @@ class MeshNode(Node):
 
     def _make_parts(self) -> list[Part]:
         scale = np.asarray(self.props["scale"], dtype=float)
+        if np.all(scale == 1.0):
+            return list(self.props["mesh_parts"])
         out = []
         for p in self.props["mesh_parts"]:
-            out.append(Part(p.vertices * scale, p.faces, p.rgb, face_rgb=p.face_rgb, T_node_part=p.T_node_part))
+            scaled = copy.copy(p)  # keeps a MeshPart's opacity and name
+            scaled.vertices = p.vertices * scale
+            if p.T_node_part is not None:
+                scaled.T_node_part = p.T_node_part.copy()
+                scaled.T_node_part[:3, 3] *= scale
+            out.append(scaled)
         return out
 
 
