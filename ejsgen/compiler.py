@@ -400,15 +400,31 @@ class Compiler:
             direction = {"up": 1, "down": -1, "both": 0}[ev.direction]
             event_src.append(f"EventDef({ename!r}, self.{when}, {direction}, self.{action}, stop={ev.stop!r})")
         lines = [] if scalar else [Line(f"self._ejs_layout{k} = None")]
-        events = "[" + ", ".join(event_src) + "]"
-        lines.append(
-            Line(
-                f"pages.append(OdePage({title!r}, method={ode.method!r}, step=self.{step_name}, state=self._ode{k}_state, "
-                f"load=self._ode{k}_load, rates=self._ode{k}_rates, names={tuple(states)!r}, events={events}, "
-                f"tolerance={ode.tolerance!r}, max_step={ode.max_step!r}, enabled={page.enabled!r}, "
-                f"where={self.where(path + ('equations',))!r}, event_where={event_where!r}))"
-            )
-        )
+        lines.append(Line(f"pages.append(OdePage("))
+        args = [
+            repr(title),
+            f"method={ode.method!r}",
+            f"step=self.{step_name}",
+            f"state=self._ode{k}_state",
+            f"load=self._ode{k}_load",
+            f"rates=self._ode{k}_rates",
+            f"names={tuple(states)!r}",
+        ]
+        lines += [Line(f"    {a},") for a in args]
+        if event_src:
+            lines.append(Line("    events=["))
+            lines += [Line(f"        {e},") for e in event_src]
+            lines.append(Line("    ],"))
+        args = [
+            f"tolerance={ode.tolerance!r}",
+            f"max_step={ode.max_step!r}",
+            f"enabled={page.enabled!r}",
+            f"where={self.where(path + ('equations',))!r}",
+        ]
+        if event_where:
+            args.append(f"event_where={event_where!r}")
+        lines += [Line(f"    {a},") for a in args]
+        lines.append(Line("))"))
         return lines
 
     def _default_step(self, k: int, step: str, path: Path_) -> str:
