@@ -22,8 +22,9 @@ Rules (what a student sees):
   each ``(a, b)`` with ``a < b``, sorted. Robot links are named ``"<robot>.link<i>"``
   (``i`` = 0 for the base, as ``fkine_all``). A robot's neighbouring links (and links that
   already touch in the robot's zero pose, such as the parts of a spherical wrist) are never
-  reported against each other, nor is a grasped object against its link and that link's
-  neighbours, nor an object against the group that holds it.
+  reported against each other, nor is a grasped object against its link, that link's
+  neighbours and the links it touched when it was grasped, nor an object against the group
+  that holds it.
 """
 
 from __future__ import annotations
@@ -148,6 +149,13 @@ class WorldFunctions:
     def _attach_now(self, node: Node, robot: RobotNode, link: int | None) -> None:
         target = robot.link(link)
         self.world.reparent(node.name, target, keep_world_pose=True)
+        # the links it touches as it is grasped (the fingers, the wrist) may go on touching it
+        self.collider.touch[node.name] = set()
+        robot_links = {ln.name for ln in robot.links}
+        self.collider.touch[node.name] = {
+            b if a == node.name else a for a, b in self.collider.pairs(self.world) if node.name in (a, b) and ({a, b} & robot_links)
+        }
+        self.collider.invalidate()
 
     def release(self, name: str) -> None:
         """Let go of ``name``: it stays where it is now, in the world frame."""
@@ -157,6 +165,7 @@ class WorldFunctions:
         if isinstance(node.parent, LinkNode):
             self.world.reparent(name, None, keep_world_pose=True)
             self.scene.placed.add(name)
+        self.collider.touch.pop(name, None)
 
     def attached_to(self, name: str) -> str | None:
         """The link node ``name`` hangs from, or None."""
@@ -197,6 +206,12 @@ class RobotCollider:
         self._entries: list[tuple[str, str, Node, Array | None]] = []
         self._report: dict[str, str] = {}
         self._zero_cache: dict[tuple, set[tuple[int, int]]] = {}
+        #: for grasped objects: the robot links they touched when grasped (never reported)
+        self.touch: dict[str, set[str]] = {}
+
+    def invalidate(self) -> None:
+        """Rebuild the checker at the next call (after a change the structure key misses)."""
+        self._key = None
 
     def _structure(self, world: Any) -> tuple:
         items = []
@@ -261,7 +276,7 @@ class RobotCollider:
             parent = obj.parent
             if isinstance(parent, LinkNode):
                 for ln in parent.robot.links:
-                    if abs(ln.index - parent.index) <= 1:
+                    if abs(ln.index - parent.index) <= 1 or ln.name in self.touch.get(obj.name, ()):
                         ignore(obj.name, ln.name)
             elif parent is not None and parent.name in groups:
                 ignore(obj.name, parent.name)
