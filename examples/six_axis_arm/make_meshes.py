@@ -17,11 +17,12 @@ In frame i, link i's body runs from the origin of frame i-1, at
 (-a, -d sin(alpha), -d cos(alpha)), to the origin. VRML cylinders stand along their
 local y axis, so each one gets a rotation that lays y along the wanted axis.
 
-    python examples/six_axis_arm/make_meshes.py
+    python examples/six_axis_arm/make_meshes.py [OUTPUT_FOLDER]
 """
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 L1, A2, L4, L6 = 0.45, 0.40, 0.40, 0.10
@@ -95,8 +96,9 @@ LINKS = {
 }
 
 
-def main() -> None:
-    here = Path(__file__).resolve().parent
+def main(out: Path | None = None) -> None:
+    """Write link0.wrl ... link6.wrl into ``out`` (default: this script's folder)."""
+    here = Path(__file__).resolve().parent if out is None else Path(out)
     for i, shapes in LINKS.items():
         text = (
             "#VRML V2.0 utf8\n"
@@ -108,4 +110,4 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    main(Path(sys.argv[1]) if len(sys.argv) > 1 else None)
