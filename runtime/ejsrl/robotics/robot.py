@@ -17,7 +17,7 @@ from typing import Any, Iterable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _dynamics, _kinematics
+from . import _dynamics, _kernels, _kinematics
 from .link import Link
 
 __all__ = ["Robot"]
@@ -33,6 +33,11 @@ def _parallel_axis(d: Array) -> Array:
 class Robot:
     """A serial-link arm.
 
+    The kinematics and dynamics run through functions generated for this arm's
+    parameters (see ``_kernels``): on plain floats for one configuration, vectorised for a
+    batch. ``base`` and ``tool`` are folded into them, so assign new matrices rather
+    than editing them in place (they are read-only).
+
     Args:
         links: the links from base to end-effector (all standard or all modified DH).
         name: label shown in the UI and in ``repr``.
@@ -47,6 +52,8 @@ class Robot:
     ``reach`` a characteristic size of the arm (m), so a viewer can size link bodies and
     the scene without knowing the model.
     """
+
+    _fast = True  # False: the NumPy reference implementations (the tests compare both)
 
     def __init__(
         self,
@@ -97,8 +104,10 @@ class Robot:
     @base.setter
     def base(self, T: ArrayLike) -> None:
         T = np.array(T, dtype=float).reshape(4, 4)
+        T.flags.writeable = False
         self._base = T
         self._base_is_eye = bool(np.array_equal(T, np.eye(4)))
+        self._cache_key = None  # the generated kernels include the base
 
     @property
     def tool(self) -> Array:
@@ -108,9 +117,10 @@ class Robot:
     @tool.setter
     def tool(self, T: ArrayLike) -> None:
         T = np.array(T, dtype=float).reshape(4, 4)
+        T.flags.writeable = False
         self._tool = T
         self._tool_is_eye = bool(np.array_equal(T, np.eye(4)))
-        self._cache_key = None  # the payload is placed relative to the tool
+        self._cache_key = None  # the payload is placed relative to the tool; kernels include it
 
     @property
     def qlim(self) -> Array:
@@ -174,6 +184,11 @@ class Robot:
         self._armature = self._Jm * self._G**2
         if self._payload is not None:
             self._apply_payload()
+        Gabs = np.abs(self._G)
+        self._coulomb = (Gabs * self._Tc[:, 0]).tolist(), (Gabs * self._Tc[:, 1]).tolist()
+        self._has_coulomb = bool(np.any(self._Tc != 0))
+        self._kernels: dict[tuple, _kernels.Kernel] = {}
+        self._kparams: _kernels.Params | None = None
         self._cache_key = key
         self._gen += 1  # generation of the cached arrays
 
@@ -204,6 +219,41 @@ class Robot:
             return _dynamics.rne_rigid_single(A[0], Qd[0], Qdd[0], a0, m, r, I, pr, self.mdh)[None]
         return _dynamics.rne_rigid(A, Qd, Qdd, a0, self._m, self._r, self._I, self._prism, self.mdh)
 
+    def _kernel(self, key: tuple) -> _kernels.Kernel:
+        """The generated function ``key`` for the current parameters (built on first use)."""
+        self._params()
+        k = self._kernels.get(key)
+        if k is None:
+            if self._kparams is None:
+                self._kparams = _kernels.Params(self)
+            k = self._kernels[key] = _kernels.build(self._kparams, key)
+        return k
+
+    def _coulomb_single(self, qd: list[float]) -> list[float]:
+        """Coulomb friction torques ``|G| Tc±`` that oppose joint speeds qd (floats)."""
+        cp, cn = self._coulomb
+        return [cp[i] if v > 0 else (cn[i] if v < 0 else 0.0) for i, v in enumerate(qd)]
+
+    def _coulomb_batch(self, Qd: Array) -> Array:
+        cp, cn = self._coulomb
+        return np.where(Qd > 0, cp, np.where(Qd < 0, cn, 0.0))
+
+    def _a0(self, gravity: ArrayLike | None) -> list[float]:
+        """Base acceleration ``-g`` in the base frame (3 floats)."""
+        g = self._gravity_base(gravity).tolist()
+        return [-g[0], -g[1], -g[2]]
+
+    def _run(self, key: tuple, args: list[Array], shape: tuple[int, ...]) -> Array:
+        """Run kernel ``key`` on one configuration ((n,) args) or a batch ((m, k) args)."""
+        k = self._kernel(key)
+        if args[0].ndim == 1:
+            vals = k.single(*[v for a in args for v in a.tolist()])
+            return np.array(vals, dtype=float).reshape(shape)
+        lead = args[0].shape[:-1]
+        m = int(np.prod(lead))
+        flat = [np.broadcast_to(a, lead + a.shape[-1:]).reshape(m, a.shape[-1]) for a in args]
+        return k.batch(flat, int(np.prod(shape))).reshape(lead + shape)
+
     def _A(self, q: Array) -> Array:
         self._params()
         return _kinematics.dh_transforms(
@@ -223,6 +273,8 @@ class Robot:
 
         Includes ``base`` and ``tool``."""
         q = self._q(q)
+        if self._fast:
+            return self._run(("fkine",), [q], (4, 4))
         A = self._A(q)
         return _kinematics.chain(
             A, None if self._base_is_eye else self._base, None if self._tool_is_eye else self._tool
@@ -233,6 +285,8 @@ class Robot:
         (``base``), index i the frame of link i; the tool is not applied. Draw link i's
         body in frame i."""
         q = self._q(q)
+        if self._fast:
+            return self._run(("fkine_all",), [q], (self.n + 1, 4, 4))
         return _kinematics.chain_all(self._A(q), self._base)
 
     def _frames_and_end(self, q: Array) -> tuple[Array, Array]:
@@ -246,12 +300,16 @@ class Robot:
         Rows ``vx vy vz wx wy wz``: linear velocity of the tool origin and angular
         velocity, both in world coordinates."""
         q = self._q(q)
+        if self._fast:
+            return self._run(("jacob0",), [q], (6, self.n))
         F, Te = self._frames_and_end(q)
         return _kinematics.jacobian_from_frames(F, Te, self._prism, self.mdh)
 
     def jacobe(self, q: ArrayLike) -> Array:
         """Geometric Jacobian in the tool frame (6, n) or (m, 6, n), rows ``vx vy vz wx wy wz``."""
         q = self._q(q)
+        if self._fast:
+            return self._run(("jacobe",), [q], (6, self.n))
         F, Te = self._frames_and_end(q)
         J = _kinematics.jacobian_from_frames(F, Te, self._prism, self.mdh)
         Rt = np.swapaxes(Te[..., :3, :3], -1, -2)
@@ -346,6 +404,9 @@ class Robot:
             friction, armature: include friction / motor armature (default True).
         """
         q = self._q(q)
+        if self._fast and fext is None:
+            return self._rne_fast(q, qd, qdd, gravity, friction, armature)
+        q = self._q(q)
         single = q.ndim == 1
         Q = np.atleast_2d(q)
         Qd = np.zeros_like(Q) if qd is None else np.broadcast_to(np.asarray(qd, float), Q.shape)
@@ -361,10 +422,36 @@ class Robot:
             tau -= (np.swapaxes(J, -1, -2) @ np.broadcast_to(np.asarray(fext, float), (len(Q), 6))[..., None])[..., 0]
         return tau[0] if single else tau
 
+    def _rne_fast(self, q: Array, qd: ArrayLike | None, qdd: ArrayLike | None, gravity: ArrayLike | None,
+                  friction: bool, armature: bool) -> Array:
+        n = self.n
+        key = ("rne", qd is not None, qdd is not None, armature, friction)
+        kernel = self._kernel(key)
+        coulomb = friction and self._has_coulomb and qd is not None
+        if q.ndim == 1:
+            qdl = [0.0] * n if qd is None else np.broadcast_to(np.asarray(qd, float), (n,)).tolist()
+            qddl = [0.0] * n if qdd is None else np.broadcast_to(np.asarray(qdd, float), (n,)).tolist()
+            tau = kernel.single(*q.tolist(), *qdl, *qddl, *self._a0(gravity))
+            if coulomb:
+                tau = [t + c for t, c in zip(tau, self._coulomb_single(qdl))]
+            return np.array(tau, dtype=float)
+        Q = q.reshape(-1, n)
+        zero = np.zeros((1, n))
+        Qd = zero if qd is None else np.asarray(qd, float)
+        Qdd = zero if qdd is None else np.asarray(qdd, float)
+        Qd, Qdd = (np.broadcast_to(x, q.shape).reshape(-1, n) for x in (Qd, Qdd))
+        a0 = np.broadcast_to(np.array(self._a0(gravity)), (len(Q), 3))
+        tau = kernel.batch([Q, Qd, Qdd, a0], n)
+        if coulomb:
+            tau += self._coulomb_batch(Qd)
+        return tau.reshape(q.shape)
+
     def inertia(self, q: ArrayLike) -> Array:
         """Joint-space inertia matrix (n, n) or (m, n, n), motor armature included
         (composite rigid body: centre-of-mass Jacobians of all links, batched)."""
         q = self._q(q)
+        if self._fast:
+            return self._run(("inertia",), [q], (self.n, self.n))
         single = q.ndim == 1
         Q = np.atleast_2d(q)
         M = self._inertia(Q)
@@ -415,6 +502,8 @@ class Robot:
         composite-rigid-body inertia M, then ``qdd = M^-1 (tau - bias)`` (batched solve).
         """
         q = self._q(q)
+        if self._fast:
+            return self._accel_fast(q, qd, tau, gravity)
         single = q.ndim == 1
         Q = np.atleast_2d(q)
         Qd = np.broadcast_to(np.asarray(qd, float), Q.shape)
@@ -424,6 +513,25 @@ class Robot:
         bias = self._rne_rigid(A, Qd, np.zeros_like(Qd), -self._gravity_base(gravity)) - self.friction(Qd)
         qdd = np.linalg.solve(M, (T - bias)[..., None])[..., 0]
         return qdd[0] if single else qdd
+
+    def _accel_fast(self, q: Array, qd: ArrayLike, tau: ArrayLike, gravity: ArrayLike | None) -> Array:
+        n = self.n
+        kernel = self._kernel(("accel",))
+        if q.ndim == 1:
+            qdl = np.broadcast_to(np.asarray(qd, float), (n,)).tolist()
+            u = np.broadcast_to(np.asarray(tau, float), (n,)).tolist()
+            visc = self._kparams.viscous  # type: ignore[union-attr]
+            # u = tau + friction(qd): friction opposes the motion
+            if self._has_coulomb:
+                u = [t - v * w - c for t, v, w, c in zip(u, visc, qdl, self._coulomb_single(qdl))]
+            else:
+                u = [t - v * w for t, v, w in zip(u, visc, qdl)]
+            return np.array(kernel.single(*q.tolist(), *qdl, *u, *self._a0(gravity)), dtype=float)
+        Q = q.reshape(-1, n)
+        Qd = np.broadcast_to(np.asarray(qd, float), q.shape).reshape(-1, n)
+        U = np.broadcast_to(np.asarray(tau, float), q.shape).reshape(-1, n) + self.friction(Qd)
+        a0 = np.broadcast_to(np.array(self._a0(gravity)), (len(Q), 3))
+        return kernel.batch([Q, Qd, U, a0], n).reshape(q.shape)
 
     # ----------------------------------------------------------------- display
     def __repr__(self) -> str:
