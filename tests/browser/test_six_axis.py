@@ -1,0 +1,100 @@
+"""The six-axis arm example in a real browser: a joint slider moves the arm, Solve reaches a typed target.
+
+What a student does in the EjsRL paper's first lab: move q1 and see the arm turn (on the
+server's world and on screen), type a target pose into the number fields, press Solve,
+and see the joints change to a solution whose forward kinematics is the target.
+"""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from browser_helpers import ARTIFACTS, wait_until
+from tests.conftest import EXAMPLES
+
+
+@pytest.fixture
+def six_axis_app(tmp_path):
+    import importlib.util
+    import sys
+
+    from ejsgen.cli import build
+    from ejsrl.app import App
+
+    folder = build(EXAMPLES / "six_axis_arm.ejs.yaml", tmp_path / "six_axis_arm")
+    name = f"six_axis_browser_{abs(hash(str(folder)))}"
+    spec = importlib.util.spec_from_file_location(name, folder / "app.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
+    spec.loader.exec_module(module)
+    app = App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder)
+    server = app.serve("127.0.0.1", 0, block=False)
+    yield app, f"http://127.0.0.1:{server.get_port()}"
+    app.stop()
+    server.stop()
+
+
+def canvas_pixels(page) -> np.ndarray:
+    png = page.locator("canvas").first.screenshot()
+    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+
+
+def link_poses(app) -> np.ndarray:
+    with app.lock:
+        return np.array([app.world.T_world(f"arm.link{i}") for i in range(7)])
+
+
+@pytest.mark.browser
+def test_six_axis_arm_slider_and_inverse_kinematics_in_the_browser(six_axis_app, page):
+    app, url = six_axis_app
+    robot = app.model.robot
+    page.goto(url)
+    page.wait_for_selector("canvas", state="attached", timeout=45_000)
+    page.get_by_text("q1 (rad)").first.wait_for(timeout=45_000)
+    page.get_by_role("button", name="Solve").wait_for()
+    assert page.get_by_text("Six-axis arm kinematics", exact=True).first.is_visible()
+    wait_until(lambda: page.get_by_text("Tool at x = 0.000").count() > 0, what="the tool pose readout")
+
+    # the arm is drawn where its forward kinematics puts it
+    q0 = app.model.q.copy()
+    np.testing.assert_allclose(link_poses(app), robot.fkine_all(q0), atol=1e-12)
+    page.wait_for_timeout(1500)  # let the first frames of the 3D view settle before comparing pixels
+    before = canvas_pixels(page)
+
+    # q1 to its maximum with the keyboard: the waist turns the whole arm
+    slider = page.get_by_role("slider").first
+    slider.focus()
+    slider.press("End")
+    wait_until(lambda: abs(app.model.q[0] - 3.14) < 1e-9, what="q[0] at the slider's maximum on the server")
+    wait_until(lambda: np.allclose(link_poses(app), robot.fkine_all(app.model.q), atol=1e-12), what="the links at fkine_all(q)")
+    moved = np.linalg.norm(link_poses(app)[6][:3, 3] - robot.fkine_all(q0)[6][:3, 3])
+    assert moved > 0.5  # the tool swung to the other side
+    wait_until(lambda: np.mean(np.abs(canvas_pixels(page) - before) > 30) > 0.002, timeout=20, what="the arm to move on screen")
+    page.screenshot(path=str(ARTIFACTS / "six_axis_after_slider.png"))
+
+    # type a target pose, press Solve
+    target = {"X (m)": 0.15, "Y (m)": 0.5, "Z (m)": 0.3, "roll (rad)": 0.0, "pitch (rad)": 3.14, "yaw (rad)": 0.5}
+    for label, value in target.items():
+        box = page.get_by_label(label, exact=True)
+        box.fill(str(value))
+        box.press("Enter")
+    names = {"X (m)": "X", "Y (m)": "Y", "Z (m)": "Z", "roll (rad)": "roll", "pitch (rad)": "pitch", "yaw (rad)": "yaw"}
+    wait_until(lambda: all(abs(getattr(app.model, names[k]) - v) < 1e-9 for k, v in target.items()), what="the typed target on the server")
+    q_typed = app.model.q.copy()
+    np.testing.assert_allclose(q_typed, [3.14, *q0[1:]])  # typing alone does not move the arm
+    page.get_by_role("button", name="Solve").click()
+    wait_until(lambda: not np.allclose(app.model.q, q_typed), what="the joints to change after Solve")
+    with app.lock:
+        q, T_target = app.model.q.copy(), app.model.T_target.copy()
+    T = robot.fkine(q)
+    np.testing.assert_allclose(T_target[:3, 3], [0.15, 0.5, 0.3], atol=1e-12)
+    np.testing.assert_allclose(T[:3, 3], T_target[:3, 3], atol=1e-8)
+    np.testing.assert_allclose(T[:3, :3], T_target[:3, :3], atol=1e-8)
+    wait_until(lambda: page.get_by_text("Solved.").count() > 0, what="the status label")
+    wait_until(lambda: page.get_by_text("Tool at x = 0.150, y = 0.500, z = 0.300 m").count() > 0, what="the readout of the new tool pose")
+    np.testing.assert_allclose(link_poses(app), robot.fkine_all(q), atol=1e-12)
+    assert app.error is None
