@@ -130,6 +130,28 @@ def test_a_new_model_object_rebuilds_the_links_and_keeps_attached_objects_on_the
     np.testing.assert_allclose(sync.world.T_world("part"), F[3] @ T_link_part, atol=1e-12)
 
 
+def test_the_same_arm_made_again_keeps_its_link_nodes_and_another_arm_redraws_them() -> None:
+    """On reset a model's robot is made again: same joints count, same nodes (no flicker)."""
+    m = Model(robot=models.puma560(), q=np.array([0.2, 0.5, -0.4, 0.1, 0.3, 0.0]))
+    sync, wf = scene(robot("arm"), Node3D(kind="box", name="part", props={"size": (0.05,) * 3}, position=(0.5, 0.1, 0.3)), model=m)
+    wf.attach("part", "arm")
+    nodes = [sync.world[f"arm.link{i}"] for i in range(7)]
+    revs = [n.geom_rev for n in nodes]
+    m.robot = models.puma560()
+    sync.update(m)
+    assert [sync.world[f"arm.link{i}"] for i in range(7)] == nodes and [n.geom_rev for n in nodes] == revs
+    m.robot, m.q = models.ur5(), np.array([0.1, -0.5, 0.9, 0.2, 0.3, 0.4])  # another 6-joint arm
+    sync.update(m)
+    assert [sync.world[f"arm.link{i}"] for i in range(7)] == nodes and nodes[2].geom_rev > revs[2]
+    F = m.robot.fkine_all(m.q)
+    for i in range(7):
+        np.testing.assert_allclose(sync.world.T_world(f"arm.link{i}"), F[i], atol=1e-12)
+    v = world_vertices(nodes[2])  # the UR5's upper arm (a2 = -0.425) joins its frames 1 and 2
+    for origin in (F[1][:3, 3], F[2][:3, 3]):
+        assert np.min(np.linalg.norm(v - origin, axis=1)) < 0.03 * m.robot.reach
+    assert sync.world["part"].parent is nodes[6]
+
+
 def test_editing_a_dh_parameter_in_place_redraws_the_link() -> None:
     r = models.rrr()
     m = Model(robot=r, q=np.zeros(3))

@@ -173,3 +173,19 @@ def test_attach_in_init_and_reset_in_a_running_app(tmp_path) -> None:
     np.testing.assert_allclose(app.world.T_world("part2")[:3, 3], [-0.1, -0.15, 0.3])
     assert app.world["start_tool"].parent is app.world["arm.link6"]  # ... and init attached this one again
     assert app.model.start_dist == pytest.approx(np.linalg.norm(np.array([0.45, -0.15, 0.4]) - models.puma560().fkine(app.model.q)[:3, 3]))
+
+
+def test_asking_for_a_link_pose_before_the_robot_is_drawn_says_why(tmp_path) -> None:
+    from ejsgen.cli import build
+
+    spec = tmp_path / "early.ejs.yaml"
+    spec.write_text(
+        "ejs: 1\ntitle: Early\nimports: [from ejsrl.robotics import models]\n"
+        "model:\n  variables:\n    robot: {expr: 'models.rrr()'}\n    q: [0.0, 0.3, -0.6]\n    z: 0.0\n"
+        "  init: |\n    z = object_pose('arm.link3')[2, 3]\n"
+        "view:\n  - scene:\n      - robot: {name: arm, model: robot, q: q}\n"
+    )
+    app = load_built(build(spec, tmp_path / "early"))
+    assert app.error is not None
+    assert "links of robot 'arm' are not drawn yet" in app.error.message
+    assert app.error.where.startswith("early.ejs.yaml:10:")  # the init line that asked

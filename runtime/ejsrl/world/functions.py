@@ -109,6 +109,13 @@ class WorldFunctions:
     def object_pose(self, name: str) -> Array:
         """The (4, 4) pose of the scene object ``name`` in the world (a copy)."""
         self.refresh()
+        if name not in self.world:
+            for node in self.world.walk():
+                if isinstance(node, RobotNode) and not node.links and name.startswith(node.name + ".link"):
+                    raise RuntimeError(
+                        f"the links of robot '{node.name}' are not drawn yet: robots are first drawn right after the "
+                        "model starts, so the first run of init and the fixed relations cannot see their links"
+                    )
         return np.array(self.world.T_world(name))
 
     def move_object(self, name: str, pose: ArrayLike) -> None:
@@ -220,7 +227,7 @@ class RobotCollider:
             v = node.visible and (node.parent is None or vis[node.parent.name])
             vis[node.name] = v
             if v and (node.kind in _PRIMITIVES or node.kind == "mesh"):
-                items.append((id(node), id(node.parent), node.geom_rev))
+                items.append((id(node), id(node.parent), node.geom_rev, id(getattr(node, "shapes", None))))
         return tuple(items)
 
     def _rebuild(self, world: Any) -> None:
@@ -288,8 +295,11 @@ class RobotCollider:
         """Pairs of link indices (i < j, not neighbours) whose shapes touch in the zero pose."""
         model = robot.model
         links = robot.links
-        key = (id(model), tuple(tuple((s.kind, s.p0.tobytes(), s.p1.tobytes(), s.radius, s.height,
-                                      s.T_link_shape.tobytes()) for s in ln.shapes) for ln in links))
+        key = (
+            tuple((k.a, k.d, k.alpha, k.theta, k.offset, k.sigma, k.mdh) for k in model.links),
+            tuple(tuple((s.kind, s.p0.tobytes(), s.p1.tobytes(), s.radius, s.height, s.T_link_shape.tobytes()) for s in ln.shapes)
+                  for ln in links),
+        )
         hit = self._zero_cache.get(key)
         if hit is not None:
             return hit

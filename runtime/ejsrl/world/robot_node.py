@@ -17,9 +17,10 @@ nodes contain no ``/`` (the browser mirror uses flat viser paths ``/ejs/<name>``
 
 World pose of link i = ``T_world(robot node) @ model.fkine_all(q)[i]``.
 
-A different ``model`` object, or a model with another number of joints, rebuilds the link
-nodes (objects attached to a link move to the new link of the same index); editing a
-model's DH parameters in place (``robot.links[1].a = 0.5``) rebuilds the geometry only.
+A model with another number of joints rebuilds the link nodes (objects attached to a link
+move to the new link of the same index); another model object with as many joints (the
+same arm made again on reset) keeps them, and different DH parameters (or an edit in
+place, ``robot.links[1].a = 0.5``) only redraw the automatic geometry.
 """
 
 from __future__ import annotations
@@ -292,12 +293,16 @@ class RobotNode(Group):
             self.q = q_arr
             changed = True
         if self.world is not None and new_model is not None:
-            if model is not None and (model is not self.model or len(self.links) != model.n + 1):
+            if model is not None and len(self.links) != model.n + 1:
                 self._rebuild(model)
                 changed = True
-            elif self.model is not None and self.mesh_parts is None and _geometry_key(self.model) != self._geom_key:
+            swapped = model is not None and model is not self.model
+            if swapped:
+                self.model = model  # same number of links (e.g. the same arm made again on reset): keep the nodes
+                changed = True
+            if _geometry_key(self.model) != self._geom_key:
                 self._regeometry()
-            changed |= self._pose_links()
+            changed |= self._pose_links(force=swapped)
         return changed
 
     def _apply_pose(self) -> bool:
@@ -348,11 +353,14 @@ class RobotNode(Group):
                     guests.append((link.index, child, child.T_parent_local.copy()))
                     world.reparent(child.name, None, keep_world_pose=True)
             remove_subtree(world, link)
+        revs = {link.name: (link.rev, link.geom_rev) for link in self.links}
         self.model = model
         self.links = []
         frame_size = 0.12 * max(float(getattr(model, "reach", 1.0) or 1.0), 0.1)
         for i in range(int(model.n) + 1):
             link = LinkNode(link_name(self.name, i), self, i, parts[i], shapes[i], color=self.color, opacity=self.opacity)
+            if link.name in revs:  # a viewer that keys nodes by name must see a new shape
+                link.rev, link.geom_rev = revs[link.name][0] + 1, revs[link.name][1] + 1
             world.add(link, self)
             self.links.append(link)
             if self.props["show_frames"]:
@@ -369,9 +377,11 @@ class RobotNode(Group):
             fn()
 
     def _regeometry(self) -> None:
-        parts, shapes = robot_geometry(self.model)
+        """New DH parameters: redraw the automatic geometry (meshes stay) and the collision shapes."""
+        parts, shapes = self._link_geometry(self.model)
         for link, p, s in zip(self.links, parts, shapes):
-            link.set(mesh_parts=tuple(p))
+            if self.mesh_parts is None:
+                link.set(mesh_parts=tuple(p))
             link.shapes = s
         self._geom_key = _geometry_key(self.model)
 
