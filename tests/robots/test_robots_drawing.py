@@ -260,3 +260,26 @@ def test_links_are_mesh_nodes_with_flat_names() -> None:
     links = [n for n in sync.world.walk() if isinstance(n, LinkNode)]
     assert len(links) == 8
     assert all("/" not in n.name and n.kind == "mesh" and n.parts() for n in links)
+
+
+def test_mesh_elements_load_relative_to_the_app_folder(tmp_path, monkeypatch) -> None:
+    (tmp_path / "parts").mkdir()
+    (tmp_path / "parts" / "peg.wrl").write_text("#VRML V2.0 utf8\nShape { geometry Box { size 0.1 0.2 0.3 } }\n")
+    monkeypatch.chdir(tmp_path.parent)  # not the app folder
+    sync = SceneSync([Node3D(kind="mesh", name="peg", props={"file": "parts/peg.wrl", "scale": 2.0}, position=(1.0, 0.0, 0.0))],
+                     base_dir=tmp_path)
+    v = world_vertices(sync.world["peg"])
+    np.testing.assert_allclose(v.min(axis=0), [0.9, -0.2, -0.3])
+    np.testing.assert_allclose(v.max(axis=0), [1.1, 0.2, 0.3])
+
+
+def test_a_hidden_robot_hides_its_links_everywhere() -> None:
+    m = Model(robot=models.rrr(), q=np.zeros(3), shown=True)
+    sync, wf = scene(robot("arm", visible=Dynamic(lambda m: m.shown, "shown")),
+                     Node3D(kind="sphere", name="ball", props={"radius": 0.05}, position=(0.55, 0.0, 0.4)), model=m)
+    n_tris = len(sync.world.triangles()[0])
+    assert wf.collisions() == [("arm.link3", "ball")]  # on the forearm, 0.4 to 0.7 m out
+    m.shown = False
+    sync.update(m)
+    assert len(sync.world.triangles()[0]) < n_tris / 10  # only the ball is left
+    assert wf.collisions() == []
