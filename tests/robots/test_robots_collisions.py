@@ -10,7 +10,6 @@ from __future__ import annotations
 import time
 
 import numpy as np
-import pytest
 
 from ejsrl.robotics import models
 from ejsrl.robotics.transforms import rpy2tr, transl
