@@ -13,7 +13,7 @@ main environment, use a separate one:
     /tmp/rtbvenv/bin/pip install roboticstoolbox-python pin numpy scipy
     /tmp/rtbvenv/bin/python bench/robotics.py            # finds ejsrl in runtime/
 
-Options: ``--quick`` (fewer repetitions), ``--n-ik N`` (IK targets, default 300).
+Options: ``--quick`` (fewer repetitions), ``--n-ik N`` (IK targets, default 1,000 as in the target).
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ def pinocchio_puma(pin, robot):  # type: ignore[no-untyped-def]
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--n-ik", type=int, default=300)
+    ap.add_argument("--n-ik", type=int, default=1000)
     args = ap.parse_args()
     rep, num = (3, 50) if args.quick else (5, 300)
     rtb, pin = load_anchors()

@@ -90,3 +90,47 @@ def test_generated_code_drops_vanishing_terms() -> None:
     fast, _ = pair("puma560", False)
     src = fast._kernel(("fkine",)).source
     assert src.count("\n") < 130
+
+
+def test_single_configuration_outside_math_domain_gives_nan_like_numpy() -> None:
+    fast, ref = pair("puma560", False)
+    q = np.array([np.inf, 0.1, 0.2, 0.3, 0.4, 0.5])
+    with np.errstate(invalid="ignore"):
+        want = ref.fkine(q)
+    got = fast.fkine(q)
+    assert np.array_equal(np.isnan(got), np.isnan(want)) and np.isnan(got).any()
+
+
+def test_accel_of_massless_arm_raises_like_numpy() -> None:
+    from ejsrl.robotics import RevoluteDH
+
+    for fast in (True, False):
+        r = Robot([RevoluteDH(a=1.0), RevoluteDH(a=1.0)])
+        r._fast = fast
+        with pytest.raises(np.linalg.LinAlgError):
+            r.accel([0.1, 0.2], [0.0, 0.0], [1.0, 1.0])
+        with pytest.raises(np.linalg.LinAlgError):
+            r.accel(np.zeros((60, 2)), np.zeros(2), np.ones(2))
+
+
+def test_damped_step_matches_numpy_solve() -> None:
+    fast, _ = pair("pa10", False)
+    rng = np.random.default_rng(3)
+    J = rng.normal(size=(6, fast.n))
+    e, w, lam = rng.normal(size=6), np.array([1.0, 1.0, 0.5, 1.0, 0.0, 2.0]), 0.05
+    got = fast._kernel(("lm_step",)).single(*J.ravel(), *e, *w, lam)
+    JtW = J.T * w
+    want = np.linalg.solve(JtW @ J + lam * np.eye(fast.n), JtW @ e)
+    np.testing.assert_allclose(got, want, **TOL)
+
+
+@pytest.mark.parametrize("angle", [0.7, 1e-8, np.pi - 1e-9, np.pi])
+def test_float_pose_error_matches_numpy(angle: float) -> None:
+    from ejsrl.robotics.ik import _pose_error_rows, pose_error
+    from ejsrl.robotics.transforms import angvec2tr
+
+    Tg = transl(0.1, 0.2, 0.3) @ rpy2tr(0.3, -0.2, 0.5)
+    T = transl(0.0, 0.25, 0.1) @ angvec2tr(angle, [0.3, -0.5, 0.8]) @ Tg
+    T[:3, 3] = [0.0, 0.25, 0.1]
+    got = _pose_error_rows(Tg[:3].tolist(), tuple(T.ravel().tolist()))
+    np.testing.assert_allclose(got, pose_error(Tg, T), rtol=1e-9, atol=1e-9)

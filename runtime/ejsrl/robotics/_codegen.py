@@ -129,6 +129,14 @@ def cos(x: Scalar) -> Scalar:
     return _tape().call("cos", Var(x.name))
 
 
+def step(x: Scalar, sign: float) -> Scalar:
+    """1.0 where ``sign * x > 0`` else 0.0 (a bool in the generated code, which multiplies
+    like 0/1 for floats and arrays alike)."""
+    if not isinstance(x, Var):
+        return float(sign * x > 0)
+    return _tape().call("gt0" if (sign > 0) != x.neg else "lt0", Var(x.name))
+
+
 def snap(x: float) -> float:
     """Round values within 1e-12 of 0, 1 or -1 to them (``cos(pi/2)`` is 6e-17), so that
     the terms they multiply vanish from the generated code."""
@@ -188,8 +196,11 @@ class Tape:
         return self._emit(fn, x.name, "")
 
     def source(self, name: str, args: Sequence[str], outputs: Sequence[Scalar]) -> str:
-        """Source of ``def name(*args): ... return (outputs)`` with dead code removed and
-        temporaries renamed to reuse names once their value is no longer needed."""
+        """Source of ``def name(*args): ... return (outputs)``.
+
+        Dead code is removed; a temporary used once is written into the expression that
+        uses it (fewer loads and stores); the others reuse names once their value is no
+        longer needed, so at most a few dozen arrays are alive in the batched version."""
         temps = self.names
         out_names = {o.name for o in outputs if isinstance(o, Var)}
         live = set(out_names)
@@ -199,20 +210,45 @@ class Tape:
                 kept.append(line)
                 live.update(line[2:])
         kept.reverse()
+        uses: dict[str, int] = {}
+        for _, _, a, b in kept:
+            for d in (a, b):
+                uses[d] = uses.get(d, 0) + 1
+        inline: dict[str, tuple[tuple, int]] = {}  # temp -> (expression node, depth)
+        lines: list[tuple[str, tuple, set[str]]] = []  # target, node, names read
+        for target, op, a, b in kept:
+            depth = 0
+            reads: set[str] = set()
+            operands = []
+            for d in (a, b):
+                if d in inline:
+                    node, dd = inline.pop(d)
+                    operands.append(node)
+                    depth = max(depth, dd)
+                    reads |= node[3]
+                else:
+                    operands.append(d)
+                    if d in temps or d in args:
+                        reads.add(d)
+            node = (op, operands[0], operands[1], reads)
+            if uses.get(target) == 1 and target not in out_names and depth < _MAX_DEPTH:
+                inline[target] = (node, depth + 1)
+            else:
+                lines.append((target, node, reads))
         last: dict[str, int] = {}
-        for i, (_, _, a, b) in enumerate(kept):
-            last[a] = last[b] = i
+        for i, (_, _, reads) in enumerate(lines):
+            for d in reads:
+                last[d] = i
         rename: dict[str, str] = {}
         free: list[str] = []
         body = []
-        for i, (target, op, a, b) in enumerate(kept):
-            ra, rb = rename.get(a, a), rename.get(b, b)
-            for d in {a, b}:
+        for i, (target, node, reads) in enumerate(lines):
+            expr = _render(node, rename)
+            for d in reads:
                 if d in temps and last[d] == i and d not in out_names:
                     free.append(rename[d])
             new = free.pop() if free else f"v{len(rename)}"
             rename[target] = new
-            expr = f"{op}({ra})" if op in ("sin", "cos") else f"{ra} {op} {rb}"
             body.append(f"    {new} = {expr}")
         rets = []
         for o in outputs:
@@ -224,8 +260,29 @@ class Tape:
         return "\n".join([head, *body, f"    return ({', '.join(rets)},)", ""])
 
 
-_FLOAT_NS = {"sin": math.sin, "cos": math.cos}
-_ARRAY_NS = {"sin": np.sin, "cos": np.cos}
+_MAX_DEPTH = 12  # nesting of inlined expressions
+_COMPARE = {"gt0": "> 0.0", "lt0": "< 0.0"}
+
+
+def _render(node: tuple | str, rename: dict[str, str]) -> str:
+    if isinstance(node, str):
+        return rename.get(node, node)
+    op, a, b, _ = node
+    if op in ("sin", "cos"):
+        return f"{op}({_render(a, rename)})"
+    if op in _COMPARE:
+        return f"({_render(a, rename)} {_COMPARE[op]})"
+    ra = _render(a, rename)
+    if not isinstance(a, str):
+        ra = f"({ra})"
+    rb = _render(b, rename)
+    if not isinstance(b, str):
+        rb = f"({rb})"
+    return f"{ra} {op} {rb}"
+
+
+_FLOAT_NS = {"sin": math.sin, "cos": math.cos, "inf": math.inf, "nan": math.nan}
+_ARRAY_NS = {"sin": np.sin, "cos": np.cos, "inf": math.inf, "nan": math.nan}
 
 
 def compile_pair(src: str, name: str) -> tuple[Callable[..., tuple], Callable[..., tuple]]:

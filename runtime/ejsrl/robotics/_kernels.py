@@ -18,11 +18,12 @@ row-major (16 values); Jacobians row-major ``(6, n)``.
 
 from __future__ import annotations
 
+import math
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ._codegen import Scalar, compile_pair, cos, sin, snap, trace
+from ._codegen import Scalar, Var, compile_pair, cos, sin, snap, step, trace
 
 Vec = list  # a 3-list of scalars
 Frame = tuple  # (x, y, z, p)
@@ -86,6 +87,7 @@ class Params:
         self.I = robot._I.tolist()
         self.armature = robot._armature.tolist()
         self.viscous = (robot._B * robot._G**2).tolist()
+        self.coulomb = robot._coulomb  # (|G| Tc+, |G| Tc-) per joint
         self.base = _pose(robot.base)
         self.tool = _pose(robot.tool)
 
@@ -264,7 +266,14 @@ def rne(P: Params, q: Sequence[Scalar], qd: Sequence[Scalar], qdd: Sequence[Scal
     return tau
 
 
-def k_rne(P: Params, has_qd: bool, has_qdd: bool, armature: bool, viscous: bool) -> Callable[..., list]:
+def friction(P: Params, qd: Sequence[Scalar]) -> list[Scalar]:
+    """Torques spent on joint friction (the negative of ``Robot.friction``): viscous
+    ``B G^2 qd`` plus Coulomb ``|G| Tc+`` when ``qd > 0``, ``|G| Tc-`` when ``qd < 0``."""
+    cp, cn = P.coulomb
+    return [P.viscous[i] * v + cp[i] * step(v, 1.0) + cn[i] * step(v, -1.0) for i, v in enumerate(qd)]
+
+
+def k_rne(P: Params, has_qd: bool, has_qdd: bool, armature: bool, with_friction: bool) -> Callable[..., list]:
     """Inputs q, qd, qdd (each n; zero and unused when ``has_*`` is False), a0 (3)."""
 
     def fn(q: list, qd: list, qdd: list, a0: list) -> list:
@@ -273,8 +282,8 @@ def k_rne(P: Params, has_qd: bool, has_qdd: bool, armature: bool, viscous: bool)
         tau = rne(P, q, qd, qdd, a0)
         if armature:
             tau = [t + P.armature[i] * qdd[i] for i, t in enumerate(tau)]
-        if viscous:
-            tau = [t + P.viscous[i] * qd[i] for i, t in enumerate(tau)]
+        if with_friction:
+            tau = [t + f for t, f in zip(tau, friction(P, qd))]
         return tau
 
     return fn
@@ -346,7 +355,7 @@ def ldl_solve(M: list[list[Scalar]], b: Sequence[Scalar]) -> list[Scalar]:
         dj = M[j][j]
         for k in range(j):
             dj = dj - L[j][k] * W[j][k]
-        inv.append(1.0 / dj)
+        inv.append(1.0 / dj if isinstance(dj, Var) or dj != 0.0 else math.inf)  # inf: singular, caught later
         for i in range(j + 1, n):
             s = M[i][j]
             for k in range(j):
@@ -365,11 +374,11 @@ def ldl_solve(M: list[list[Scalar]], b: Sequence[Scalar]) -> list[Scalar]:
 
 
 def k_accel(P: Params) -> Callable[..., list]:
-    """Inputs q, qd, u (``tau + friction(qd)``), a0; output qdd."""
+    """Inputs q, qd, tau, a0; output qdd."""
 
-    def fn(q: list, qd: list, u: list, a0: list) -> list:
-        bias = rne(P, q, qd, [0.0] * P.n, a0)
-        return ldl_solve(inertia(P, q), [ui - bi for ui, bi in zip(u, bias)])
+    def fn(q: list, qd: list, tau: list, a0: list) -> list:
+        bias = [b + f for b, f in zip(rne(P, q, qd, [0.0] * P.n, a0), friction(P, qd))]
+        return ldl_solve(inertia(P, q), [t - b for t, b in zip(tau, bias)])
 
     return fn
 
@@ -396,7 +405,7 @@ def k_lm_step(n: int) -> Callable[..., list]:
 def build(P: Params, key: tuple) -> "Kernel":
     """The kernel named by ``key``: ``("fkine",)``, ``("fkine_all",)``, ``("jacob0",)``,
     ``("jacobe",)``, ``("pose_jacob0",)``, ``("inertia",)``, ``("accel",)``,
-    ``("rne", has_qd, has_qdd, armature, viscous)`` or ``("lm_step",)``."""
+    ``("rne", has_qd, has_qdd, armature, friction)`` or ``("lm_step",)``."""
     n = P.n
     kind = key[0]
     q = [("q", n)]
@@ -411,7 +420,7 @@ def build(P: Params, key: tuple) -> "Kernel":
     if kind == "rne":
         return Kernel(k_rne(P, *key[1:]), kind, q + [("qd", n), ("qdd", n), ("a", 3)])
     if kind == "accel":
-        return Kernel(k_accel(P), kind, q + [("qd", n), ("u", n), ("a", 3)])
+        return Kernel(k_accel(P), kind, q + [("qd", n), ("tau", n), ("a", 3)])
     if kind == "lm_step":
         return Kernel(k_lm_step(n), kind, [("J", 6 * n), ("e", 6), ("w", 6), ("lam", 1)])
     raise KeyError(key)
@@ -425,6 +434,13 @@ class Kernel:
         self.source = trace(fn, name, groups)
         self.single, self.vector = compile_pair(self.source, name)
         self.groups = groups
+
+    def fallback(self, args: Sequence[float]) -> tuple:
+        """The array version on one configuration: for the inputs on which ``math``
+        raises (``sin(inf)``, a zero pivot) NumPy gives ``nan``/``inf`` as the reference
+        path does."""
+        with np.errstate(all="ignore"):
+            return tuple(float(v) for v in self.vector(*[np.float64(a) for a in args]))
 
     def batch(self, args: Sequence[np.ndarray], size: int) -> np.ndarray:
         """Run on ``(m, k)`` input arrays (one per group); returns ``(m, size)``."""

@@ -9,13 +9,13 @@ angle-axis vector of the remaining rotation.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ._kinematics import jacobian_from_frames
 from .transforms import tr2angvec_vec
 
 if TYPE_CHECKING:
@@ -107,80 +107,94 @@ def ikine(
     hi = np.where(finite[1], lim[1], np.pi)
     if not joint_limits:
         lim = np.vstack((np.full(n, -np.inf), np.full(n, np.inf)))
-    qmin, qmax = lim
-    pmask = W[:3] > 0
-    rmask = W[3:] > 0
+    qmin, qmax = lim.tolist()
     if q0 is None:
-        q = 0.5 * (lo + hi)
+        q = (0.5 * (lo + hi)).tolist()
     else:
-        q = np.clip(np.asarray(q0, dtype=float).reshape(n), qmin, qmax)
+        q = np.clip(np.asarray(q0, dtype=float).reshape(n), lim[0], lim[1]).tolist()
     rng = np.random.default_rng(seed)
-    robot._params()
-    base = robot.base
-    tool = None if robot._tool_is_eye else robot.tool
-    prism = robot._prism
-    mdh = robot.mdh
-    eye_n = np.eye(n)
-    pg = Tg[:3, 3]
-    Rg = Tg[:3, :3]
+    # One generated pass gives the pose and the Jacobian; the damped step is another.
+    pose_jacob = robot._kernel(("pose_jacob0",)).single
+    lm_step = robot._kernel(("lm_step",)).single
+    w = W.tolist()
+    pidx = [k for k in range(3) if w[k] > 0]
+    ridx = [k for k in range(3, 6) if w[k] > 0]
+    goal = Tg[:3, :].tolist()
 
-    def evaluate(qv: Array) -> tuple[Array, Array, Array]:
-        A = robot._A(qv)
-        F = np.empty((n + 1, 4, 4))
-        F[0] = base
-        Tc = base
-        for i in range(n):
-            Tc = Tc @ A[i]
-            F[i + 1] = Tc
-        Te = Tc if tool is None else Tc @ tool
-        e = np.empty(6)
-        e[:3] = pg - Te[:3, 3]
-        e[3:] = _rot_error(Rg @ Te[:3, :3].T)
-        return e, F, Te
+    def evaluate(qv: list[float]) -> tuple[list[float], tuple, float]:
+        v = pose_jacob(*qv)
+        e = _pose_error_rows(goal, v)
+        return e, v[16:], 0.5 * sum(wk * ek * ek for wk, ek in zip(w, e))
+
+    def converged(e: list[float]) -> bool:
+        return all(abs(e[k]) < tol for k in pidx) and all(abs(e[k]) < tol for k in ridx)
 
     total = 0
-    best_q, best_E, best_e = q.copy(), np.inf, np.full(6, np.inf)
+    best_q, best_E, best_e = list(q), np.inf, [np.inf] * 6
     for search in range(1, slimit + 1):
-        e, F, Te = evaluate(q)
-        E = 0.5 * float(e @ (W * e))
+        e, J, E = evaluate(q)
         damp = lam
         for _ in range(ilimit):
-            if np.all(np.abs(e[:3][pmask]) < tol) and np.all(np.abs(e[3:][rmask]) < tol):
+            if converged(e):
                 break
             total += 1
-            J = jacobian_from_frames(F, Te, prism, mdh)
-            JtW = J.T * W
-            g = JtW @ e
-            H = JtW @ J
-            dq = np.linalg.solve(H + (E + damp) * eye_n, g)
-            qn = q + dq
+            dq = lm_step(*J, *e, *w, E + damp)
             if joint_limits:
-                np.clip(qn, qmin, qmax, out=qn)
-            en, Fn, Ten = evaluate(qn)
-            En = 0.5 * float(en @ (W * en))
+                qn = [min(max(qi + di, a), b) for qi, di, a, b in zip(q, dq, qmin, qmax)]
+            else:
+                qn = [qi + di for qi, di in zip(q, dq)]
+            en, Jn, En = evaluate(qn)
             if En < E:
-                q, e, F, Te, E = qn, en, Fn, Ten, En
+                q, e, J, E = qn, en, Jn, En
                 damp = max(damp * 0.5, 1e-9)
             else:
                 damp *= 10.0
                 if damp > 1e6:
                     break
         if E < best_E:
-            best_q, best_E, best_e = q.copy(), E, e.copy()
-        pos_err = float(np.max(np.abs(e[:3][pmask]), initial=0.0))
-        rot_err = float(np.max(np.abs(e[3:][rmask]), initial=0.0))
-        if pos_err < tol and rot_err < tol:
-            return IKSolution(q=q, success=True, iterations=total, searches=search,
+            best_q, best_E, best_e = list(q), E, list(e)
+        if converged(e):
+            pos_err = max((abs(e[k]) for k in pidx), default=0.0)
+            rot_err = max((abs(e[k]) for k in ridx), default=0.0)
+            return IKSolution(q=np.array(q), success=True, iterations=total, searches=search,
                               residual=float(np.sqrt(2 * E)), pos_error=pos_err, rot_error=rot_err)
-        q = rng.uniform(lo, hi)
-    pos_err = float(np.linalg.norm(best_e[:3][pmask]))
-    rot_err = float(np.linalg.norm(best_e[3:][rmask]))
+        q = rng.uniform(lo, hi).tolist()
+    pos_err = float(np.sqrt(sum(best_e[k] ** 2 for k in pidx)))
+    rot_err = float(np.sqrt(sum(best_e[k] ** 2 for k in ridx)))
     return IKSolution(
-        q=best_q, success=False, iterations=total, searches=slimit, residual=float(np.sqrt(2 * best_E)),
+        q=np.array(best_q), success=False, iterations=total, searches=slimit, residual=float(np.sqrt(2 * best_E)),
         reason=f"no solution within tolerance after {slimit} searches (best position error {pos_err:.3g} m, "
         f"orientation error {rot_err:.3g} rad): the pose may be out of reach or outside the joint limits",
         pos_error=pos_err, rot_error=rot_err,
     )
+
+
+def _pose_error_rows(goal: list[list[float]], v: tuple) -> list[float]:
+    """:func:`pose_error` on plain floats: ``goal`` the top rows (3, 4) of the goal pose,
+    ``v`` the current pose row-major (first 12 values used)."""
+    g0, g1, g2 = goal
+    r0, r1, r2 = v[0:3], v[4:7], v[8:11]
+    # M = R* R^T (only the entries the logarithm needs)
+    m00 = g0[0] * r0[0] + g0[1] * r0[1] + g0[2] * r0[2]
+    m11 = g1[0] * r1[0] + g1[1] * r1[1] + g1[2] * r1[2]
+    m22 = g2[0] * r2[0] + g2[1] * r2[1] + g2[2] * r2[2]
+    m01 = g0[0] * r1[0] + g0[1] * r1[1] + g0[2] * r1[2]
+    m10 = g1[0] * r0[0] + g1[1] * r0[1] + g1[2] * r0[2]
+    m02 = g0[0] * r2[0] + g0[1] * r2[1] + g0[2] * r2[2]
+    m20 = g2[0] * r0[0] + g2[1] * r0[1] + g2[2] * r0[2]
+    m12 = g1[0] * r2[0] + g1[1] * r2[1] + g1[2] * r2[2]
+    m21 = g2[0] * r1[0] + g2[1] * r1[1] + g2[2] * r1[2]
+    vx, vy, vz = m21 - m12, m02 - m20, m10 - m01
+    c = 0.5 * (m00 + m11 + m22 - 1.0)
+    s = 0.5 * math.sqrt(vx * vx + vy * vy + vz * vz)
+    e = [g0[3] - v[3], g1[3] - v[7], g2[3] - v[11]]
+    if s > 1e-6:
+        k = math.atan2(s, c) / (2.0 * s)
+        return e + [vx * k, vy * k, vz * k]
+    if c > 0:
+        return e + [0.5 * vx, 0.5 * vy, 0.5 * vz]
+    M = np.array([[m00, m01, m02], [m10, m11, m12], [m20, m21, m22]])
+    return e + _rot_error(M).tolist()  # near pi: the general logarithm
 
 
 # ---------------------------------------------------------------------------- closed form

@@ -12,6 +12,7 @@ Frames: ``base`` is ``T_world_base`` (4, 4); ``tool`` is ``T_linkn_tool`` (4, 4)
 
 from __future__ import annotations
 
+import math
 from typing import Any, Iterable
 
 import numpy as np
@@ -23,6 +24,13 @@ from .link import Link
 __all__ = ["Robot"]
 
 Array = NDArray[np.float64]
+
+
+def _floats(x: ArrayLike, n: int) -> list[float]:
+    """x broadcast to (n,), as a list of Python floats (fast when already a float array)."""
+    if type(x) is np.ndarray and x.shape == (n,) and x.dtype.char == "d":
+        return x.tolist()
+    return np.broadcast_to(np.asarray(x, dtype=float), (n,)).tolist()
 
 
 def _parallel_axis(d: Array) -> Array:
@@ -162,7 +170,7 @@ class Robot:
 
     # ----------------------------------------------------------------- cached arrays
     def _params(self) -> None:
-        key = tuple(link.version for link in self.links)
+        key = tuple([link.version for link in self.links])
         if key == self._cache_key:
             return
         L = self.links
@@ -186,7 +194,6 @@ class Robot:
             self._apply_payload()
         Gabs = np.abs(self._G)
         self._coulomb = (Gabs * self._Tc[:, 0]).tolist(), (Gabs * self._Tc[:, 1]).tolist()
-        self._has_coulomb = bool(np.any(self._Tc != 0))
         self._kernels: dict[tuple, _kernels.Kernel] = {}
         self._kparams: _kernels.Params | None = None
         self._cache_key = key
@@ -229,15 +236,6 @@ class Robot:
             k = self._kernels[key] = _kernels.build(self._kparams, key)
         return k
 
-    def _coulomb_single(self, qd: list[float]) -> list[float]:
-        """Coulomb friction torques ``|G| Tc±`` that oppose joint speeds qd (floats)."""
-        cp, cn = self._coulomb
-        return [cp[i] if v > 0 else (cn[i] if v < 0 else 0.0) for i, v in enumerate(qd)]
-
-    def _coulomb_batch(self, Qd: Array) -> Array:
-        cp, cn = self._coulomb
-        return np.where(Qd > 0, cp, np.where(Qd < 0, cn, 0.0))
-
     def _a0(self, gravity: ArrayLike | None) -> list[float]:
         """Base acceleration ``-g`` in the base frame (3 floats)."""
         g = self._gravity_base(gravity).tolist()
@@ -247,7 +245,11 @@ class Robot:
         """Run kernel ``key`` on one configuration ((n,) args) or a batch ((m, k) args)."""
         k = self._kernel(key)
         if args[0].ndim == 1:
-            vals = k.single(*[v for a in args for v in a.tolist()])
+            flat = [v for a in args for v in a.tolist()]
+            try:
+                vals = k.single(*flat)
+            except (ValueError, ZeroDivisionError, OverflowError):
+                vals = k.fallback(flat)
             return np.array(vals, dtype=float).reshape(shape)
         lead = args[0].shape[:-1]
         m = int(np.prod(lead))
@@ -425,26 +427,22 @@ class Robot:
     def _rne_fast(self, q: Array, qd: ArrayLike | None, qdd: ArrayLike | None, gravity: ArrayLike | None,
                   friction: bool, armature: bool) -> Array:
         n = self.n
-        key = ("rne", qd is not None, qdd is not None, armature, friction)
-        kernel = self._kernel(key)
-        coulomb = friction and self._has_coulomb and qd is not None
+        kernel = self._kernel(("rne", qd is not None, qdd is not None, armature, friction and qd is not None))
         if q.ndim == 1:
-            qdl = [0.0] * n if qd is None else np.broadcast_to(np.asarray(qd, float), (n,)).tolist()
-            qddl = [0.0] * n if qdd is None else np.broadcast_to(np.asarray(qdd, float), (n,)).tolist()
-            tau = kernel.single(*q.tolist(), *qdl, *qddl, *self._a0(gravity))
-            if coulomb:
-                tau = [t + c for t, c in zip(tau, self._coulomb_single(qdl))]
-            return np.array(tau, dtype=float)
+            qdl = [0.0] * n if qd is None else _floats(qd, n)
+            qddl = [0.0] * n if qdd is None else _floats(qdd, n)
+            args = [*q.tolist(), *qdl, *qddl, *self._a0(gravity)]
+            try:
+                return np.array(kernel.single(*args), dtype=float)
+            except (ValueError, ZeroDivisionError, OverflowError):
+                return np.array(kernel.fallback(args))
         Q = q.reshape(-1, n)
         zero = np.zeros((1, n))
         Qd = zero if qd is None else np.asarray(qd, float)
         Qdd = zero if qdd is None else np.asarray(qdd, float)
         Qd, Qdd = (np.broadcast_to(x, q.shape).reshape(-1, n) for x in (Qd, Qdd))
         a0 = np.broadcast_to(np.array(self._a0(gravity)), (len(Q), 3))
-        tau = kernel.batch([Q, Qd, Qdd, a0], n)
-        if coulomb:
-            tau += self._coulomb_batch(Qd)
-        return tau.reshape(q.shape)
+        return kernel.batch([Q, Qd, Qdd, a0], n).reshape(q.shape)
 
     def inertia(self, q: ArrayLike) -> Array:
         """Joint-space inertia matrix (n, n) or (m, n, n), motor armature included
@@ -518,20 +516,24 @@ class Robot:
         n = self.n
         kernel = self._kernel(("accel",))
         if q.ndim == 1:
-            qdl = np.broadcast_to(np.asarray(qd, float), (n,)).tolist()
-            u = np.broadcast_to(np.asarray(tau, float), (n,)).tolist()
-            visc = self._kparams.viscous  # type: ignore[union-attr]
-            # u = tau + friction(qd): friction opposes the motion
-            if self._has_coulomb:
-                u = [t - v * w - c for t, v, w, c in zip(u, visc, qdl, self._coulomb_single(qdl))]
-            else:
-                u = [t - v * w for t, v, w in zip(u, visc, qdl)]
-            return np.array(kernel.single(*q.tolist(), *qdl, *u, *self._a0(gravity)), dtype=float)
-        Q = q.reshape(-1, n)
-        Qd = np.broadcast_to(np.asarray(qd, float), q.shape).reshape(-1, n)
-        U = np.broadcast_to(np.asarray(tau, float), q.shape).reshape(-1, n) + self.friction(Qd)
-        a0 = np.broadcast_to(np.array(self._a0(gravity)), (len(Q), 3))
-        return kernel.batch([Q, Qd, U, a0], n).reshape(q.shape)
+            args = [*q.tolist(), *_floats(qd, n), *_floats(tau, n), *self._a0(gravity)]
+            try:
+                vals = kernel.single(*args)
+            except (ValueError, ZeroDivisionError, OverflowError):
+                vals = kernel.fallback(args)
+            out = np.array(vals, dtype=float)
+            if all(map(math.isfinite, vals)):
+                return out
+        else:
+            Q = q.reshape(-1, n)
+            Qd, T = (np.broadcast_to(np.asarray(x, float), q.shape).reshape(-1, n) for x in (qd, tau))
+            a0 = np.broadcast_to(np.array(self._a0(gravity)), (len(Q), 3))
+            with np.errstate(divide="ignore", invalid="ignore"):
+                out = kernel.batch([Q, Qd, T, a0], n).reshape(q.shape)
+        if not np.isfinite(out).all() and all(np.isfinite(x).all() for x in (q, qd, tau)):
+            raise np.linalg.LinAlgError(f"{self.name}: singular inertia matrix (a link chain without mass "
+                                        "or armature); give the links mass or motor inertia")
+        return out
 
     # ----------------------------------------------------------------- display
     def __repr__(self) -> str:
