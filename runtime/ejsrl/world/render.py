@@ -1,13 +1,25 @@
 """Virtual-camera rendering of the world: RGB and depth images from a camera pose.
 
 ``render(world, "cam")`` is what ``capture("cam")`` returns in apps, with or without a
-browser. The back end is the NumPy z-buffer rasterizer of ``_raster.py`` (deterministic,
-flat shading). ``backend`` is kept as a parameter ("auto" and "numpy" both pick it) for an
-OpenGL back end (moderngl on a headless EGL context) that is not built yet.
+browser. Two back ends draw the same picture:
 
-Shading: each face gets its colour times ``ambient + (1 - ambient) * |cos a|`` where ``a``
-is the angle between its normal and ``LIGHT_DIR``, a light attached to the camera (so
-faces seen edge-on are darker); no textures, no shadows.
+- ``"numpy"``: the z-buffer rasterizer of ``_raster.py``, deterministic, always there;
+- ``"gl"``: OpenGL through moderngl on a headless EGL context (``_gl.py``): Mesa's
+  llvmpipe on a machine without a GPU, the GPU's driver where there is one. It needs
+  ``pip install moderngl`` and the EGL and Mesa libraries (Debian: ``libegl1
+  libegl-mesa0 libgl1-mesa-dri``). It agrees with the NumPy one except for pixels on
+  triangle edges (its fill rule differs) and for depth rounding (float32 on the GPU,
+  24-bit depth test).
+
+``backend="auto"`` (the default) picks ``"gl"`` when moderngl imports and an EGL context
+can be made (tried once per process and thread, then cached), else ``"numpy"``; the
+environment variable ``EJSRL_RENDER_BACKEND`` (``numpy``, ``gl`` or ``auto``) overrides
+what "auto" means, for example to get the NumPy output everywhere.
+
+Shading, the same on both back ends (computed here, on the CPU, in float64): each face
+gets its colour times ``ambient + (1 - ambient) * |cos a|`` where ``a`` is the angle
+between its normal and ``LIGHT_DIR``, a light attached to the camera (so faces seen
+edge-on are darker); no textures, no shadows.
 """
 
 from __future__ import annotations
@@ -20,9 +32,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ejsrl.vision.camera import CameraModel
-from ejsrl.world._raster import rasterize
+from ejsrl.world._raster import face_normals, front_faces, zbuffer
 
-__all__ = ["render", "render_triangles", "shade_faces", "BACKGROUND", "AMBIENT"]
+__all__ = ["render", "render_triangles", "shade_faces", "available_backends", "BACKGROUND", "AMBIENT", "BACKENDS"]
 
 #: default background colour, RGB in [0, 1] (a light grey-blue)
 BACKGROUND: tuple[float, float, float] = (0.82, 0.86, 0.92)
@@ -30,6 +42,18 @@ BACKGROUND: tuple[float, float, float] = (0.82, 0.86, 0.92)
 AMBIENT: float = 0.3
 #: unit vector towards the light in the camera frame (x right, y down, z forward)
 LIGHT_DIR: NDArray[np.float64] = np.array([-0.25, -0.35, -1.0]) / np.linalg.norm([-0.25, -0.35, -1.0])
+#: the values ``backend`` takes
+BACKENDS: tuple[str, ...] = ("auto", "numpy", "gl")
+
+
+def _shade(n: NDArray[np.float64], rgb: NDArray[np.float64], ambient: float) -> NDArray[np.uint8]:
+    """Flat shading from camera-frame face normals ``n`` (3, F) and colours (F, 3) -> (F, 3) uint8."""
+    nn = np.sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos = np.abs(n[0] * LIGHT_DIR[0] + n[1] * LIGHT_DIR[1] + n[2] * LIGHT_DIR[2]) / nn
+    cos = np.nan_to_num(cos, nan=1.0)
+    k = ambient + (1.0 - ambient) * cos
+    return np.clip(np.rint(255.0 * np.clip(rgb, 0.0, 1.0) * k[:, None]), 0, 255).astype(np.uint8)
 
 
 def shade_faces(
@@ -40,13 +64,9 @@ def shade_faces(
     The light comes from the camera, slightly from its upper left (``LIGHT_DIR``, camera
     frame), so coplanar faces get the same shade and the sides of a box differ.
     """
-    n = np.cross(tris_cam[:, 1] - tris_cam[:, 0], tris_cam[:, 2] - tris_cam[:, 0])
-    nn = np.linalg.norm(n, axis=1)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cos = np.abs(n @ LIGHT_DIR) / nn
-    cos = np.nan_to_num(cos, nan=1.0)
-    k = ambient + (1.0 - ambient) * cos
-    return np.clip(np.rint(255.0 * np.clip(rgb, 0.0, 1.0) * k[:, None]), 0, 255).astype(np.uint8)
+    tris_cam = np.asarray(tris_cam, dtype=np.float64).reshape(-1, 3, 3)
+    P = np.ascontiguousarray(tris_cam.transpose(1, 2, 0))
+    return _shade(face_normals(P), np.asarray(rgb, dtype=np.float64).reshape(-1, 3), ambient)
 
 
 def _bg_uint8(background: Sequence[float]) -> NDArray[np.uint8]:
@@ -54,6 +74,37 @@ def _bg_uint8(background: Sequence[float]) -> NDArray[np.uint8]:
     if bg.max() > 1.0:  # allow 0-255 too
         bg = bg / 255.0
     return np.clip(np.rint(bg * 255.0), 0, 255).astype(np.uint8)
+
+
+def _to_camera(tris_world: NDArray[np.float64], T_world_camera: NDArray[np.float64]) -> NDArray[np.float64]:
+    """World triangles (F, 3, 3) -> camera-frame triangles laid out (3, 3, F): ``P[v, c]``, coordinate c of vertex v."""
+    R, t = T_world_camera[:3, :3], T_world_camera[:3, 3]
+    Q = tris_world.transpose(1, 2, 0) - t[None, :, None]  # (3 vertices, 3 coordinates, F)
+    return np.matmul(R.T, Q)  # R^T (p - t) for every vertex
+
+
+def available_backends() -> list[str]:
+    """The back ends that work in this process: always "numpy", and "gl" when moderngl and EGL do."""
+    from ejsrl.world import _gl
+
+    return ["numpy"] + (["gl"] if _gl.available() else [])
+
+
+def _pick_backend(backend: str) -> str:
+    """The back end that ``backend`` resolves to: "numpy" or "gl" (see the module docstring)."""
+    if backend not in BACKENDS:
+        raise ValueError(f"unknown render backend {backend!r}; choose one of {', '.join(map(repr, BACKENDS))}")
+    if backend == "auto":
+        backend = os.environ.get("EJSRL_RENDER_BACKEND", "auto").strip().lower() or "auto"
+        if backend not in BACKENDS:
+            raise ValueError(
+                f"EJSRL_RENDER_BACKEND={backend!r} is not a render backend; use one of {', '.join(map(repr, BACKENDS))}"
+            )
+        if backend == "auto":
+            from ejsrl.world import _gl
+
+            return "gl" if _gl.available() else "numpy"
+    return backend
 
 
 def render_triangles(
@@ -68,29 +119,27 @@ def render_triangles(
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Render world triangles (F, 3, 3) with colours (F, 3) in [0, 1] seen by ``camera``.
 
-    Returns ``rgb`` (H, W, 3) uint8 and ``depth`` (H, W) float32 (metres along the optical
-    axis, inf where nothing is seen).
+    ``T_world_camera``: (4, 4) pose of the camera in the world. ``backend``: "numpy", "gl"
+    or "auto" (see the module docstring). Returns ``rgb`` (H, W, 3) uint8 and ``depth``
+    (H, W) float32 (metres along the optical axis, inf where nothing is seen).
     """
+    be = _pick_backend(backend)
     tris = np.asarray(tris_world, dtype=np.float64).reshape(-1, 3, 3)
     cols = np.asarray(rgb, dtype=np.float64).reshape(-1, 3)
     T = np.asarray(T_world_camera, dtype=np.float64)
-    R, t = T[:3, :3], T[:3, 3]
-    tris_cam = (tris - t) @ R  # world -> camera: R^T (p - t)
-    shaded = shade_faces(tris_cam, cols)
     bg = _bg_uint8(background)
-    if backend not in ("numpy", "auto"):
-        raise ValueError(f"unknown render backend {backend!r}; only 'numpy' (or 'auto') is available")
-    face, depth = rasterize(
-        tris_cam, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, cull_backfaces=cull_backfaces
-    )
-    table = np.concatenate([shaded, bg[None, :]])
-    image = table[face]  # face == -1 picks the background row
-    return image, depth
+    P = _to_camera(tris, T)
+    n = face_normals(P)
+    front = front_faces(P, n) if cull_backfaces else None
+    if be == "gl":
+        from ejsrl.world import _gl
 
-
-def _pick_backend(backend: str) -> str:
-    """The back end that ``backend`` ("auto", "numpy") resolves to: the NumPy rasterizer."""
-    return "numpy" if backend == "auto" else backend
+        keep = np.flatnonzero(front) if front is not None else np.arange(P.shape[2])
+        shaded = _shade(n.take(keep, axis=1), cols[keep], AMBIENT)
+        return _gl.render_faces(P.take(keep, axis=2), shaded, camera, bg)
+    zb = zbuffer(P, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, front=front)
+    shaded = _shade(n.take(zb.ids, axis=1), cols[zb.ids], AMBIENT)  # only the faces drawn
+    return zb.lookup(shaded, bg), zb.depth()
 
 
 def render(
@@ -112,10 +161,11 @@ def render(
     link that carries the camera). ``background``: RGB in [0, 1] (default ``BACKGROUND``,
     light grey-blue). ``cull_backfaces``: skip faces seen from behind, as the browser view
     (three.js, front side) does; set False for open meshes seen from both sides.
-    ``backend``: "auto" or "numpy" (see the module docstring).
+    ``backend``: "auto" (default: OpenGL when it works here, else NumPy), "numpy" or "gl"
+    (see the module docstring; "gl" raises with an install hint when it cannot run).
 
     Depth is Z in the camera frame (metres along the optical axis), inf where nothing is
-    seen. The output is deterministic.
+    seen. The output is deterministic for a given back end and machine.
     """
     if isinstance(camera, str):
         node = world[camera]
@@ -132,6 +182,4 @@ def render(
     else:
         raise TypeError(f"camera must be a CameraModel or a camera name, not {type(camera).__name__}")
     tris, rgb = world.triangles(exclude=tuple(exclude))
-    return render_triangles(
-        tris, rgb, cam, T, background=background, cull_backfaces=cull_backfaces, backend=_pick_backend(backend)
-    )
+    return render_triangles(tris, rgb, cam, T, background=background, cull_backfaces=cull_backfaces, backend=backend)

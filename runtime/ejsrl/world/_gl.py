@@ -1,0 +1,200 @@
+"""The OpenGL back end of ``ejsrl.world.render``: moderngl on a headless EGL context.
+
+It draws the faces that ``render_triangles`` has already transformed to the camera
+frame, culled and shaded (so culling and colours are the NumPy back end's, to the bit):
+the GPU (or Mesa's llvmpipe on a machine without one) only rasterizes and depth-tests.
+
+Conventions matched to the NumPy rasterizer: the camera frame is x right, y down, z
+forward; pixel (c, r) has its centre at u = c, v = r, so the projection maps u to
+``x_ndc = 2 (u + 0.5) / W - 1`` and v to ``y_ndc = 2 (v + 0.5) / H - 1`` (row 0 of the
+image is the first row that ``glReadPixels`` returns: no flip); ``w_clip = Z``, and the
+fragment shader writes ``gl_FragCoord.w`` = 1/Z, interpolated linearly in screen space as
+the NumPy rasterizer does, to a float32 target, from which depth = 1 / (1/Z) (inf where
+nothing was drawn). The near and far planes clip as in the NumPy back end; the depth test
+uses a 24-bit depth buffer (ties: the first face drawn, the lower index, wins).
+
+One context per process, made on first use and kept; each render makes it current on the
+calling thread under a lock, so any thread may render.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ["GLUnavailableError", "INSTALL_HINT", "available", "describe", "projection_matrix", "render_faces"]
+
+#: what to install for the "gl" back end
+INSTALL_HINT = (
+    "pip install moderngl, and the EGL and Mesa libraries "
+    "(Debian/Ubuntu: apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)"
+)
+
+_VERTEX_SHADER = """
+#version 330
+uniform mat4 proj;
+in vec3 in_pos;
+in vec3 in_col;
+flat out vec3 v_col;
+void main() {
+    v_col = in_col;
+    gl_Position = proj * vec4(in_pos, 1.0);
+}
+"""
+
+_FRAGMENT_SHADER = """
+#version 330
+flat in vec3 v_col;
+layout(location = 0) out vec4 out_rgb;
+layout(location = 1) out float out_inv_z;
+void main() {
+    out_rgb = vec4(v_col, 1.0);
+    out_inv_z = gl_FragCoord.w;  // 1 / w_clip = 1 / Z
+}
+"""
+
+
+class GLUnavailableError(RuntimeError):
+    """The "gl" render back end cannot run here; the message says why and what to install."""
+
+
+def projection_matrix(K: NDArray[np.float64], width: int, height: int, near: float, far: float) -> NDArray[np.float64]:
+    """The (4, 4) OpenGL projection of a pinhole camera, camera frame (x right, y down, z forward) -> clip.
+
+    ``K`` (3, 3): intrinsics with pixel centres at integer coordinates. ``x_ndc = 2 (u + 0.5) / W - 1``,
+    ``y_ndc = 2 (v + 0.5) / H - 1``, ``w_clip = Z``; ``z_ndc`` goes from -1 at ``near`` to +1 at
+    ``far`` (``far`` may be inf).
+    """
+    W, H = float(width), float(height)
+    fx, s, cx = K[0, 0], K[0, 1], K[0, 2]
+    fy, cy = K[1, 1], K[1, 2]
+    if np.isfinite(far):
+        a, b = (far + near) / (far - near), -2.0 * far * near / (far - near)
+    else:
+        a, b = 1.0, -2.0 * near
+    return np.array(
+        [
+            [2.0 * fx / W, 2.0 * s / W, 2.0 * (cx + 0.5) / W - 1.0, 0.0],
+            [0.0, 2.0 * fy / H, 2.0 * (cy + 0.5) / H - 1.0, 0.0],
+            [0.0, 0.0, a, b],
+            [0.0, 0.0, 1.0, 0.0],
+        ]
+    )
+
+
+class _Renderer:
+    """The context, program and buffers, reused from frame to frame."""
+
+    def __init__(self) -> None:
+        import moderngl
+
+        self.mgl = moderngl
+        self.ctx = moderngl.create_context(standalone=True, backend="egl", require=330)
+        self.prog = self.ctx.program(vertex_shader=_VERTEX_SHADER, fragment_shader=_FRAGMENT_SHADER)
+        self.vbo = self.ctx.buffer(reserve=36 * 64, dynamic=True)
+        self.cbo = self.ctx.buffer(reserve=9 * 64, dynamic=True)
+        self.vao = self.ctx.vertex_array(self.prog, [(self.vbo, "3f", "in_pos"), (self.cbo, "3f1", "in_col")])
+        self.targets: dict[tuple[int, int], tuple[Any, Any, Any]] = {}
+        self.lock = threading.Lock()
+        info = self.ctx.info
+        self.renderer = f"{info.get('GL_RENDERER', '?')} ({info.get('GL_VERSION', '?')})"
+
+    def _target(self, W: int, H: int) -> tuple[Any, Any, Any]:
+        """(draw framebuffer, colour-only framebuffer, 1/Z-and-depth framebuffer) of size W x H."""
+        fbs = self.targets.get((W, H))
+        if fbs is None:
+            ctx = self.ctx
+            rgb = ctx.texture((W, H), 4, dtype="f1")
+            inv_z = ctx.texture((W, H), 1, dtype="f4")
+            depth = ctx.depth_renderbuffer((W, H))
+            draw = ctx.framebuffer(color_attachments=[rgb, inv_z], depth_attachment=depth)
+            fbs = (draw, ctx.framebuffer(color_attachments=[rgb]), ctx.framebuffer(color_attachments=[inv_z], depth_attachment=depth))
+            if len(self.targets) >= 8:  # keep a few sizes, drop the oldest
+                for obj in self.targets.pop(next(iter(self.targets))):
+                    obj.release()
+            self.targets[(W, H)] = fbs
+        return fbs
+
+    def render(
+        self, P: NDArray[np.float64], shaded: NDArray[np.uint8], camera: Any, bg: NDArray[np.uint8]
+    ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+        W, H = int(camera.width), int(camera.height)
+        F = P.shape[2]
+        pos = np.ascontiguousarray(P.transpose(2, 0, 1), dtype=np.float32)  # (F, 3 vertices, 3)
+        col = np.repeat(shaded, 3, axis=0)  # one colour per vertex, the face's
+        proj = projection_matrix(camera.K, W, H, camera.near, camera.far)
+        rgb = np.empty((H, W, 3), dtype=np.uint8)
+        inv_z = np.empty((H, W), dtype=np.float32)
+        with self.lock, self.ctx:
+            draw, colour_only, inv_z_depth = self._target(W, H)
+            if F:
+                if self.vbo.size < pos.nbytes:
+                    self.vbo.orphan(pos.nbytes + pos.nbytes // 4)
+                    self.cbo.orphan(col.nbytes + col.nbytes // 4)
+                self.vbo.write(pos)
+                self.cbo.write(col)
+            self.prog["proj"].write(proj.T.astype(np.float32).tobytes())  # GL wants column-major
+            colour_only.clear(*(bg / 255.0), 1.0)
+            inv_z_depth.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            draw.use()
+            self.ctx.enable_only(self.mgl.DEPTH_TEST)
+            self.ctx.depth_func = "<"
+            if F:
+                self.vao.render(self.mgl.TRIANGLES, vertices=3 * F)
+            draw.read_into(rgb, components=3, attachment=0, alignment=1)
+            draw.read_into(inv_z, components=1, attachment=1, alignment=1, dtype="f4")
+        with np.errstate(divide="ignore"):
+            depth = np.divide(np.float32(1.0), inv_z, out=inv_z)  # 1 / 0 = inf where empty
+        return rgb, depth
+
+
+_lock = threading.Lock()
+_renderer: _Renderer | None = None
+_failure: str | None = None
+
+
+def _get() -> _Renderer:
+    """The process's renderer, made on first call; raises GLUnavailableError (every time) if it cannot be."""
+    global _renderer, _failure
+    with _lock:
+        if _renderer is None and _failure is None:
+            try:
+                _renderer = _Renderer()
+            except ImportError as exc:
+                _failure = f"moderngl is not installed ({exc})"
+            except Exception as exc:  # no EGL library, no driver, no GL 3.3, ...
+                _failure = f"no OpenGL context through EGL: {type(exc).__name__}: {exc}".strip()
+        if _renderer is None:
+            raise GLUnavailableError(f"the 'gl' render backend is not available: {_failure}. To use it: {INSTALL_HINT}")
+        return _renderer
+
+
+def available() -> bool:
+    """True when moderngl imports and a headless EGL context could be made (tried once, then cached)."""
+    try:
+        _get()
+    except GLUnavailableError:
+        return False
+    return True
+
+
+def describe() -> str:
+    """The OpenGL renderer in use ("llvmpipe ..." for Mesa's CPU driver), or why there is none."""
+    try:
+        return _get().renderer
+    except GLUnavailableError as exc:
+        return str(exc)
+
+
+def render_faces(
+    P: NDArray[np.float64], shaded: NDArray[np.uint8], camera: Any, bg: NDArray[np.uint8]
+) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+    """Draw camera-frame faces ``P`` (3, 3, F) (vertex-major) with flat colours ``shaded`` (F, 3) uint8.
+
+    ``camera``: a ``CameraModel`` (K, width, height, near, far). ``bg`` (3,) uint8. Returns
+    ``rgb`` (H, W, 3) uint8 and ``depth`` (H, W) float32, Z in metres, inf where empty.
+    """
+    return _get().render(P, shaded, camera, bg)
