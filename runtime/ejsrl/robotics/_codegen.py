@@ -17,13 +17,14 @@ for a batch (one vectorised operation per scalar operation).
 from __future__ import annotations
 
 import math
+import threading
 from typing import Callable, Sequence, Union
 
 import numpy as np
 
 Scalar = Union[float, "Var"]
 
-_TAPE: "Tape | None" = None
+_STATE = threading.local()  # .tape: the Tape recording in this thread
 
 
 class Var:
@@ -65,9 +66,10 @@ class Var:
 
 
 def _tape() -> "Tape":
-    if _TAPE is None:
+    tape = getattr(_STATE, "tape", None)
+    if tape is None:
         raise RuntimeError("symbolic arithmetic outside a Tape")
-    return _TAPE
+    return tape
 
 
 def _add(x: Var, y: Scalar) -> Scalar:
@@ -164,13 +166,11 @@ class Tape:
         self._prev: Tape | None = None
 
     def __enter__(self) -> "Tape":
-        global _TAPE
-        self._prev, _TAPE = _TAPE, self
+        self._prev, _STATE.tape = getattr(_STATE, "tape", None), self
         return self
 
     def __exit__(self, *exc: object) -> None:
-        global _TAPE
-        _TAPE = self._prev
+        _STATE.tape = self._prev
 
     def inputs(self, prefix: str, n: int) -> list[Var]:
         return [Var(f"{prefix}{i}") for i in range(n)]
