@@ -1,5 +1,8 @@
 """Batched recursive Newton-Euler on plain arrays (private).
 
+The reference implementation: ``Robot`` runs the generated code of :mod:`._kernels` by
+default, and the tests check it against these functions (``Robot._fast = False``).
+
 Rigid-body part only (no motor armature, no friction: the Robot adds those). Works on
 ``(m, n)`` batches of configurations at once; the loops run over the n links only.
 Quantities of link i are expressed in its frame i (Luh-Walker-Paul for standard DH,

@@ -29,7 +29,7 @@ Vec = list  # a 3-list of scalars
 Frame = tuple  # (x, y, z, p)
 
 SMALL_BATCH = 48  # up to this many configurations, loop over the float version
-CHUNK = 2048  # configurations per vectorised pass (keeps temporaries in cache)
+CHUNK = 4096  # configurations per vectorised pass (keeps temporaries in cache)
 
 
 # ---------------------------------------------------------------------------- vector helpers

@@ -1,5 +1,8 @@
 """Batched forward kinematics and geometric Jacobians on plain arrays (private).
 
+The reference implementation: ``Robot`` runs the generated code of :mod:`._kernels` by
+default, and the tests check it against these functions (``Robot._fast = False``).
+
 Every function accepts joint values with any leading batch shape ``(..., n)`` and works
 on all configurations at once with NumPy (no Python loop over configurations; the only
 loop is over the n links of the chain).

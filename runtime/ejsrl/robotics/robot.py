@@ -3,7 +3,9 @@
 Names and conventions follow Corke's Robotics Toolbox (``fkine``, ``jacob0``, ``rne``...).
 All inputs and outputs are NumPy arrays in SI units and radians. Methods that take joint
 values accept one configuration ``(n,)`` or a batch ``(m, n)`` and answer for all of them
-at once (vectorised over configurations).
+at once (vectorised over configurations). The work is done by code generated for the
+arm on first use (``_kernels``): plain float arithmetic for one configuration, one NumPy
+operation per scalar operation for a batch.
 
 Frames: ``base`` is ``T_world_base`` (4, 4); ``tool`` is ``T_linkn_tool`` (4, 4).
 ``gravity`` is the gravitational acceleration in the world frame (default
