@@ -17,11 +17,22 @@ from conftest import look_at
 from ejsrl.robotics.transforms import r2t, rotx, rotz, transl
 from ejsrl.vision import CameraModel
 from ejsrl.world import BACKGROUND, World, render
+from ejsrl.world import _gl
 from ejsrl.world._raster import clip_near, rasterize
+from ejsrl.world.render import _pick_backend
 from ejsrl.world.scene import Box, CameraNode, MeshNode, Part, Sphere
+from test_render_gl import require_gl
 
 GOLDEN = Path(__file__).parent / "golden"
 REGEN = os.environ.get("EJSGEN_REGEN_GOLDEN") == "1"
+
+
+@pytest.fixture(params=["numpy", "gl"])
+def backend(request) -> str:
+    """Each render back end in turn (the OpenGL one fails in CI and is skipped elsewhere when it cannot run)."""
+    if request.param == "gl":
+        require_gl()
+    return request.param
 
 
 # -- CameraModel ------------------------------------------------------------------------------
@@ -83,13 +94,13 @@ def _convex_margins(px_poly: np.ndarray, W: int, H: int) -> np.ndarray:
     return d
 
 
-def test_rendered_box_silhouette_matches_camera_model_projection():
+def test_rendered_box_silhouette_matches_camera_model_projection(backend):
     w = World()
     T_box = transl(0.1, -0.05, 0.2) @ r2t(rotz(0.5) @ rotx(0.2))
     w.add(Box("b", size=(0.4, 0.3, 0.25), color="orange", T_parent_local=T_box))
     cam = CameraModel(160, 120, fov_deg=55)
     T_cam = look_at((0.9, -1.1, 0.9), (0.1, -0.05, 0.2))
-    rgb, depth = render(w, cam, T_cam)
+    rgb, depth = render(w, cam, T_cam, backend=backend)
     corners = np.array([[x, y, z] for x in (-0.2, 0.2) for y in (-0.15, 0.15) for z in (-0.125, 0.125)])
     Pw = corners @ T_box[:3, :3].T + T_box[:3, 3]
     px = cam.project(Pw, T_cam)
@@ -105,7 +116,7 @@ def test_rendered_box_silhouette_matches_camera_model_projection():
     assert abs(depth[y, x] - cam.depth(Pw, T_cam)[i]) < 0.02
 
 
-def test_depth_equals_the_analytic_plane_distance():
+def test_depth_equals_the_analytic_plane_distance(backend):
     # a tilted plane n.P = c seen by the camera: Z(pixel) = c / (n . (x, y, 1)) in the camera frame
     w = World()
     T_plane = transl(0, 0, 0) @ r2t(rotx(0.5))
@@ -113,7 +124,7 @@ def test_depth_equals_the_analytic_plane_distance():
     w.add(MeshNode("p", mesh_parts=(Part(V, [[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]], (0.5, 0.6, 0.7)),), T_parent_local=T_plane))
     cam = CameraModel(120, 90, fov_deg=60)
     T_cam = look_at((0.3, -0.4, 1.5), (0, 0.1, 0))
-    _, depth = render(w, cam, T_cam)
+    _, depth = render(w, cam, T_cam, backend=backend)
     assert np.isfinite(depth).all()
     Tcp = np.linalg.inv(T_cam) @ T_plane
     n_c, p0_c = Tcp[:3, 2], Tcp[:3, 3]
@@ -124,7 +135,7 @@ def test_depth_equals_the_analytic_plane_distance():
     np.testing.assert_allclose(depth.ravel(), Z, rtol=2e-6)
 
 
-def test_floor_under_a_sphere_is_occluded_per_pixel():
+def test_floor_under_a_sphere_is_occluded_per_pixel(backend):
     """A painter's algorithm sorting faces by their centre's depth draws the floor over the ball here."""
     w = World()
     r = 0.3
@@ -134,7 +145,7 @@ def test_floor_under_a_sphere_is_occluded_per_pixel():
     w.add(ball)
     cam = CameraModel(160, 120, fov_deg=60)
     T_cam = look_at((0, -1.2, 0.5), (0, 0, 0.25))
-    rgb, depth = render(w, cam, T_cam)
+    rgb, depth = render(w, cam, T_cam, backend=backend)
     tris, _ = w.triangles()
     centre_depth = cam.depth(tris.mean(axis=1), T_cam)
     floor_top = centre_depth[:12]
@@ -167,14 +178,14 @@ def test_floor_under_a_sphere_is_occluded_per_pixel():
     np.testing.assert_allclose(depth[ball_px], t_sphere.reshape(120, 160)[ball_px], rtol=0.03)
 
 
-def test_near_plane_clipping_keeps_the_visible_part():
+def test_near_plane_clipping_keeps_the_visible_part(backend):
     # a floor that passes under and behind the camera
     w = World()
     V = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], float)
     w.add(MeshNode("floor", mesh_parts=(Part(V, [[0, 1, 2], [0, 2, 3]], (0.6, 0.6, 0.6)),)))
     cam = CameraModel(80, 60, fov_deg=70, near=0.05)
     T_cam = look_at((0, 0, 0.3), (0, 2, 0.0))
-    _, depth = render(w, cam, T_cam)
+    _, depth = render(w, cam, T_cam, backend=backend)
     yy, xx = np.mgrid[0:60, 0:80]
     xy = cam.normalized(np.column_stack([xx.ravel(), yy.ravel()]))
     d_w = np.column_stack([xy, np.ones(len(xy))]) @ T_cam[:3, :3].T
@@ -192,21 +203,21 @@ def test_near_plane_clipping_keeps_the_visible_part():
         assert np.dot(np.cross(t3[1] - t3[0], t3[2] - t3[0]), n0) > 0
 
 
-def test_camera_node_by_name_and_determinism():
+def test_camera_node_by_name_and_determinism(backend):
     w = World()
     w.add(Box("b", size=(0.3, 0.3, 0.3), color="blue", T_parent_local=transl(0, 0, 0.15)))
     T_cam = look_at((0.8, -0.8, 0.7), (0, 0, 0.1))
     w.add(CameraNode("cam", T_parent_local=T_cam, fov=45.0, resolution=(96, 72)))
-    rgb1, d1 = render(w, "cam")
-    rgb2, d2 = render(w, CameraModel(96, 72, fov_deg=45.0), T_cam)
+    rgb1, d1 = render(w, "cam", backend=backend)
+    rgb2, d2 = render(w, CameraModel(96, 72, fov_deg=45.0), T_cam, backend=backend)
     np.testing.assert_array_equal(rgb1, rgb2)
     np.testing.assert_array_equal(d1, d2)
-    rgb3, _ = render(w, "cam")
+    rgb3, _ = render(w, "cam", backend=backend)
     np.testing.assert_array_equal(rgb1, rgb3)
     assert rgb1.shape == (72, 96, 3) and rgb1.dtype == np.uint8 and d1.dtype == np.float32
     bg = np.rint(np.array(BACKGROUND) * 255).astype(np.uint8)
     assert (rgb1[~np.isfinite(d1)] == bg).all() and np.isinf(d1[0, 0])
-    rgb_ex, d_ex = render(w, "cam", exclude=("b",))
+    rgb_ex, d_ex = render(w, "cam", exclude=("b",), backend=backend)
     assert np.isinf(d_ex).all()
     with pytest.raises(ValueError, match="T_world_camera"):
         render(w, CameraModel(8, 8))
@@ -241,7 +252,7 @@ def _golden_scene() -> tuple[World, CameraModel, np.ndarray]:
 
 def test_golden_image_of_a_small_scene():
     w, cam, T = _golden_scene()
-    rgb, depth = render(w, cam, T)
+    rgb, depth = render(w, cam, T, backend="numpy")
     path = GOLDEN / "test_golden_image_of_a_small_scene.png"
     if REGEN or not path.exists():
         if not REGEN:
@@ -257,3 +268,101 @@ def test_golden_image_of_a_small_scene():
     assert any(c[0] > 150 and c[1] < 50 for c in colours)
     assert any(c[2] > 150 and c[0] < 50 for c in colours)
     assert any(c[1] > 80 and c[0] < 50 and c[2] < 50 for c in colours)
+
+
+# -- the rasterizer against a brute-force per-pixel reference ------------------------------------
+def _brute_force(tris_cam: np.ndarray, K: np.ndarray, W: int, H: int, cull: bool, margin: float = 1e-4):
+    """Per pixel and triangle, in float64: inside (> margin px from every edge), outside, or too close to call.
+
+    Returns face (H, W) (-1: none), depth (H, W) (inf: none) and ``sure`` (H, W): no triangle is
+    within ``margin`` of an edge at that pixel and the nearest two depths there differ.
+    """
+    n = np.cross(tris_cam[:, 1] - tris_cam[:, 0], tris_cam[:, 2] - tris_cam[:, 0])
+    uv = tris_cam @ K.T
+    uv = uv[:, :, :2] / uv[:, :, 2:]
+    yy, xx = np.mgrid[0:H, 0:W].astype(float)
+    px = np.stack([xx.ravel(), yy.ravel()], axis=1)  # (P, 2)
+    area = (uv[:, 1, 0] - uv[:, 0, 0]) * (uv[:, 2, 1] - uv[:, 0, 1]) - (uv[:, 2, 0] - uv[:, 0, 0]) * (uv[:, 1, 1] - uv[:, 0, 1])
+    dist = []
+    for i in range(3):  # signed distance in pixels to each edge, > 0 inside
+        a, b = uv[:, i], uv[:, (i + 1) % 3]
+        e = b - a
+        cross = e[:, 0][None] * (px[:, 1][:, None] - a[:, 1][None]) - e[:, 1][None] * (px[:, 0][:, None] - a[:, 0][None])
+        dist.append(np.sign(area)[None] * cross / np.hypot(e[:, 0], e[:, 1])[None])
+    dmin = np.minimum(np.minimum(dist[0], dist[1]), dist[2])  # (P, F)
+    usable = np.abs(area) > 1e-9
+    if cull:
+        usable &= np.einsum("ij,ij->i", n, tris_cam[:, 0]) < 0
+    inside = (dmin > margin) & usable[None]
+    unsure = (np.abs(dmin) <= margin) & usable[None]
+    ray = np.column_stack([px, np.ones(len(px))]) @ np.linalg.inv(K).T  # Z = 1 along each ray
+    with np.errstate(divide="ignore", invalid="ignore"):
+        Z = (n * tris_cam[:, 0]).sum(axis=1)[None] / (ray @ n.T)  # the plane's Z along each ray
+    Z = np.where(inside, Z, np.inf)
+    order = np.argsort(Z, axis=1, kind="stable")
+    z1 = np.take_along_axis(Z, order[:, :1], axis=1)[:, 0]
+    z2 = np.take_along_axis(Z, order[:, 1:2], axis=1)[:, 0]
+    face = np.where(np.isfinite(z1), order[:, 0], -1)
+    with np.errstate(invalid="ignore"):  # inf - inf where nothing covers the pixel
+        tie = np.isfinite(z2) & (z2 - z1 <= 1e-6 * z1)
+    sure = ~unsure.any(axis=1) & ~tie
+    return face.reshape(H, W), z1.reshape(H, W), sure.reshape(H, W)
+
+
+@pytest.mark.parametrize("cull", [True, False])
+def test_rasterizer_agrees_with_a_brute_force_reference(rng, cull):
+    # a soup of interpenetrating triangles in front of the camera, some reaching past the image
+    centres = np.column_stack([rng.uniform(-0.8, 0.8, (120, 2)), rng.uniform(1.0, 3.0, 120)])
+    tris = centres[:, None, :] + rng.normal(0.0, 0.35, (120, 3, 3))
+    tris[:, :, 2] = np.maximum(tris[:, :, 2], 0.3)
+    K = CameraModel(64, 48, K=[[50.0, 0.0, 31.7], [0.0, 52.0, 23.2], [0, 0, 1]]).K
+    face, depth = rasterize(tris, K, 64, 48, cull_backfaces=cull)
+    want_face, want_depth, sure = _brute_force(tris, K, 64, 48, cull)
+    assert sure.mean() > 0.9 and (want_face >= 0).mean() > 0.5
+    np.testing.assert_array_equal(face[sure], want_face[sure])
+    seen = sure & (want_face >= 0)
+    np.testing.assert_allclose(depth[seen], want_depth[seen], rtol=1e-6)
+    assert np.isinf(depth[sure & (want_face < 0)]).all()
+
+
+def test_far_plane_clips_per_pixel():
+    # a plane tilted away from the camera crosses the far plane: pixels beyond it stay empty
+    V = np.array([[-4, -1, 1.0], [4, -1, 1.0], [4, 1, 6.0], [-4, 1, 6.0]])
+    tris = V[np.array([[0, 2, 1], [0, 3, 2]])]
+    K = CameraModel(60, 60, fov_deg=90).K
+    face, depth = rasterize(tris, K, 60, 60, far=3.0, cull_backfaces=False)
+    _, depth_all = rasterize(tris, K, 60, 60, cull_backfaces=False)
+    assert np.isfinite(depth_all).sum() > np.isfinite(depth).sum() > 300
+    assert depth[np.isfinite(depth)].max() <= 3.0
+    beyond = np.isfinite(depth_all) & (depth_all > 3.0 + 1e-6)
+    assert beyond.sum() > 100 and (face[beyond] == -1).all() and np.isinf(depth[beyond]).all()
+
+
+# -- choosing the back end -----------------------------------------------------------------------
+def test_backend_choice_env_override_and_errors(monkeypatch):
+    w, cam, T = _golden_scene()
+    monkeypatch.setenv("EJSRL_RENDER_BACKEND", "numpy")
+    assert _pick_backend("auto") == "numpy"
+    rgb_auto, d_auto = render(w, cam, T)
+    rgb_np, d_np = render(w, cam, T, backend="numpy")
+    np.testing.assert_array_equal(rgb_auto, rgb_np)
+    np.testing.assert_array_equal(d_auto, d_np)
+    monkeypatch.setenv("EJSRL_RENDER_BACKEND", "vulkan")
+    with pytest.raises(ValueError, match="EJSRL_RENDER_BACKEND"):
+        render(w, cam, T)
+    with pytest.raises(ValueError, match="unknown render backend 'opengl'"):
+        render(w, cam, T, backend="opengl")
+
+
+def test_gl_unavailable_falls_back_silently_for_auto_and_explains_for_gl(monkeypatch):
+    # as on a machine without moderngl: the cached outcome of the first attempt says why
+    monkeypatch.setattr(_gl, "_renderer", None)
+    monkeypatch.setattr(_gl, "_failure", "moderngl is not installed (No module named 'moderngl')")
+    monkeypatch.delenv("EJSRL_RENDER_BACKEND", raising=False)
+    w, cam, T = _golden_scene()
+    assert _pick_backend("auto") == "numpy"
+    rgb, depth = render(w, cam, T)
+    np.testing.assert_array_equal(rgb, render(w, cam, T, backend="numpy")[0])
+    with pytest.raises(_gl.GLUnavailableError, match="pip install moderngl") as info:
+        render(w, cam, T, backend="gl")
+    assert "libegl1" in str(info.value) and "not installed" in str(info.value)

@@ -1,0 +1,173 @@
+"""The OpenGL back end (moderngl on headless EGL) against the NumPy rasterizer and analytic depths.
+
+CI installs moderngl and Mesa's EGL (scripts/setup.sh), so these tests run there and fail
+if the back end cannot; on a machine without them they are skipped with the reason.
+"""
+
+from __future__ import annotations
+
+import os
+import threading
+
+import numpy as np
+import pytest
+import trimesh
+from conftest import look_at
+
+from ejsrl.robotics.transforms import r2t, rotx, rotz, transl
+from ejsrl.vision import CameraModel
+from ejsrl.world import World, render
+from ejsrl.world import _gl
+from ejsrl.world.scene import Box, Cylinder, MeshNode, Part, Sphere
+
+
+def require_gl() -> None:
+    """Fail in CI and skip elsewhere when the "gl" back end cannot run here."""
+    if _gl.available():
+        return
+    if os.environ.get("CI"):
+        pytest.fail(f"{_gl.describe()} (CI must run the OpenGL tests: scripts/setup.sh installs what they need)")
+    pytest.skip(_gl.describe())
+
+
+def _scene() -> World:
+    w = World()
+    w.add(Box("floor", size=(3, 3, 0.02), color="gray", T_parent_local=transl(0, 0, -0.01)))
+    m = trimesh.creation.icosphere(subdivisions=3, radius=0.25)
+    w.add(MeshNode("blob", mesh_parts=(Part(m.vertices, m.faces, (0.2, 0.7, 0.3)),), T_parent_local=transl(-0.2, 0.1, 0.25)))
+    w.add(Box("crate", size=(0.25, 0.25, 0.25), color="blue", T_parent_local=transl(0.3, -0.1, 0.125) @ r2t(rotz(0.4))))
+    w.add(Cylinder("can", radius=0.08, height=0.3, color="orange", T_parent_local=transl(0.1, 0.35, 0.15)))
+    w.add(Sphere("ball", radius=0.1, color="red", T_parent_local=transl(0.35, 0.3, 0.1)))
+    return w
+
+
+def _edges(face: np.ndarray) -> np.ndarray:
+    """(H, W) bool: pixels whose 3 x 3 neighbourhood sees more than one face (or the background)."""
+    H, W = face.shape
+    pad = np.pad(face, 1, mode="edge")
+    edge = np.zeros((H, W), dtype=bool)
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            edge |= pad[dy : dy + H, dx : dx + W] != face
+    return edge
+
+
+CAMERAS = [
+    CameraModel(640, 480, fov_deg=50),
+    CameraModel(97, 61, fov_deg=70),  # odd sizes: rows not a multiple of 4 bytes
+    CameraModel(200, 150, K=[[180, 0, 80.3], [0, 175, 90.7], [0, 0, 1]]),  # off-centre, non-square pixels
+]
+
+
+@pytest.mark.parametrize("cam", CAMERAS, ids=["640x480", "97x61", "offcentre-K"])
+def test_gl_draws_what_numpy_draws_except_along_edges(cam: CameraModel):
+    require_gl()
+    w = _scene()
+    T = look_at((0.9, -1.3, 0.9), (0.0, 0.0, 0.15))
+    rgb_n, d_n = render(w, cam, T, backend="numpy")
+    rgb_g, d_g = render(w, cam, T, backend="gl")
+    assert rgb_g.shape == rgb_n.shape and rgb_g.dtype == np.uint8 and d_g.dtype == np.float32
+    same = np.abs(rgb_n.astype(int) - rgb_g.astype(int)).max(axis=2) <= 2
+    assert same.mean() >= 0.99, f"only {100 * same.mean():.2f} % of pixels agree"
+    # every pixel that differs lies on an edge of the NumPy picture (triangle or silhouette)
+    from ejsrl.world._raster import rasterize
+    from ejsrl.world.render import _to_camera
+
+    tris, _ = w.triangles()
+    face, _ = rasterize(_to_camera(tris, T).transpose(2, 0, 1), cam.K, cam.width, cam.height, near=cam.near, far=cam.far)
+    assert not (~same & ~_edges(face)).any()
+    # depth: the same surfaces, to float32 rounding, wherever both see one
+    both = np.isfinite(d_n) & np.isfinite(d_g)
+    assert (np.isfinite(d_n) != np.isfinite(d_g)).mean() < 0.01
+    rel = np.abs(d_g[both] - d_n[both]) / d_n[both]
+    assert (rel <= 1e-4).mean() >= 0.99
+    # the colours are the NumPy back end's to the bit away from edges
+    inner = ~_edges(face)
+    np.testing.assert_array_equal(rgb_g[inner], rgb_n[inner])
+
+
+def test_gl_depth_equals_the_analytic_plane_distance():
+    require_gl()
+    w = World()
+    V = np.array([[-3, -3, 0], [3, -3, 0], [3, 3, 0], [-3, 3, 0]], float)
+    T_plane = r2t(rotx(0.5))
+    w.add(MeshNode("p", mesh_parts=(Part(V, [[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]], (0.5, 0.6, 0.7)),), T_parent_local=T_plane))
+    cam = CameraModel(120, 90, fov_deg=60)
+    T_cam = look_at((0.3, -0.4, 1.5), (0, 0.1, 0))
+    _, depth = render(w, cam, T_cam, backend="gl")
+    assert np.isfinite(depth).all()
+    Tcp = np.linalg.inv(T_cam) @ T_plane
+    n_c, p0_c = Tcp[:3, 2], Tcp[:3, 3]
+    yy, xx = np.mgrid[0:90, 0:120]
+    xy = cam.normalized(np.column_stack([xx.ravel(), yy.ravel()]))
+    Z = (n_c @ p0_c) / (xy @ n_c[:2] + n_c[2])
+    np.testing.assert_allclose(depth.ravel(), Z, rtol=1e-5)
+
+
+def test_gl_clips_at_the_near_and_far_planes_like_numpy():
+    require_gl()
+    w = World()
+    V = np.array([[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]], float)
+    w.add(MeshNode("floor", mesh_parts=(Part(V, [[0, 1, 2], [0, 2, 3]], (0.6, 0.6, 0.6)),)))
+    cam = CameraModel(80, 60, fov_deg=70, near=0.05, far=2.0)
+    T_cam = look_at((0, 0, 0.3), (0, 2, 0.0))  # the floor runs under the camera and past the far plane
+    rgb_n, d_n = render(w, cam, T_cam, backend="numpy")
+    rgb_g, d_g = render(w, cam, T_cam, backend="gl")
+    drawn_n, drawn_g = np.isfinite(d_n), np.isfinite(d_g)
+    assert drawn_n.sum() > 1000 and (~drawn_n).sum() > 500  # both planes cut something
+    assert (drawn_n != drawn_g).mean() < 0.02  # only along the far cut
+    assert d_g[drawn_g].max() <= 2.0 * (1 + 1e-5) and d_g[drawn_g].min() >= 0.05
+    both = drawn_n & drawn_g
+    np.testing.assert_allclose(d_g[both], d_n[both], rtol=1e-4)
+
+
+def test_gl_empty_scene_and_background():
+    require_gl()
+    w = World()
+    rgb, depth = render(w, CameraModel(33, 17, fov_deg=40), np.eye(4), background=(0.1, 0.2, 0.3), backend="gl")
+    assert np.isinf(depth).all()
+    assert (rgb == np.rint(np.array([0.1, 0.2, 0.3]) * 255).astype(np.uint8)).all()
+
+
+def test_gl_renders_from_other_threads_and_is_deterministic():
+    require_gl()
+    w = _scene()
+    cam = CameraModel(160, 120, fov_deg=50)
+    T = look_at((0.9, -1.3, 0.9), (0.0, 0.0, 0.15))
+    want_rgb, want_d = render(w, cam, T, backend="gl")
+    got: list[tuple[np.ndarray, np.ndarray]] = []
+    threads = [threading.Thread(target=lambda: got.append(render(w, cam, T, backend="gl"))) for _ in range(3)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(got) == 3
+    for rgb, d in got:
+        np.testing.assert_array_equal(rgb, want_rgb)
+        np.testing.assert_array_equal(d, want_d)
+
+
+def test_auto_picks_gl_when_it_works():
+    require_gl()
+    from ejsrl.world.render import _pick_backend, available_backends
+
+    assert available_backends() == ["numpy", "gl"]
+    assert _pick_backend("auto") == "gl" or os.environ.get("EJSRL_RENDER_BACKEND", "auto") != "auto"
+
+
+def test_projection_matrix_puts_pixel_centres_where_the_camera_model_does(rng):
+    # no GL needed: the matrix alone, against CameraModel.project
+    cam = CameraModel(200, 150, K=[[180, 2.0, 80.3], [0, 175, 90.7], [0, 0, 1]], near=0.1, far=7.0)
+    M = _gl.projection_matrix(cam.K, cam.width, cam.height, cam.near, cam.far)
+    P = np.column_stack([rng.uniform(-1, 1, (50, 2)), rng.uniform(0.1, 7.0, 50)])
+    clip = np.column_stack([P, np.ones(50)]) @ M.T
+    ndc = clip[:, :3] / clip[:, 3:]
+    px = cam.project(P, np.eye(4))
+    np.testing.assert_allclose((ndc[:, 0] + 1) * cam.width / 2 - 0.5, px[:, 0], atol=1e-9)
+    np.testing.assert_allclose((ndc[:, 1] + 1) * cam.height / 2 - 0.5, px[:, 1], atol=1e-9)
+    np.testing.assert_allclose(clip[:, 3], P[:, 2])
+    z_ndc = lambda Z: (M[2, 2] * Z + M[2, 3]) / Z  # noqa: E731
+    assert z_ndc(0.1) == pytest.approx(-1.0) and z_ndc(7.0) == pytest.approx(1.0)
+    assert (np.diff(z_ndc(np.linspace(0.1, 7.0, 20))) > 0).all()
+    M_inf = _gl.projection_matrix(cam.K, cam.width, cam.height, 0.1, np.inf)
+    assert (M_inf[2, 2] * 0.1 + M_inf[2, 3]) / 0.1 == pytest.approx(-1.0)
