@@ -7,7 +7,6 @@ if the back end cannot; on a machine without them they are skipped with the reas
 from __future__ import annotations
 
 import os
-import threading
 
 import numpy as np
 import pytest
@@ -127,24 +126,6 @@ def test_gl_empty_scene_and_background():
     rgb, depth = render(w, CameraModel(33, 17, fov_deg=40), np.eye(4), background=(0.1, 0.2, 0.3), backend="gl")
     assert np.isinf(depth).all()
     assert (rgb == np.rint(np.array([0.1, 0.2, 0.3]) * 255).astype(np.uint8)).all()
-
-
-def test_gl_renders_from_other_threads_and_is_deterministic():
-    require_gl()
-    w = _scene()
-    cam = CameraModel(160, 120, fov_deg=50)
-    T = look_at((0.9, -1.3, 0.9), (0.0, 0.0, 0.15))
-    want_rgb, want_d = render(w, cam, T, backend="gl")
-    got: list[tuple[np.ndarray, np.ndarray]] = []
-    threads = [threading.Thread(target=lambda: got.append(render(w, cam, T, backend="gl"))) for _ in range(3)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join()
-    assert len(got) == 3
-    for rgb, d in got:
-        np.testing.assert_array_equal(rgb, want_rgb)
-        np.testing.assert_array_equal(d, want_d)
 
 
 def test_auto_picks_gl_when_it_works():

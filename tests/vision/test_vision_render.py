@@ -7,6 +7,7 @@ images by eye) with ``EJSGEN_REGEN_GOLDEN=1 python -m pytest tests/vision``.
 from __future__ import annotations
 
 import os
+import threading
 from pathlib import Path
 
 import cv2
@@ -223,6 +224,36 @@ def test_camera_node_by_name_and_determinism(backend):
         render(w, CameraModel(8, 8))
     with pytest.raises(KeyError, match="did you mean 'cam'"):
         render(w, "cma")
+
+
+def test_threads_rendering_at_once_get_the_same_pictures(backend):
+    """The NumPy back end keeps its work buffers per thread; the OpenGL one shares a context under a lock."""
+    w, cam, T = _golden_scene()
+    big = CameraModel(320, 240, fov_deg=50)
+    want = [render(w, c, T, backend=backend) for c in (cam, big)]
+    got: dict[tuple[int, int], list] = {}
+    errors: list[BaseException] = []
+    barrier = threading.Barrier(4)
+
+    def worker(i: int) -> None:
+        barrier.wait()
+        try:
+            for j in range(6):  # sizes alternate, so buffers are resized while others use theirs
+                got.setdefault((i, j), []).append(render(w, (cam, big)[(i + j) % 2], T, backend=backend))
+        except BaseException as exc:  # noqa: BLE001 - reported below, in the test's thread
+            errors.append(exc)
+
+    threads = [threading.Thread(target=worker, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert not errors, errors
+    assert len(got) == 24
+    for (i, j), [(rgb, depth)] in got.items():
+        rgb_want, depth_want = want[(i + j) % 2]
+        np.testing.assert_array_equal(rgb, rgb_want)
+        np.testing.assert_array_equal(depth, depth_want)
 
 
 def test_back_faces_are_culled_only_when_asked():

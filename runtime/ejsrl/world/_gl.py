@@ -13,12 +13,13 @@ the NumPy rasterizer does, to a float32 target, from which depth = 1 / (1/Z) (in
 nothing was drawn). The near and far planes clip as in the NumPy back end; the depth test
 uses a 24-bit depth buffer (ties: the first face drawn, the lower index, wins).
 
-One context per process, made on first use and kept; each render makes it current on the
-calling thread under a lock, so any thread may render.
+One context per process, made on first use and kept (a forked child makes its own); each
+render makes it current on the calling thread under a lock, so any thread may render.
 """
 
 from __future__ import annotations
 
+import os
 import threading
 from typing import Any
 
@@ -99,6 +100,7 @@ class _Renderer:
         self.vao = self.ctx.vertex_array(self.prog, [(self.vbo, "3f", "in_pos"), (self.cbo, "3f1", "in_col")])
         self.targets: dict[tuple[int, int], tuple[Any, Any, Any]] = {}
         self.lock = threading.Lock()
+        self.pid = os.getpid()
         info = self.ctx.info
         self.renderer = f"{info.get('GL_RENDERER', '?')} ({info.get('GL_VERSION', '?')})"
 
@@ -131,11 +133,10 @@ class _Renderer:
         with self.lock, self.ctx:
             draw, colour_only, inv_z_depth = self._target(W, H)
             if F:
-                if self.vbo.size < pos.nbytes:
-                    self.vbo.orphan(pos.nbytes + pos.nbytes // 4)
-                    self.cbo.orphan(col.nbytes + col.nbytes // 4)
-                self.vbo.write(pos)
-                self.cbo.write(col)
+                for buf, data in ((self.vbo, pos), (self.cbo, col)):
+                    if buf.size < data.nbytes:
+                        buf.orphan(data.nbytes + data.nbytes // 4)
+                    buf.write(data)
             self.prog["proj"].write(proj.T.astype(np.float32).tobytes())  # GL wants column-major
             colour_only.clear(*(bg / 255.0), 1.0)
             inv_z_depth.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
@@ -160,6 +161,8 @@ def _get() -> _Renderer:
     """The process's renderer, made on first call; raises GLUnavailableError (every time) if it cannot be."""
     global _renderer, _failure
     with _lock:
+        if _renderer is not None and _renderer.pid != os.getpid():
+            _renderer = None  # a forked child: the parent's context is not ours to use
         if _renderer is None and _failure is None:
             try:
                 _renderer = _Renderer()
