@@ -140,3 +140,14 @@ def test_float_pose_error_matches_numpy(angle: float) -> None:
     T[:3, 3] = [0.0, 0.25, 0.1]
     got = _pose_error_rows(Tg[:3].tolist(), tuple(T.ravel().tolist()))
     np.testing.assert_allclose(got, pose_error(Tg, T), rtol=1e-9, atol=1e-9)
+
+
+def test_robot_pickles_without_its_generated_code() -> None:
+    import pickle
+
+    fast, _ = pair("puma560", True)
+    q = fast.qn
+    T = fast.fkine(q)
+    clone = pickle.loads(pickle.dumps(fast))
+    np.testing.assert_allclose(clone.fkine(q), T, **TOL)
+    assert not clone.tool.flags.writeable

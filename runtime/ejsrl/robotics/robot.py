@@ -228,6 +228,16 @@ class Robot:
             return _dynamics.rne_rigid_single(A[0], Qd[0], Qdd[0], a0, m, r, I, pr, self.mdh)[None]
         return _dynamics.rne_rigid(A, Qd, Qdd, a0, self._m, self._r, self._I, self._prism, self.mdh)
 
+    def __getstate__(self) -> dict[str, Any]:
+        # Generated functions do not pickle: drop them, they are rebuilt on first use.
+        state = self.__dict__.copy()
+        state.update(_kernels={}, _kparams=None, _cache_key=None)
+        return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.base, self.tool = self._base, self._tool  # read-only again
+
     def _kernel(self, key: tuple) -> _kernels.Kernel:
         """The generated function ``key`` for the current parameters (built on first use)."""
         self._params()
