@@ -120,6 +120,23 @@ def test_gl_clips_at_the_near_and_far_planes_like_numpy():
     np.testing.assert_allclose(d_g[both], d_n[both], rtol=1e-4)
 
 
+@pytest.mark.parametrize("far", [100.0, np.inf])
+def test_gl_separates_nearly_coplanar_surfaces_far_away(far):
+    # a decal 0.1 mm in front of a wall 10 and 20 m away: with the usual 1 - near / Z depth
+    # (near 1 cm) the wall would show through; both back ends must draw the decal
+    require_gl()
+    cam = CameraModel(40, 30, fov_deg=40, near=0.01, far=far)
+    for Z in (10.0, 20.0):
+        w = World()
+        for name, z, colour in (("wall", Z + 1e-4, (1.0, 0.0, 0.0)), ("decal", Z, (0.0, 0.0, 1.0))):
+            V = np.array([[-99, -99, z], [99, -99, z], [99, 99, z], [-99, 99, z]], float)
+            w.add(MeshNode(name, mesh_parts=(Part(V, [[0, 2, 1], [0, 3, 2]], colour),)))
+        for backend in ("numpy", "gl"):
+            rgb, depth = render(w, cam, np.eye(4), backend=backend)
+            assert (rgb[..., 2] > rgb[..., 0]).all(), (backend, Z)
+            np.testing.assert_allclose(depth, Z, rtol=1e-6)
+
+
 def test_gl_empty_scene_and_background():
     require_gl()
     w = World()

@@ -10,8 +10,10 @@ forward; pixel (c, r) has its centre at u = c, v = r, so the projection maps u t
 image is the first row that ``glReadPixels`` returns: no flip); ``w_clip = Z``, and the
 fragment shader writes ``gl_FragCoord.w`` = 1/Z, interpolated linearly in screen space as
 the NumPy rasterizer does, to a float32 target, from which depth = 1 / (1/Z) (inf where
-nothing was drawn). The near and far planes clip as in the NumPy back end; the depth test
-uses a 24-bit depth buffer (ties: the first face drawn, the lower index, wins).
+nothing was drawn). The near and far planes clip as in the NumPy back end. The depth test
+runs on Z / far (or Z / (Z + 1 m) without a far plane) written to the depth buffer, which
+separates surfaces a few micrometres apart at 100 m of range, rather than on the usual
+1 - near / Z; ties go to the first face drawn, the lower index, as in the NumPy back end.
 
 One context per process, made on first use and kept (a forked child makes its own); each
 render makes it current on the calling thread under a lock, so any thread may render.
@@ -31,7 +33,7 @@ __all__ = ["GLUnavailableError", "INSTALL_HINT", "available", "describe", "proje
 #: what to install for the "gl" back end
 INSTALL_HINT = (
     "pip install moderngl, and the EGL and Mesa libraries "
-    "(Debian/Ubuntu: apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri)"
+    "(Debian/Ubuntu: apt-get install libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri)"
 )
 
 _VERTEX_SHADER = """
@@ -48,12 +50,17 @@ void main() {
 
 _FRAGMENT_SHADER = """
 #version 330
+uniform float inv_far;  // 1 / far, or 0 for no far plane
 flat in vec3 v_col;
 layout(location = 0) out vec4 out_rgb;
 layout(location = 1) out float out_inv_z;
 void main() {
     out_rgb = vec4(v_col, 1.0);
     out_inv_z = gl_FragCoord.w;  // 1 / w_clip = 1 / Z
+    // depth-test on Z itself, not on the usual 1 - near / Z, whose steps at a near plane of
+    // 1 cm are ~0.1 mm at 2 m and over 1 mm at 10 m
+    float z = 1.0 / gl_FragCoord.w;
+    gl_FragDepth = inv_far > 0.0 ? z * inv_far : z / (z + 1.0);
 }
 """
 
@@ -138,6 +145,7 @@ class _Renderer:
                         buf.orphan(data.nbytes + data.nbytes // 4)
                     buf.write(data)
             self.prog["proj"].write(proj.T.astype(np.float32).tobytes())  # GL wants column-major
+            self.prog["inv_far"].value = 1.0 / camera.far if np.isfinite(camera.far) else 0.0
             colour_only.clear(*(bg / 255.0), 1.0)
             inv_z_depth.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
             draw.use()

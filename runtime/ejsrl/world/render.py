@@ -6,13 +6,13 @@ browser. Two back ends draw the same picture:
 - ``"numpy"``: the z-buffer rasterizer of ``_raster.py``, deterministic, always there;
 - ``"gl"``: OpenGL through moderngl on a headless EGL context (``_gl.py``): Mesa's
   llvmpipe on a machine without a GPU, the GPU's driver where there is one. It needs
-  ``pip install moderngl`` and the EGL and Mesa libraries (Debian: ``libegl1
+  ``pip install moderngl`` and the EGL and Mesa libraries (Debian: ``libegl1 libgl1
   libegl-mesa0 libgl1-mesa-dri``). It agrees with the NumPy one except for pixels on
-  triangle edges (its fill rule differs) and for depth rounding (float32 on the GPU,
-  24-bit depth test).
+  triangle edges (its fill rule differs) and for depth rounding (float32 on the GPU;
+  its depth test separates surfaces about 1e-5 m apart, the NumPy one ~1e-7 relative).
 
 ``backend="auto"`` (the default) picks ``"gl"`` when moderngl imports and an EGL context
-can be made (tried once per process and thread, then cached), else ``"numpy"``; the
+can be made (tried once per process, then cached), else ``"numpy"``; the
 environment variable ``EJSRL_RENDER_BACKEND`` (``numpy``, ``gl`` or ``auto``) overrides
 what "auto" means, for example to get the NumPy output everywhere.
 
