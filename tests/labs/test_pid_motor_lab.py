@@ -76,3 +76,14 @@ def test_overshoot_orders_with_the_gains(runs):
     # and the arm still gets there
     for d in runs.values():
         np.testing.assert_allclose(vector(d, "q", 3)[-1], TARGETS, rtol=0.03)
+
+
+def test_without_integral_action_gravity_leaves_a_steady_error(built):
+    """P and D only: at rest the motor torque G Kt Ka Kp e / R must equal the weight's torque."""
+    d = headless(built(LABS["pid"]), 4.0, vars=VARS, every=50, sets={"Ki": "0"})
+    q = vector(d, "q", 3)[-1]
+    error = TARGETS - q
+    Ka, Kp = 10.0, 12.0
+    np.testing.assert_allclose(G * KT * Ka * Kp * error / R, gravity_torque(q), rtol=0.02, atol=1e-3)
+    assert abs(error[0]) < 1e-4  # the waist carries no weight
+    assert abs(np.degrees(error[1])) > 0.5  # the shoulder visibly falls short
