@@ -27,6 +27,7 @@ was half the frame time. Nothing returned to the caller aliases these buffers.
 
 from __future__ import annotations
 
+import sys
 import threading
 
 import numpy as np
@@ -38,6 +39,8 @@ _EDGE_EPS = 1e-7
 _INF_BITS = int(np.float32(np.inf).view(np.int32))
 _FMAX = np.float32(np.finfo(np.float32).max)
 _LOW32 = np.int64(0xFFFFFFFF)
+_F32_EXACT = 1 << 24  # integers below this are exact in float32
+_HI = 1 if sys.byteorder == "little" else 0  # which int32 of an int64 holds its high word
 
 
 class _Scratch(threading.local):
@@ -56,12 +59,13 @@ class _Scratch(threading.local):
         out = buf[:size]
         return out.reshape(n, cols) if cols else out
 
-    def arange(self, n: int) -> NDArray[np.int64]:
-        """0, 1, ..., n - 1 (int64), computed once per size class and kept."""
-        a = self.bufs.get("arange")
+    def arange(self, n: int, dtype: type = np.int64) -> np.ndarray:
+        """0, 1, ..., n - 1, computed once per size class and dtype and kept."""
+        name = f"arange_{np.dtype(dtype).name}"
+        a = self.bufs.get(name)
         if a is None or a.size < n:
-            a = np.arange(n + n // 4 + 4096, dtype=np.int64)
-            self.bufs["arange"] = a
+            a = np.arange(n + n // 4 + 4096, dtype=dtype)
+            self.bufs[name] = a
         return a[:n]
 
 
@@ -148,7 +152,7 @@ class ZBuffer:
 
     def depth(self) -> NDArray[np.float32]:
         """A new (H, W) float32 array: Z in metres, inf where empty."""
-        return self.keys.view(np.float32)[1::2].reshape(self.height, self.width).copy()
+        return self.keys.view(np.float32)[_HI::2].reshape(self.height, self.width).copy()
 
     def face(self) -> NDArray[np.int64]:
         """A new (H, W) int64 array: the input triangle seen at each pixel, -1 where none."""
@@ -318,31 +322,32 @@ def zbuffer(
     np.copyto(inv0, rhs[:S], casting="same_kind")
     p32 = _scratch.get("p32", S, np.float32)
     np.copyto(p32, p_s, casting="same_kind")
-    start32 = _scratch.get("start32", S, np.int32)
-    np.copyto(start32, start, casting="unsafe")
+    start_f = _scratch.get("start_f", S, np.float32)  # exact below 2**24 fragments
+    np.copyto(start_f, start, casting="unsafe")
 
     # -- fragments: span index, pixel index, 1/Z then Z
     sid = _scratch.get("sid", N, np.int64)  # 0 0 0 1 1 2 ...: a cumulative sum of span starts
     sid.fill(0)
     sid[start[1:]] = 1
     np.cumsum(sid, out=sid)
-    k = _scratch.arange(N)
     pix = pix0.take(sid, out=_scratch.get("pix", N, np.int64), mode="clip")
-    pix += k
-    x_i = start32.take(sid, out=_scratch.get("x_i", N, np.int32), mode="clip")
-    np.subtract(k, x_i, out=x_i, casting="unsafe")
+    pix += _scratch.arange(N)
+    # pixels right of the span's first one: k - start (in float32 when that is exact)
     x_local = _scratch.get("x_local", N, np.float32)
-    np.copyto(x_local, x_i, casting="unsafe")
+    if N < _F32_EXACT:
+        start_f.take(sid, out=x_local, mode="clip")
+        np.subtract(_scratch.arange(N, np.float32), x_local, out=x_local)
+    else:
+        np.subtract(_scratch.arange(N), start.take(sid), out=x_local, casting="unsafe")
     z32 = inv0.take(sid, out=_scratch.get("z32", N, np.float32), mode="clip")
     dz = p32.take(sid, out=_scratch.get("dz", N, np.float32), mode="clip")
     dz *= x_local
     z32 += dz
     np.reciprocal(z32, out=z32)
     np.clip(z32, np.float32(0.0), _FMAX, out=z32)  # rounding guard: keys must order like depths
-    keys2 = _scratch.get("frag_keys", N, np.int32, 2)
-    np.copyto(keys2[:, 0], sid, casting="unsafe")
-    keys2[:, 1] = z32.view(np.int32)
-    key = keys2.view(np.int64).reshape(N)
+    # the key: the span index (< 2**31) already fills the low word of sid; Z goes in the high one
+    sid.view(np.int32).reshape(N, 2)[:, _HI] = z32.view(np.int32)
+    key = sid
     empty_key = np.int64((_INF_BITS << 32) | S)
     if beyond_far:
         key[z32 > np.float32(far)] = empty_key  # per-pixel far clipping
