@@ -21,7 +21,8 @@ MET or NOT MET. The machine's load average is printed: on a shared 2-core machin
 processes take their share, so read the figures with it.
 
 ``--profile LAB`` runs that lab headless under pyinstrument (``pip install pyinstrument``)
-and prints where the time goes.
+and prints where the time goes; ``--spy LAB`` serves it to Chromium and samples the app's
+loop thread with py-spy (``pip install py-spy``): the share of each function in the frames.
 """
 
 from __future__ import annotations
@@ -146,6 +147,50 @@ def served_rates(app_dir: Path, seconds: float, page: Any) -> dict[str, float]:
         server.stop()
 
 
+def spy_served(app_dir: Path, seconds: float) -> None:
+    """Serve the lab to Chromium, play, and sample this process with py-spy: where the loop's time goes."""
+    import shutil
+    import subprocess
+    from collections import Counter
+
+    from playwright.sync_api import sync_playwright
+
+    if shutil.which("py-spy") is None:
+        sys.exit("--spy needs py-spy: pip install py-spy")
+    from ejsrl.app import load_app
+
+    app = load_app(app_dir)
+    server = app.serve("127.0.0.1", 0, block=False)
+    out = Path(tempfile.mkdtemp()) / "stacks.txt"
+    with sync_playwright() as pw:
+        browser = pw.chromium.launch(executable_path="/usr/bin/chromium", headless=True, args=["--no-sandbox", "--disable-gpu"])
+        page = browser.new_page(viewport={"width": 1280, "height": 800})
+        page.goto(f"http://127.0.0.1:{server.get_port()}")
+        page.get_by_role("button", name="Play").first.wait_for(timeout=60_000)
+        page.wait_for_timeout(2000)
+        page.get_by_role("button", name="Play").first.click()
+        time.sleep(0.5)
+        subprocess.run(["py-spy", "record", "--pid", str(os.getpid()), "--duration", str(int(seconds)), "--rate", "200",
+                        "--format", "raw", "--threads", "--output", str(out), "--nonblocking"], check=True, capture_output=True)
+        browser.close()
+    app.stop()
+    server.stop()
+    inclusive: Counter[str] = Counter()
+    total = 0
+    for line in out.read_text().splitlines():
+        stack, _, count = line.rpartition(" ")
+        frames = stack.split(";")
+        if "ejsrl-loop" not in frames[0]:  # "thread (id): name"
+            continue
+        n = int(count)
+        total += n
+        for name in {f.split(" (")[0] for f in frames[1:]}:
+            inclusive[name] += n
+    print(f"loop thread: {total} samples over {seconds:.0f} s ({total / (200 * seconds):.0%} busy); inclusive share:")
+    for name, n in inclusive.most_common(25):
+        print(f"   {n / max(total, 1):6.1%}  {name}")
+
+
 def profile(app_dir: Path, duration: float) -> None:
     try:
         from pyinstrument import Profiler
@@ -167,11 +212,15 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=8.0, help="how long to measure each served lab (default 8)")
     p.add_argument("--no-browser", action="store_true", help="headless figures only")
     p.add_argument("--profile", metavar="LAB", help="profile one lab headless with pyinstrument and stop")
+    p.add_argument("--spy", metavar="LAB", help="sample one served lab's loop thread with py-spy and stop")
     args = p.parse_args()
     names = args.labs.split(",") if args.labs else list(DURATION)
     out_root = Path(tempfile.mkdtemp(prefix="ejsgen-labs-bench-"))
     if args.profile:
         profile(build_lab(args.profile, out_root), DURATION[args.profile])
+        return 0
+    if args.spy:
+        spy_served(build_lab(args.spy, out_root), args.seconds)
         return 0
 
     print(f"load average at start: {os.getloadavg()[0]:.2f} (2 cores)")
