@@ -3,10 +3,18 @@
 # Debian's chromium (for the real-browser tests) and the package with its test extras.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if [ ! -x /usr/bin/chromium ]; then
-  SUDO=""
-  if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
+SUDO=""
+if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
+need=()
+# Debian's Chromium for the real-browser tests (never a browser download)
+[ -x /usr/bin/chromium ] || need+=(chromium)
+# Mesa's EGL and software OpenGL for the optional GL renderer (moderngl) and its tests;
+# only when missing, so present packages are not upgraded
+if ! ldconfig -p | grep -q 'libEGL_mesa.so.0' || ! ls /usr/lib/*/dri/swrast_dri.so >/dev/null 2>&1; then
+  need+=(libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri)
+fi
+if [ ${#need[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
-  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq chromium >/dev/null
+  DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null
 fi
 python3 -m pip install -q --disable-pip-version-check -e ".[test]"
