@@ -30,7 +30,7 @@ REGEN = os.environ.get("EJSGEN_REGEN_GOLDEN") == "1"
 
 @pytest.fixture(params=["numpy", "gl"])
 def backend(request) -> str:
-    """Each render back end in turn (the OpenGL one fails in CI and is skipped elsewhere when it cannot run)."""
+    """Each render back end in turn (the OpenGL one fails, saying why, if it cannot run)."""
     if request.param == "gl":
         require_gl()
     return request.param
