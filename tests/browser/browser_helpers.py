@@ -10,7 +10,7 @@ from pathlib import Path
 ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
 
 
-def wait_until(condition: Callable[[], bool], *, timeout: float = 15.0, what: str = "condition") -> None:
+def wait_until(condition: Callable[[], bool], *, timeout: float = 30.0, what: str = "condition") -> None:
     """Poll ``condition`` (state on the server) until it holds, or fail saying what was awaited."""
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
