@@ -36,7 +36,7 @@ class Lab:
 
 LABS = {
     "six_axis_kinematics": Lab("paper/six_axis_kinematics", "Six-axis arm kinematics (paper lab 1)", "Solve and move", "arm.link6", 1.0),
-    "path_planning_434": Lab("paper/path_planning_434", "Path planning (4-3-4 and friends)", "Plan and move", "puma.link6", 1.0),
+    "path_planning_434": Lab("paper/path_planning_434", "Path planning (4-3-4 and friends)", "Plan and move", "puma.link6", 0.5),
     "inverse_dynamics_payload": Lab("paper/inverse_dynamics_payload", "Inverse dynamics with a payload", "Play", "puma.link6", 1.0),
     "visual_servoing_eih": Lab("paper/visual_servoing_eih", "Eye-in-hand visual servoing", "Restart", "puma.link6", 1.5),
     "pid_dc_motor_control": Lab("paper/pid_dc_motor_control", "PID control of a 3R arm with DC motors", "Restart", "rrr.link3", 0.6),
