@@ -226,7 +226,7 @@ class App(Controller):
         if self._world_functions is None:
             from ejsrl.world.functions import WorldFunctions
 
-            self._world_functions = WorldFunctions(self.scene)
+            self._world_functions = WorldFunctions(self.scene, lambda: self.model)
         return self._world_functions
 
     def capture(self, name: str) -> np.ndarray:

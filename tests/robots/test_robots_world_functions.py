@@ -175,8 +175,9 @@ def test_attach_in_init_and_reset_in_a_running_app(tmp_path) -> None:
     assert app.model.start_dist == pytest.approx(np.linalg.norm(np.array([0.45, -0.15, 0.4]) - models.puma560().fkine(app.model.q)[:3, 3]))
 
 
-def test_asking_for_a_link_pose_before_the_robot_is_drawn_says_why(tmp_path) -> None:
+def test_link_poses_are_known_already_in_the_first_init(tmp_path) -> None:
     from ejsgen.cli import build
+    from ejsrl.robotics import models
 
     spec = tmp_path / "early.ejs.yaml"
     spec.write_text(
@@ -186,6 +187,5 @@ def test_asking_for_a_link_pose_before_the_robot_is_drawn_says_why(tmp_path) -> 
         "view:\n  - scene:\n      - robot: {name: arm, model: robot, q: q}\n"
     )
     app = load_built(build(spec, tmp_path / "early"))
-    assert app.error is not None
-    assert "links of robot 'arm' are not drawn yet" in app.error.message
-    assert app.error.where.startswith("early.ejs.yaml:10:")  # the init line that asked
+    assert app.error is None
+    assert app.model.z == pytest.approx(models.rrr().fkine_all(np.array([0.0, 0.3, -0.6]))[3][2, 3], abs=1e-12)

@@ -56,6 +56,9 @@ def _finite(x: Any) -> bool:
         return False
 
 
+_UNSET = object()
+
+
 class ControlBinding:
     """One control and its viser handle.
 
@@ -70,6 +73,17 @@ class ControlBinding:
         self.getter = Dynamic(control.get, control.bind)
         self.user_time = -math.inf
         self.lock = threading.Lock()
+        #: what the model last held, as shown (pushed or applied); the handle is written only
+        #: when the model's value moves away from it, never just because the browser's
+        #: in-progress text differs (which raced with typing on a loaded machine)
+        self.last: Any = _UNSET
+
+
+def _same_value(a: Any, b: Any) -> bool:
+    try:
+        return bool(a == b) and type(a) is type(b)
+    except Exception:  # noqa: BLE001 - odd values: treat as changed
+        return False
 
 
 def _display_fn(control: Control) -> Callable[[Any], Any]:
@@ -297,9 +311,11 @@ class Panel:
                 b.user_time = -math.inf
                 if current is not None:
                     b.handle.value = current
+                    b.last = current
                 return
             self.app.apply_control(b.control, checked.value)
             shown = b.display(checked.value)
+            b.last = shown if shown is not None else _UNSET
             if shown is not None and shown != raw:
                 b.handle.value = shown  # show the clamped / rounded value
 
@@ -329,8 +345,9 @@ class Panel:
             if now - b.user_time < USER_HOLD_SECONDS:
                 continue
             shown = b.display(app.safe_value(b.getter, b.control.where))
-            if shown is not None:
-                b.handle.value = shown  # viser sends nothing when unchanged
+            if shown is not None and (b.last is _UNSET or not _same_value(shown, b.last)):
+                b.handle.value = shown
+                b.last = shown
         playing = bool(app.is_playing())
         for p in self.plots:
             x = app.safe_value(p.plot.x, p.plot.where)

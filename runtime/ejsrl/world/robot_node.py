@@ -174,19 +174,7 @@ def _geometry_key(model: Any) -> tuple:
 # -- the world helpers ----------------------------------------------------------------------------
 def remove_subtree(world: World, node: Node) -> None:
     """Take ``node`` and everything below it out of ``world``."""
-    if node.parent is None:
-        if node in world.roots:
-            world.roots.remove(node)
-    elif node in node.parent.children:
-        node.parent.children.remove(node)
-    stack = [node]
-    while stack:
-        n = stack.pop()
-        stack.extend(n.children)
-        world.nodes.pop(n.name, None)
-        world._tri_cache.pop(n.name, None)  # noqa: SLF001 - the renderer's cache of this world
-        n.world = None
-    node.parent = None
+    world.remove(node.name)
 
 
 # -- nodes ---------------------------------------------------------------------------------------

@@ -405,6 +405,23 @@ class World:
         self.nodes[node.name] = node
         return node
 
+    def remove(self, name: str) -> None:
+        """Take the named object and everything below it out of the world."""
+        node = self[name]
+        if node.parent is None:
+            if node in self.roots:
+                self.roots.remove(node)
+        elif node in node.parent.children:
+            node.parent.children.remove(node)
+        stack = [node]
+        while stack:
+            n = stack.pop()
+            stack.extend(n.children)
+            self.nodes.pop(n.name, None)
+            self._tri_cache.pop(n.name, None)
+            n.world = None
+        node.parent = None
+
     def unique_name(self, base: str) -> str:
         """A name not yet used, ``base`` or ``base_2``, ``base_3``, ..."""
         if base not in self.nodes:
