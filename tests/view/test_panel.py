@@ -218,3 +218,18 @@ def test_alerts_become_notifications(served, monkeypatch):
     served.app.model.alert("Target reached")
     served.app.frame()
     assert ("Alert", "Target reached", "yellow") in client.notes
+
+
+def test_text_being_typed_is_not_overwritten_while_the_model_keeps_its_value(served):
+    """A number field the user is typing into (its handle differs from the model, e.g. a
+    half-typed value the server has not applied) is left alone after the hold expires, as
+    long as the model's value does not move; when the model moves, the field follows."""
+    b = binding(served, "L")
+    served.app.frame()
+    b.handle._impl.value = 0.3  # the browser's in-progress text, not applied to the model
+    b.user_time = time.monotonic() - _gui.USER_HOLD_SECONDS - 1.0  # long after the last keystroke
+    served.app.frame()
+    assert b.handle.value == pytest.approx(0.3)
+    served.app.model.L = 0.7  # now the model itself changes
+    served.app.frame()
+    assert b.handle.value == pytest.approx(0.7)
