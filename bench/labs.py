@@ -16,8 +16,7 @@ For every lab under examples/paper/, at its default settings:
 
 Targets: every lab at least real time (headless ratio >= 1 and, served, the simulated
 time keeps up with the wall clock) at 30 frames/s (or the lab's own ``fps`` if it asks
-for fewer: the visual-servoing lab runs its camera at 25 Hz by design). Each line ends in
-MET or NOT MET. The machine's load average is printed: on a shared 2-core machine other
+for fewer). Each line ends in MET or NOT MET. The machine's load average is printed: on a shared 2-core machine other
 processes take their share, so read the figures with it.
 
 ``--profile LAB`` runs that lab headless under pyinstrument (``pip install pyinstrument``)
@@ -174,7 +173,7 @@ def spy_served(app_dir: Path, seconds: float) -> None:
         page.get_by_role("button", name="Play").first.click()
         time.sleep(0.5)
         subprocess.run(["py-spy", "record", "--pid", str(os.getpid()), "--duration", str(int(seconds)), "--rate", "200",
-                        "--format", "raw", "--threads", "--output", str(out), "--nonblocking"], check=True, capture_output=True)
+                        "--format", "raw", "--threads", "--idle", "--output", str(out), "--nonblocking"], check=True, capture_output=True)
         browser.close()
     app.stop()
     server.stop()
@@ -189,7 +188,7 @@ def spy_served(app_dir: Path, seconds: float) -> None:
         total += n
         for name in {f.split(" (")[0] for f in frames[1:]}:
             inclusive[name] += n
-    print(f"loop thread: {total} samples over {seconds:.0f} s ({total / (200 * seconds):.0%} busy); inclusive share:")
+    print(f"loop thread: {total} samples over {seconds:.0f} s (idle included: sleeping between frames, waiting for the lock or the GIL); inclusive share:")
     for name, n in inclusive.most_common(25):
         print(f"   {n / max(total, 1):6.1%}  {name}")
 
