@@ -45,7 +45,11 @@ DURATION = {
     "visual_servoing_eih": 5.0,
     "pid_dc_motor_control": 3.0,
     "multi_robot_eih": 6.0,
+    "pick_and_place": 20.0,
 }
+
+#: labs that a button starts rather than Play: (the button's label, what it runs, for headless runs)
+START = {"pick_and_place": ("Run program", "pick_and_place")}
 
 
 def build_lab(name: str, out_root: Path) -> Path:
@@ -59,6 +63,8 @@ def headless_ratio(app_dir: Path, duration: float) -> float:
     from ejsrl.app import load_app
 
     app = load_app(app_dir)
+    if app_dir.name in START:
+        app.model.start_program(START[app_dir.name][1])
     start = app.model._ejs_time() or 0.0
     t0 = time.perf_counter()
     status = app.run_headless(duration, log=open(os.devnull, "w"))
@@ -120,7 +126,7 @@ def served_rates(app_dir: Path, seconds: float, page: Any) -> dict[str, float]:
         page.get_by_role("button", name="Play").first.wait_for(timeout=60_000)
         page.wait_for_timeout(2000)  # first frames, shaders, fonts
         timer = FrameTimer(app)
-        page.get_by_role("button", name="Play").first.click()
+        page.get_by_role("button", name=START.get(app_dir.name, ("Play",))[0]).first.click()
         deadline = time.monotonic() + 10
         while not app.is_playing() and time.monotonic() < deadline:
             time.sleep(0.01)
@@ -143,6 +149,8 @@ def served_rates(app_dir: Path, seconds: float, page: Any) -> dict[str, float]:
             "ms_world": 1e3 * timer.world / frames,
             "ms_send": 1e3 * timer.send / frames,
             "measured": wall,
+            # the pace the spec asks for: simulated time per frame times its fps (1 with realtime)
+            "asked_pace": 1.0 if app.sim.realtime else (s1 - s0) / frames * float(app.sim.fps),
         }
     finally:
         app.stop()
@@ -249,10 +257,13 @@ def main() -> int:
                 page.close()
             want = min(30.0, r["target_fps"])
             ok = r["fps"] >= 0.95 * want and r["sim_per_wall"] >= 0.95
+            why = ""
+            if not ok and r["fps"] >= 0.95 * want and r["asked_pace"] < 0.95:
+                why = f" (its settings ask for {r['asked_pace']:.2f} x: step x steps_per_display x fps; the frames keep up)"
             print(f"   {name:26s} {r['fps']:5.1f} fps (asks {r['target_fps']:.0f})  {r['sim_per_wall']:5.2f} x real time "
                   f"over {r['measured']:3.1f} s   "
                   f"steps {r['ms_steps']:5.1f}  world {r['ms_world']:5.1f}  send {r['ms_send']:5.1f} ms   "
-                  f"{'MET' if ok else 'NOT MET'}")
+                  f"{'MET' if ok else 'NOT MET'}{why}")
         browser.close()
     print(f"\nload average at end: {os.getloadavg()[0]:.2f}")
     return 0

@@ -32,6 +32,7 @@ class Lab:
     button: str  # a button of the lab, to know the panel is there
     link: str  # a world node that moves when the lab plays
     play_for: float  # simulated seconds to wait for after Play
+    play: str = "Play"  # the button that sets it going
 
 
 LABS = {
@@ -41,6 +42,8 @@ LABS = {
     "visual_servoing_eih": Lab("paper/visual_servoing_eih", "Eye-in-hand visual servoing", "Restart", "puma.link6", 1.5),
     "pid_dc_motor_control": Lab("paper/pid_dc_motor_control", "PID control of a 3R arm with DC motors", "Restart", "rrr.link3", 0.6),
     "multi_robot_eih": Lab("paper/multi_robot_eih", "Multi-robot system with an eye-in-hand camera", "Play", "arm3.link3", 1.5),
+    "pick_and_place": Lab("paper/pick_and_place", "Pick and place from a conveyor belt", "Stop program", "puma.link6", 2.0,
+                          play="Run program"),
 }
 
 
@@ -107,7 +110,7 @@ def test_lab_plays_in_the_browser(served, page):
     link0 = app.world[lab.link].T_world().copy()
     before = canvas_pixels(page)
 
-    page.get_by_role("button", name="Play").first.click()
+    page.get_by_role("button", name=lab.play).first.click()
     t0 = app.model.t
     wait_until(lambda: app.model.t > t0 + lab.play_for, timeout=30, what=f"t to advance {lab.play_for} s after Play")
     assert app.is_playing() and app.error is None
