@@ -171,3 +171,21 @@ def test_cartesian_line_is_straight_with_slerp_orientation():
     W = (Ta[:3, :3] - Tb[:3, :3]) / (2 * h) @ Tp[:3, :3].T
     np.testing.assert_allclose([W[2, 1], W[0, 2], W[1, 0]], v[3:], atol=1e-7)
     assert np.allclose(q2r(r2q(ct.poses[10])), ct.poses[10][:3, :3])
+
+
+def test_sample_at_the_ends_gives_the_polynomials_values() -> None:
+    """A cubic from rest to rest: a(0) = 6 D / T^2 and a(T) = -6 D / T^2 (finite differences agree)."""
+    import numpy as np
+
+    from ejsrl.robotics import trajectory
+
+    D, T = 1.2, 2.0
+    tr = trajectory.cubic([0.0], [D], T)
+    for t, expected in ((0.0, 6 * D / T**2), (T, -6 * D / T**2)):
+        q, qd, qdd = tr.sample(t)
+        assert np.allclose(qdd, expected)
+        assert np.allclose(qd, 0.0, atol=1e-12)
+        assert np.allclose(tr.sample(np.array([t]))[2][0], qdd)  # scalar and array paths agree
+    h = 1e-5
+    assert np.allclose(tr.sample(h)[1] / h, 6 * D / T**2, rtol=1e-3)
+    assert np.allclose(tr.sample(-0.1)[2], 0.0) and np.allclose(tr.sample(T + 0.1)[2], 0.0)

@@ -87,16 +87,22 @@ class Trajectory:
     def sample(self, t: float | ArrayLike) -> tuple[Array, Array, Array]:
         """``(q, qd, qdd)`` at time(s) t: (n,) each for a scalar, (m, n) for an array.
 
-        Outside ``[0, T]`` the trajectory holds its end point: position clamped, velocity
-        and acceleration zero."""
+        On ``[0, T]``, ends included, the polynomials themselves (so a cubic's acceleration
+        at t = 0 is 6 D / T^2, not 0). Outside, the trajectory holds its end point: position
+        clamped, velocity and acceleration zero."""
         if np.ndim(t) == 0:
             t = float(t)
             b = self._blist
-            if t <= b[0] or t >= b[-1]:
-                i = 0 if t <= b[0] else len(b) - 2
-                tau = 0.0 if t <= b[0] else b[-1] - b[-2]
+            if t < b[0] or t > b[-1]:
+                i = 0 if t < b[0] else len(b) - 2
+                tau = 0.0 if t < b[0] else b[-1] - b[-2]
                 z = np.zeros(self.n)
                 return self._horner(self.coef[i], tau), z, z.copy()
+            if t == b[-1]:
+                i = len(b) - 2
+                tau = b[-1] - b[-2]
+                return (self._horner(self.coef[i], tau), self._horner(self._dcoef[i], tau),
+                        self._horner(self._ddcoef[i], tau))
             i = bisect.bisect_right(b, t) - 1
             tau = t - b[i]
             return (self._horner(self.coef[i], tau), self._horner(self._dcoef[i], tau),
