@@ -53,9 +53,12 @@ class Compiler:
     def loc(self, path: Path_) -> Location:
         return self.doc.loc(path)
 
-    def where(self, path: Path_) -> str:
-        """A location for the generated app: the spec's file name (not the build's path)."""
-        loc = self.doc.loc(path)
+    def where(self, path: Path_, *, key: bool = False) -> str:
+        """A location for the generated app: the spec's file name (not the build's path).
+
+        ``key``: the location of the mapping key at ``path`` rather than of its value.
+        """
+        loc = self.doc.key_loc(path) if key else self.doc.loc(path)
         return f"{self.spec_path.name}:{loc.line}:{loc.col}"
 
     def snippet(self, path: Path_, what: str, mode: str = "exec", text: str | None = None) -> Snippet:
@@ -419,7 +422,7 @@ class Compiler:
             f"tolerance={ode.tolerance!r}",
             f"max_step={ode.max_step!r}",
             f"enabled={page.enabled!r}",
-            f"where={self.where(path + ('equations',))!r}",
+            f"where={self.where(path + ('equations',), key=True)!r}",
         ]
         if event_where:
             args.append(f"event_where={event_where!r}")

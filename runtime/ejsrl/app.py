@@ -532,6 +532,9 @@ def main(
 ) -> int:
     """The generated app's entry point; returns the process exit status."""
     args = _parser(meta.title).parse_args(argv)
+    # NumPy's overflow/invalid warnings would point at app.py; a state that becomes
+    # non-finite is reported instead, with the spec location of its equations.
+    np.seterr(all="ignore")
     overrides: dict[str, Any] = {}
     try:
         for item in args.set:

@@ -166,3 +166,25 @@ def test_the_app_serves_on_loopback_by_default(checks_module) -> None:
 
     assert app_module._parser("x").parse_args([]).host == "127.0.0.1"
     assert "eval(" not in text and "exec(" not in text
+
+
+def test_preliminary_code_runs_before_each_rate_evaluation(tmp_path) -> None:
+    from ejsgen.cli import build
+
+    app = load_app(build(SPECS / "preliminary.ejs.yaml", tmp_path / "pre"))
+    for _ in range(40):  # 2 s
+        app.step_once()
+    m = app.model
+    assert m.calls == 4 * 40  # RK4: four evaluations of the rates a step
+    assert m.x == pytest.approx(np.cos(m.w * m.t), abs=1e-5)  # the shared acceleration is the right one
+    assert m.v == pytest.approx(-m.w * np.sin(m.w * m.t), abs=1e-4)
+
+
+def test_a_state_that_blows_up_stops_with_the_equations_location(tmp_path) -> None:
+    from ejsgen.cli import build
+
+    out = build(SPECS / "preliminary.ejs.yaml", tmp_path / "pre")
+    r = run_app(out, "--headless", "--duration", "50", "--set", "grow=50.0", "--set", "w=0", "--set", "v=5", timeout=60)
+    assert r.returncode == 1
+    assert "preliminary.ejs.yaml:21:9: error: the state became non-finite" in r.stderr
+    assert "Traceback" not in r.stderr
