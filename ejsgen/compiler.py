@@ -82,11 +82,17 @@ class Compiler:
         self.methods.append(Method(name, params, doc, lines or [Line("pass")], comment))
         return name
 
-    def parse_rewrite(self, snippet: Snippet, *, extra_locals: tuple[str, ...] = (), names: Names | None = None) -> ast.AST | None:
+    def parse(self, snippet: Snippet) -> ast.AST | None:
+        """Parse a snippet; a syntax error is recorded (and None returned)."""
         try:
-            tree = parse_snippet(snippet)
+            return parse_snippet(snippet)
         except SpecError as err:
             self.errors.append(err)
+            return None
+
+    def parse_rewrite(self, snippet: Snippet, *, extra_locals: tuple[str, ...] = (), names: Names | None = None) -> ast.AST | None:
+        tree = self.parse(snippet)
+        if tree is None:
             return None
         new, errs = rewrite(tree, names or self.names, snippet, extra_locals=extra_locals)
         self.errors.extend(errs)
@@ -143,11 +149,8 @@ class Compiler:
         lines = []
         for i, line in enumerate(self.spec.imports):
             path = ("imports", i)
-            snippet = self.snippet(path, "imports")
-            try:
-                tree = parse_snippet(snippet)
-            except SpecError as err:
-                self.errors.append(err)
+            tree = self.parse(self.snippet(path, "imports"))
+            if tree is None:
                 continue
             assert isinstance(tree, ast.Module)
             if len(tree.body) != 1 or not isinstance(tree.body[0], (ast.Import, ast.ImportFrom)):
@@ -221,10 +224,8 @@ class Compiler:
         ]
         for path, _ in pages:
             snippet = self.snippet(path, "model.custom")
-            try:
-                tree = parse_snippet(snippet)
-            except SpecError as err:
-                self.errors.append(err)
+            tree = self.parse(snippet)
+            if tree is None:
                 continue
             assert isinstance(tree, ast.Module)
             for stmt in tree.body:

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from browser_helpers import ARTIFACTS, wait_until
+from browser_helpers import ARTIFACTS, canvas_pixels, serving, wait_until
 from tests.conftest import ROOT
 
 GALLERY = ROOT / "examples" / "gallery"
@@ -50,19 +50,9 @@ LABS = {
 @pytest.fixture
 def served(request, built):
     """The lab of the test's parameter, served on a free port: (lab, app, url)."""
-    from ejsrl.app import load_app
-
     lab = LABS[request.param]
-    app = load_app(built(lab.spec))
-    server = app.serve("127.0.0.1", 0, block=False)
-    yield lab, app, f"http://127.0.0.1:{server.get_port()}"
-    app.stop()
-    server.stop()
-
-
-def canvas_pixels(page) -> np.ndarray:
-    png = page.locator("canvas").first.screenshot()
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    with serving(built(lab.spec)) as (app, url):
+        yield lab, app, url
 
 
 def close_notifications(page) -> None:

@@ -7,31 +7,20 @@ Reset (back to the start).
 
 from __future__ import annotations
 
-import io
 
 import numpy as np
 import pytest
-from PIL import Image
 
-from browser_helpers import ARTIFACTS, wait_until
+from browser_helpers import ARTIFACTS, canvas_pixels, serving, wait_until
 from tests.conftest import EXAMPLES
 
 
 @pytest.fixture
 def pendulum_app(tmp_path):
     from ejsgen.cli import build
-    from ejsrl.app import load_app
 
-    app = load_app(build(EXAMPLES / "pendulum.ejs.yaml", tmp_path / "pendulum"))
-    server = app.serve("127.0.0.1", 0, block=False)
-    yield app, f"http://127.0.0.1:{server.get_port()}"
-    app.stop()
-    server.stop()
-
-
-def canvas_pixels(page) -> np.ndarray:
-    png = page.locator("canvas").first.screenshot()
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    with serving(build(EXAMPLES / "pendulum.ejs.yaml", tmp_path / "pendulum")) as served:
+        yield served
 
 
 @pytest.mark.browser

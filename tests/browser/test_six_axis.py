@@ -7,40 +7,20 @@ and see the joints change to a solution whose forward kinematics is the target.
 
 from __future__ import annotations
 
-import io
 
 import numpy as np
 import pytest
-from PIL import Image
 
-from browser_helpers import ARTIFACTS, wait_until
+from browser_helpers import ARTIFACTS, canvas_pixels, serving, wait_until
 from tests.conftest import EXAMPLES
 
 
 @pytest.fixture
 def six_axis_app(tmp_path):
-    import importlib.util
-    import sys
-
     from ejsgen.cli import build
-    from ejsrl.app import App
 
-    folder = build(EXAMPLES / "six_axis_arm.ejs.yaml", tmp_path / "six_axis_arm")
-    name = f"six_axis_browser_{abs(hash(str(folder)))}"
-    spec = importlib.util.spec_from_file_location(name, folder / "app.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    app = App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder)
-    server = app.serve("127.0.0.1", 0, block=False)
-    yield app, f"http://127.0.0.1:{server.get_port()}"
-    app.stop()
-    server.stop()
-
-
-def canvas_pixels(page) -> np.ndarray:
-    png = page.locator("canvas").first.screenshot()
-    return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    with serving(build(EXAMPLES / "six_axis_arm.ejs.yaml", tmp_path / "six_axis_arm")) as served:
+        yield served
 
 
 def type_number(page, app, label: str, variable: str, value: float) -> None:
