@@ -46,7 +46,7 @@ def hand_pendulum(steps: int) -> float:
         k4 = f(t + h, y + h * k3)
         y = y + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         t += h
-        x = L * sin(y[0])
+        x = L * sin(y[0])  # noqa: F841 - same fixed relations as the app
         yy = -L * cos(y[0])
         E = 0.5 * L**2 * y[1] ** 2 + g * (yy + L)  # noqa: F841 - same fixed relations as the app
     return (time.perf_counter() - start) / steps

@@ -23,20 +23,9 @@ import numpy as np
 import trimesh
 
 from ejsrl.robotics.transforms import r2t, rotx, roty, rotz, transl
-from ejsrl.vision import CameraModel, add_gaussian_noise, susan_corners, to_gray
+from ejsrl.vision import CameraModel, add_gaussian_noise, look_at, susan_corners, to_gray
 from ejsrl.world import World, render
 from ejsrl.world.scene import Box, Cylinder, MeshNode, Part, Sphere
-
-
-def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    eye = np.asarray(eye, float)
-    z = np.asarray(target, float) - eye
-    z /= np.linalg.norm(z)
-    x = np.cross(z, up)
-    x /= np.linalg.norm(x)
-    T = np.eye(4)
-    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(z, x), z, eye
-    return T
 
 
 def timeit(fn: Callable[[], object], repeat: int) -> tuple[float, float]:

@@ -61,7 +61,7 @@ class ViewCompiler:
 
     # -- formatting ------------------------------------------------------------------------------
     def call(self, fn: str, kwargs: dict[str, Any], indent: int) -> list[str]:
-        parts = [f"{k}={py(v) if not isinstance(v, list) or not v or not isinstance(v[0], _Block) else '...'}" for k, v in kwargs.items() if not isinstance(v, _Children)]
+        parts = [f"{k}={py(v)}" for k, v in kwargs.items() if not isinstance(v, _Children)]
         children = {k: v for k, v in kwargs.items() if isinstance(v, _Children)}
         pad = " " * indent
         one = f"{pad}{fn}(" + ", ".join(parts) + ")"
@@ -492,10 +492,6 @@ class _Children:
 
     def __init__(self, items: list[list[str]]) -> None:
         self.items = items
-
-
-class _Block:
-    pass
 
 
 def _const_index(node: ast.AST) -> tuple[int, ...] | None:

@@ -16,7 +16,7 @@ from ejsgen._resolve import Names, Snippet, parse_snippet, rewrite
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError, SpecErrors
-from ejsgen.plan import AppPlan, Line, Method, Src, body_lines, py
+from ejsgen.plan import AppPlan, Line, Method, body_lines, py
 from ejsgen.spec import Code, CodeEvolutionPage, OdePage
 from ejsgen.validate import CONTROL_NAMES, MATH_NAMES, Checked
 from ejsgen.yamlload import Path_, TextOrigin
@@ -177,11 +177,7 @@ class Compiler:
                     self.errors.append(SpecError(self.loc(path), f"the import binds '{bound}', which is also a variable"))
                 self.names.globals.add(bound)
             lines.append(ast.unparse(stmt))
-            if module and module.startswith("ejsrl.robotics"):
-                self.uses_robotics = True
         return lines
-
-    uses_robotics = False
 
     # -- variables ------------------------------------------------------------------------------------
     def compile_variables(self) -> None:
@@ -486,7 +482,6 @@ class Compiler:
             view_lines=view_lines,
             sim={"fps": sim.fps, "steps_per_display": sim.steps_per_display, "autoplay": sim.autoplay, "realtime": sim.realtime, "controls": sim.controls},
             assets=sorted((src, rel) for rel, src in self.assets.items()),
-            uses_robotics=self.uses_robotics,
             after_class=self.after_class,
             runtime_imports=self.runtime_imports,
         )
@@ -553,5 +548,3 @@ def compile_spec(checked: Checked, spec_path: Path) -> AppPlan:
     """Compile a validated spec (raises ``SpecErrors``)."""
     return Compiler(checked, spec_path).compile()
 
-
-_ = Src  # re-exported for the view compiler

@@ -20,7 +20,7 @@ import jinja2
 
 from ejsgen import __version__
 from ejsgen.errors import EjsError
-from ejsgen.plan import AppPlan, Method
+from ejsgen.plan import AppPlan
 
 __all__ = ["render_app", "write_app", "REQUIREMENTS", "runtime_dir"]
 
@@ -194,8 +194,3 @@ def _replace_dir(new: Path, final: Path) -> None:
         shutil.rmtree(old, ignore_errors=True)
     else:
         new.rename(final)
-
-
-def method_names(plan: AppPlan) -> list[str]:
-    """The names of the generated model's methods (for tests and tools)."""
-    return [m.name for m in plan.methods if isinstance(m, Method)]

@@ -50,7 +50,6 @@ class AppPlan:
     view_lines: list[str]
     sim: dict[str, Any]
     assets: list[tuple[Path, str]] = field(default_factory=list)
-    uses_robotics: bool = False
     after_class: list[str] = field(default_factory=list)
     runtime_imports: list[str] = field(default_factory=list)
 

@@ -15,7 +15,7 @@ from pydantic import BaseModel, ValidationError
 
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError, SpecErrors
-from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, VIEW_KINDS, Spec, Strict, Variable
+from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, Spec, Strict, Variable
 from ejsgen.yamlload import Document, Path_
 
 __all__ = ["Checked", "ViewItem", "VarDecl", "validate", "PRELUDE_NAMES", "CONTROL_NAMES", "MATH_NAMES"]

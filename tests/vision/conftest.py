@@ -5,23 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ejsrl.vision import look_at  # noqa: F401 - the tests import it from here
 from ejsrl.world import World
 from ejsrl.world.scene import MeshNode, Part
 
 SQUARE_HALF = 0.1  # the target square is 0.2 m across
-
-
-def look_at(eye, target, up=(0.0, 0.0, 1.0)) -> np.ndarray:
-    """Camera pose (4, 4) at ``eye`` looking at ``target`` (camera z forward, y down)."""
-    eye = np.asarray(eye, float)
-    z = np.asarray(target, float) - eye
-    z /= np.linalg.norm(z)
-    x = np.cross(z, up)
-    x /= np.linalg.norm(x)
-    y = np.cross(z, x)
-    T = np.eye(4)
-    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, y, z, eye
-    return T
 
 
 def square_corners_local(half: float = SQUARE_HALF) -> np.ndarray:

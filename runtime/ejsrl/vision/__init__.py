@@ -9,7 +9,7 @@ Images are (H, W) uint8 grey or (H, W, 3) uint8 RGB arrays; features are ``(x, y
 from __future__ import annotations
 
 from ejsrl.vision._susan import SUSAN_MASK, susan, susan_corners, susan_edges, usan_area
-from ejsrl.vision.camera import CameraModel, intrinsics_from_fov
+from ejsrl.vision.camera import CameraModel, intrinsics_from_fov, look_at
 from ejsrl.vision.color import (
     adjust_brightness_contrast,
     adjust_gamma,
@@ -68,6 +68,7 @@ from ejsrl.vision.filters import (
 )
 from ejsrl.vision.geometry import affine_matrix, crop, flip, perspective_matrix, resize, rotate, warp_affine, warp_perspective
 from ejsrl.vision.pipeline import STEPS, Pipeline, PipelineResult
+from ejsrl.vision import servo as _servo
 from ejsrl.vision.servo import (
     camera_twist_to_world,
     eih_joint_velocities,
@@ -118,13 +119,6 @@ __all__ = [
     "STEPS",
     "CameraModel",
     "intrinsics_from_fov",
-    "interaction_matrix",
-    "ibvs_velocity",
-    "feature_error",
-    "skew",
-    "twist_transform",
-    "camera_twist_to_world",
-    "eih_joint_velocities",
-    "integrate_twist",
-    "match_points",
+    "look_at",
+    *_servo.__all__,
 ]

@@ -14,9 +14,24 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["CameraModel", "intrinsics_from_fov"]
+__all__ = ["CameraModel", "intrinsics_from_fov", "look_at"]
 
 Array = NDArray[np.float64]
+
+
+def look_at(eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, 0.0, 1.0)) -> Array:
+    """``T_world_camera`` (4, 4): a camera at ``eye`` looking at ``target`` (z forward, y down).
+
+    ``up`` is the world direction that appears up in the image (not parallel to the view).
+    """
+    eye = np.asarray(eye, dtype=float)
+    z = np.asarray(target, dtype=float) - eye
+    z /= np.linalg.norm(z)
+    x = np.cross(z, np.asarray(up, dtype=float))
+    x /= np.linalg.norm(x)
+    T = np.eye(4)
+    T[:3, 0], T[:3, 1], T[:3, 2], T[:3, 3] = x, np.cross(z, x), z, eye
+    return T
 
 
 def intrinsics_from_fov(width: int, height: int, fov_deg: float) -> Array:
