@@ -87,6 +87,7 @@ class App(Controller):
         self._t0: float = 0.0
         self._stopped = threading.Event()
         self._world_functions: Any = None
+        self._loop_thread: threading.Thread | None = None
         self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
         self.model = model_cls(self, overrides, start=False)
         self.guard(self.model._ejs_reset)
@@ -299,7 +300,11 @@ class App(Controller):
                 next_time = time.perf_counter()
 
     def stop(self) -> None:
+        """Stop the loop; when it runs in its own thread (``serve(block=False)``), wait for it."""
         self._stopped.set()
+        thread = self._loop_thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout=5.0)
 
     # -- serving ----------------------------------------------------------------------------------
     def serve(self, host: str = "127.0.0.1", port: int = 8080, *, block: bool = True) -> Any:
@@ -314,8 +319,8 @@ class App(Controller):
         url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
         print(f"{self.meta.title}: serving on http://{url_host}:{server.get_port()} (Ctrl+C to stop)", flush=True)
         if not block:
-            thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)
-            thread.start()
+            self._loop_thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)
+            self._loop_thread.start()
             return server
         try:
             self.run_loop()
