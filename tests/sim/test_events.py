@@ -179,3 +179,47 @@ def test_several_events_share_one_step_with_a_bounce():
     v1 = 1.0 + G * t1
     t2 = t1 + (v1 - math.sqrt(v1**2 - 2 * G * 0.12)) / G
     np.testing.assert_allclose([ft for _, ft in r.fired], [t1, t2], atol=1e-6)
+
+
+def counting(name: str, direction: int, g, counts: dict[str, list[float]], then=None) -> EventDef:
+    """An event on ``g`` that records its firing times (and then runs ``then``, if given)."""
+
+    def action(t, y):
+        counts.setdefault(name, []).append(t)
+        return None if then is None else then(t, y)
+
+    return EventDef(name, g, direction, action)
+
+
+@pytest.mark.parametrize("method", ["rk4", "dopri5", "radau"])
+@pytest.mark.parametrize("bounce_first", [True, False])
+def test_events_on_the_same_crossing_each_fire_once_per_crossing(method, bounce_first):
+    """down (the bounce) + both + up on the ball's height: down and both fire at every impact,
+    in either order in the list; up never does, since the ball never goes below the floor."""
+    times: dict[str, list[float]] = {}
+    height = lambda t, y: y[0]  # noqa: E731
+    bounce = counting("down", -1, height, times, then=lambda t, y: np.array([y[0], -0.9 * y[1]]))
+    others = [counting("both", 0, height, times), counting("up", +1, height, times)]
+    events = [bounce, *others] if bounce_first else [*others, bounce]
+    integ = OdeIntegrator(falling, method, tolerance=1e-10, events=events)
+    t, y, fired = simulate(integ, [1.0, 0.0], 0.01, 5.0)
+    exact = [te for te in impact_times(0.9, 1.0, 40) if te < t]
+    assert len(exact) == 8
+    np.testing.assert_allclose(times["down"], exact, atol=1e-6)
+    assert times["both"] == times["down"]  # the same instant, once each
+    assert "up" not in times
+    order = ["down", "both"] if bounce_first else ["both", "down"]
+    assert [name for name, _ in fired] == order * len(exact)
+
+
+@pytest.mark.parametrize("method", ["rk4", "dop853", "bdf"])
+def test_counting_events_up_down_and_both_on_one_expression_match_sin_zeros(method):
+    """x = sin t, three counters on x: down at odd multiples of pi, up at even ones, both at all."""
+    times: dict[str, list[float]] = {}
+    x = lambda t, y: y[0]  # noqa: E731
+    events = [counting("down", -1, x, times), counting("both", 0, x, times), counting("up", +1, x, times)]
+    integ = OdeIntegrator(lambda t, y: np.array([y[1], -y[0]]), method, tolerance=1e-10, events=events)
+    simulate(integ, [0.0, 1.0], 0.05, 13.0)
+    np.testing.assert_allclose(times["down"], [math.pi, 3 * math.pi], atol=1e-6)
+    np.testing.assert_allclose(times["up"], [2 * math.pi, 4 * math.pi], atol=1e-6)
+    np.testing.assert_allclose(times["both"], [k * math.pi for k in (1, 2, 3, 4)], atol=1e-6)

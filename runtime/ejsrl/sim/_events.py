@@ -12,6 +12,11 @@ heading through zero (the action did not turn it back, e.g. it only counted or s
 the motion), the crossing that was just handled would be seen again a hair later; the
 event is therefore disarmed until ``g`` has reached the other side. If the action turned
 the motion back (a bounce), the event stays armed and the next crossing counts.
+
+Events whose crossings coincide (within the time tolerance; typically several events on
+the same ``when`` with different directions) fire together, once each, in list order,
+whatever the earlier actions did to the state: a ``down`` bounce and a ``both`` counter
+on the ball's height both fire at every impact.
 """
 
 from __future__ import annotations
@@ -145,15 +150,18 @@ class EventTracker:
         t1: float,
         y1: np.ndarray,
         state_at: Callable[[float], np.ndarray],
-    ) -> Hit | None:
+    ) -> list[Hit]:
         """Look for crossings over the internal step (t0, y0) -> (t1, y1).
 
-        Returns the earliest located crossing (ties: the first event in the list) without
-        moving the tracker on, or None after moving it to (t1, y1).
+        Returns the earliest located crossings without moving the tracker on: every event
+        whose crossing lies within the time tolerance of the earliest one (events on the
+        same ``when``, or crossings that coincide), in list order, each with the time and
+        state of the earliest. Returns ``[]`` after moving the tracker to (t1, y1).
         """
         events = self.events
         g1 = [float(ev.when(t1, y1)) for ev in events]
         hits: list[Hit] = []
+        tol = 1e-12 * (1.0 + abs(t0))
         for i, ev in enumerate(events):
             if not self.armed[i]:
                 continue
@@ -166,11 +174,13 @@ class EventTracker:
                 yx = state_at(x)
                 return float(when(x, yx)), yx
 
-            tol = 1e-12 * (1.0 + abs(t0))
             a, ya = locate(g_at, t0, self.g[i], y0, t1, g1[i], tol)
             hits.append(Hit(i, float(a), ya, s0))
         if hits:
-            return min(hits, key=lambda h: (h.t, h.index))
+            first = min(hits, key=lambda h: (h.t, h.index))
+            return [
+                Hit(h.index, first.t, first.y, h.pre) for h in hits if h.t <= first.t + tol
+            ]  # hits are in list order already
         for i in range(len(events)):
             g = g1[i]
             if not self.armed[i]:
@@ -178,52 +188,68 @@ class EventTracker:
                 if s == 0 or s == self.waiting_for[i]:
                     self.armed[i] = True
             self.g[i] = g
-        return None
+        return []
 
-    def fire(self, hit: Hit, rates: Callable[[float, np.ndarray], np.ndarray], scale: float) -> np.ndarray:
-        """Run the action of ``hit`` and restart the tracker at the new state.
+    def fire(self, hits: Sequence[Hit], rates: Callable[[float, np.ndarray], np.ndarray], scale: float) -> np.ndarray:
+        """Run the actions of ``hits`` (one instant, from :meth:`check`) and restart the tracker.
+
+        The actions run in list order, each on the state the previous one left. Each event
+        fires once for its crossing: afterwards, an event that fired and whose motion still
+        heads through zero (its action did not turn it back) waits until ``g`` reaches the
+        far side; any other event whose ``g`` the actions changed is armed afresh.
 
         ``scale`` is a time scale of the integration (the step); it sets the probe used to
         tell whether the motion still heads through zero. Returns the new state. Raises
-        :class:`ZenoError` on the 101st firing in one step, or when the event fires again
-        at the very instant of its previous firing.
+        :class:`ZenoError` on an event's 101st firing in one step, or when an event fires
+        again at the very instant of its previous firing.
         """
-        i, t, y, pre = hit
-        ev = self.events[i]
-        if self.last_time[i] == t:
-            raise ZenoError(
-                f"event {ev.name!r} fired {self.count[i] + 1} times in one step, the last ones at the same "
-                f"instant t={t:.12g}: Zeno behaviour (e.g. a ball with restitution 0); "
-                "the simulation was stopped"
-            )
-        self.count[i] += 1
-        if self.count[i] > MAX_FIRINGS:
-            raise ZenoError(
-                f"event {ev.name!r} fired more than {MAX_FIRINGS} times in one step at t={t:.12g}: "
-                "Zeno behaviour (e.g. a ball with restitution 0); the simulation was stopped"
-            )
-        self.last_time[i] = t
-        out = ev.action(t, y)
-        if out is None:
-            y_new = y
-        else:
-            y_new = np.asarray(out, dtype=float)
-            if y_new.shape != y.shape:
-                raise ValueError(
-                    f"event {ev.name!r}: the action returned a state of shape {y_new.shape}, expected {y.shape}"
+        t, y = hits[0].t, hits[0].y
+        y_new = y
+        for hit in hits:
+            i = hit.index
+            ev = self.events[i]
+            if self.last_time[i] == t:
+                raise ZenoError(
+                    f"event {ev.name!r} fired {self.count[i] + 1} times in one step, the last ones at the same "
+                    f"instant t={t:.12g}: Zeno behaviour (e.g. a ball with restitution 0); "
+                    "the simulation was stopped"
                 )
-        for j, other in enumerate(self.events):
-            self.g[j] = float(other.when(t, y_new))
-            if j != i:
-                self.armed[j] = True
-        g = self.g[i]
-        self.armed[i] = True
-        if _sign(g) == pre:
-            # Still on the near side: does the motion head through zero (same crossing) or back?
-            eps = 1e-6 * scale if scale > 0 else 1e-9
-            eps = max(eps, 4.0 * np.spacing(abs(t) + 1.0))
-            probe = float(ev.when(t + eps, y_new + eps * rates(t, y_new)))
-            if _sign(probe - g) == -pre:
-                self.armed[i] = False
-                self.waiting_for[i] = -pre
+            self.count[i] += 1
+            if self.count[i] > MAX_FIRINGS:
+                raise ZenoError(
+                    f"event {ev.name!r} fired more than {MAX_FIRINGS} times in one step at t={t:.12g}: "
+                    "Zeno behaviour (e.g. a ball with restitution 0); the simulation was stopped"
+                )
+            self.last_time[i] = t
+            out = ev.action(t, y_new)
+            if out is not None:
+                out = np.asarray(out, dtype=float)
+                if out.shape != y.shape:
+                    raise ValueError(
+                        f"event {ev.name!r}: the action returned a state of shape {out.shape}, expected {y.shape}"
+                    )
+                y_new = out
+        fired = {h.index: h.pre for h in hits}
+        changed = y_new is not y and not np.array_equal(y_new, y)
+        slope: np.ndarray | None = None
+        for j, ev in enumerate(self.events):
+            pre = fired.get(j)
+            g_before = float(ev.when(t, y)) if pre is None and changed else None
+            g = float(ev.when(t, y_new))  # read last, so a model's variables hold the new state
+            self.g[j] = g
+            if pre is None:
+                if g_before is not None and g != g_before:
+                    self.armed[j] = True
+                continue
+            self.armed[j] = True
+            if _sign(g) == pre:
+                # Still on the near side: does the motion head through zero (same crossing) or back?
+                eps = 1e-6 * scale if scale > 0 else 1e-9
+                eps = max(eps, 4.0 * np.spacing(abs(t) + 1.0))
+                if slope is None:
+                    slope = rates(t, y_new)
+                probe = float(ev.when(t + eps, y_new + eps * slope))
+                if _sign(probe - g) == -pre:
+                    self.armed[j] = False
+                    self.waiting_for[j] = -pre
         return y_new

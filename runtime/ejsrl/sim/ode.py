@@ -10,7 +10,8 @@ simulation step ``h`` per call of :meth:`OdeIntegrator.step`:
   read the state at ``t + h`` from its dense output.
 
 Events (:class:`EventDef`) are located on the method's own trajectory, their action runs
-at the located time, and the method restarts from the new state. Arrays passed in are
+at the located time (coinciding crossings fire together, once each, in list order), and
+the method restarts from the new state. Arrays passed in are
 never written to; every array returned is new, and is never modified afterwards.
 """
 
@@ -23,7 +24,7 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ._events import EventDef, EventTracker, ZenoError
+from ._events import EventDef, EventTracker, Hit, ZenoError
 from ._explicit import AdaptiveRK, make_fixed_step, rk_trial
 from ._implicit import ImplicitStepper
 from ._tableaus import TABLEAUS
@@ -166,6 +167,15 @@ class OdeIntegrator:
         self._k_last = k
         return StepResult(t, y, fired, stop)
 
+    def _record(self, hits: Sequence[Hit], fired: list[tuple[str, float]]) -> bool:
+        """Add the events that just fired to ``fired``; True if one of them stops the simulation."""
+        stop = False
+        for hit in hits:
+            ev = self.events[hit.index]
+            fired.append((ev.name, hit.t))
+            stop = stop or ev.stop
+        return stop
+
     def _check_h(self, h: float) -> None:
         if not h >= 0:
             raise ValueError(
@@ -196,15 +206,13 @@ class OdeIntegrator:
             def state_at(x: float, t0: float = t, y0: np.ndarray = y, k0: np.ndarray = k0) -> np.ndarray:
                 return step(f, t0, y0, x - t0, k0)
 
-            hit = tr.check(t, y, t_end, y1, state_at)
-            if hit is None:
+            hits = tr.check(t, y, t_end, y1, state_at)
+            if not hits:
                 t, y = t_end, y1
                 break
-            y = tr.fire(hit, f, t_end - t)
-            t = hit.t
-            ev = self.events[hit.index]
-            fired.append((ev.name, t))
-            if ev.stop:
+            y = tr.fire(hits, f, t_end - t)
+            t = hits[0].t
+            if self._record(hits, fired):
                 return self._finish(t, y, fired, True)
         return self._finish(t_end, y if h else y.copy(), fired, False)
 
@@ -236,15 +244,13 @@ class OdeIntegrator:
                 def state_at(x: float, t0: float = t, y0: np.ndarray = y, k0: np.ndarray = k) -> np.ndarray:
                     return rk_trial(f, tab, t0, y0, x - t0, k0)[0]
 
-                hit = tr.check(t, y, t1, y1, state_at)
-                if hit is not None:
-                    y = tr.fire(hit, f, t1 - t)
-                    t = hit.t
+                hits = tr.check(t, y, t1, y1, state_at)
+                if hits:
+                    y = tr.fire(hits, f, t1 - t)
+                    t = hits[0].t
                     rk.reset()
                     k = None
-                    ev = self.events[hit.index]
-                    fired.append((ev.name, t))
-                    if ev.stop:
+                    if self._record(hits, fired):
                         return self._finish(t, y, fired, True)
                     continue
             t, y, k = t1, y1, k1
@@ -271,14 +277,12 @@ class OdeIntegrator:
         while t < t_end:
             t1, y1 = imp.advance(t, t_end)
             if tr is not None:
-                hit = tr.check(t, y, t1, y1, imp.state_at)
-                if hit is not None:
-                    y = tr.fire(hit, f, t1 - t)
-                    t = hit.t
+                hits = tr.check(t, y, t1, y1, imp.state_at)
+                if hits:
+                    y = tr.fire(hits, f, t1 - t)
+                    t = hits[0].t
                     imp.restart(t, y)
-                    ev = self.events[hit.index]
-                    fired.append((ev.name, t))
-                    if ev.stop:
+                    if self._record(hits, fired):
                         return self._finish(t, y, fired, True)
                     continue
             t, y = t1, y1
