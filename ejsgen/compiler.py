@@ -436,17 +436,16 @@ class Compiler:
 
     # -- assets ------------------------------------------------------------------------------------------
     def asset(self, rel: str, path: Path_, what: str = "asset") -> str | None:
-        """Check that a file next to the spec exists; register it to copy; returns its relative path."""
-        p = Path(rel)
-        if p.is_absolute() or ".." in p.parts:
-            self.errors.append(SpecError(self.loc(path), f"the {what} '{rel}' must be a path inside the spec's folder"))
+        """Check a file inside the spec's folder (links followed; meshes read); register it to copy."""
+        from ejsgen._assets import checked_asset
+
+        try:
+            name, real = checked_asset(self.spec_dir, rel, self.loc(path), what, mesh=what == "mesh file")
+        except SpecError as err:
+            self.errors.append(err)
             return None
-        src = self.spec_dir / p
-        if not src.is_file():
-            self.errors.append(SpecError(self.loc(path), f"the {what} '{rel}' does not exist", "paths are relative to the spec's folder"))
-            return None
-        self.assets[p.as_posix()] = src
-        return p.as_posix()
+        self.assets[name] = real
+        return name
 
     # -- the whole spec -----------------------------------------------------------------------------------
     def compile(self) -> AppPlan:
@@ -480,7 +479,7 @@ class Compiler:
             independent=independent,
             methods=self.methods,
             view_lines=view_lines,
-            sim={"fps": sim.fps, "steps_per_display": sim.steps_per_display, "autoplay": sim.autoplay, "realtime": sim.realtime, "controls": sim.controls},
+            sim={"fps": sim.fps, "steps_per_display": sim.steps_per_display, "autoplay": sim.autoplay, "realtime": sim.realtime, "controls": sim.controls} | ({"panel_width": sim.panel_width} if sim.panel_width else {}),
             assets=sorted((src, rel) for rel, src in self.assets.items()),
             after_class=self.after_class,
             runtime_imports=self.runtime_imports,

@@ -148,9 +148,9 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
         (tmp / "requirements.txt").write_text(reqs, encoding="utf-8")
         shutil.copytree(runtime_dir(), tmp / "ejsrl", ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         for src, rel in plan.assets:
-            dest = tmp / rel
+            dest = _asset_dest(tmp, src, rel)
             dest.parent.mkdir(parents=True, exist_ok=True)
-            shutil.copy2(src, dest)
+            shutil.copy2(src, dest, follow_symlinks=False)
         if bundle:
             _write_bundle(plan, tmp, tmp / bundle_name)
         _replace_dir(tmp, out_dir)
@@ -158,6 +158,20 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return sorted(p for p in out_dir.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+
+
+def _asset_dest(folder: Path, src: Path, rel: str) -> Path:
+    """Where the asset ``src`` goes in ``folder``; refuses links and paths that leave the folder.
+
+    The compiler has already resolved every asset to a real file inside the spec's folder;
+    this is the last guard before anything is copied into an app or its ``.pyz``.
+    """
+    dest = folder / rel
+    if Path(src).is_symlink() or not Path(src).is_file():
+        raise EjsError(f"internal error: the asset '{rel}' ({src}) is not a regular file; please report it")
+    if ".." in Path(rel).parts or Path(rel).is_absolute() or not dest.resolve().is_relative_to(folder.resolve()):
+        raise EjsError(f"internal error: the asset '{rel}' would be written outside the app folder; please report it")
+    return dest
 
 
 def _write_bundle(plan: AppPlan, folder: Path, target: Path) -> None:

@@ -1,0 +1,95 @@
+"""Check the files a spec names (assets, mesh files) before they are copied into an app.
+
+A file is accepted only if its *real* path (every symbolic link followed) lies inside the
+spec's folder, so a link such as ``link.obj -> /etc/passwd`` is never copied into an app
+or its ``.pyz``. Every mesh file, and every asset with a mesh extension, is read with the
+runtime's own loader (``ejsrl.world.mesh.load_mesh``), so a file the app could not show
+is refused at build time, at the spec location that names it.
+"""
+
+from __future__ import annotations
+
+import functools
+import warnings
+from pathlib import Path, PurePosixPath
+
+from ejsgen.errors import Location, SpecError
+
+__all__ = ["checked_asset", "MESH_EXTENSIONS"]
+
+#: extensions read as meshes by the runtime (``ejsrl.world.mesh``)
+MESH_EXTENSIONS = ("obj", "stl", "ply", "glb", "gltf", "off", "dae", "3mf", "wrl", "wrz", "vrml")
+
+
+def checked_asset(spec_dir: Path, rel: str, where: Location, what: str = "asset", *, mesh: bool = False) -> tuple[str, Path]:
+    """Check the file ``rel`` named in the spec; returns (its posix relative path, its real path).
+
+    ``spec_dir``: the spec's folder; ``where``: the spec location of the name, for errors;
+    ``mesh``: the file must be a mesh the runtime can read (assets with a mesh extension
+    are read too). Raises ``SpecError`` when the path leaves the spec's folder (directly,
+    with ``..``, or through a symbolic link), does not name a regular file, or is a mesh
+    that cannot be read.
+    """
+    p = PurePosixPath(rel.replace("\\", "/"))
+    if p.is_absolute() or Path(rel).is_absolute() or ".." in p.parts:
+        raise SpecError(
+            where,
+            f"the {what} '{rel}' must be a path inside the spec's folder",
+            "copy the file next to the spec (or into a subfolder) and name it relative to the spec",
+        )
+    folder = spec_dir.resolve()
+    src = folder / p
+    if not src.exists() and not src.is_symlink():
+        raise SpecError(where, f"the {what} '{rel}' does not exist", "paths are relative to the spec's folder")
+    try:
+        real = src.resolve(strict=True)
+    except (OSError, RuntimeError):  # a dangling or looping link
+        raise SpecError(where, f"the {what} '{rel}' is a link to a file that does not exist") from None
+    if not real.is_relative_to(folder):
+        raise SpecError(
+            where,
+            f"the {what} '{rel}' is a link to a file outside the spec's folder",
+            "only files inside the spec's folder are copied into an app; copy the file there instead of linking to it",
+        )
+    if not real.is_file():
+        kind = "a folder" if real.is_dir() else "not a regular file"
+        raise SpecError(where, f"the {what} '{rel}' is {kind}", f"name a file{' (OBJ, STL, PLY, GLB/glTF, OFF or VRML97 .wrl)' if mesh else ''}")
+    if mesh or p.suffix.lower().lstrip(".") in MESH_EXTENSIONS:
+        _check_mesh(real, rel, where, what)
+    return p.as_posix(), real
+
+
+def _check_mesh(real: Path, rel: str, where: Location, what: str) -> None:
+    stat = real.stat()
+    problem = _mesh_problem(real, stat.st_mtime_ns, stat.st_size)
+    if problem:
+        raise SpecError(where, f"the {what} '{rel}' cannot be read: {problem}", "check that it opens in a mesh viewer, or export it again")
+
+
+@functools.lru_cache(maxsize=256)
+def _mesh_problem(real: Path, mtime_ns: int, size: int) -> str:
+    """Why the runtime cannot read the mesh at ``real`` ('' if it can); one read per file version."""
+    from ejsrl.world.mesh import MeshFormatError, load_mesh
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # skipped VRML nodes are the runtime's to report
+            load_mesh(real)
+    except MeshFormatError as exc:
+        return _reason(str(exc), real)
+    except (OSError, ValueError, MemoryError) as exc:
+        return str(exc) or type(exc).__name__
+    return ""
+
+
+def _reason(message: str, real: Path) -> str:
+    """The loader's message without its leading path (``path:`` or ``path:LINE:COL:``)."""
+    prefix = f"{real}:"
+    if not message.startswith(prefix):
+        return message
+    rest = message[len(prefix):]
+    head, sep, tail = rest.partition(": ")
+    parts = head.split(":")
+    if sep and len(parts) == 2 and all(x.isdigit() for x in parts):
+        return f"line {parts[0]}, column {parts[1]}: {tail}"
+    return rest.strip()
