@@ -14,7 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
-from ejsgen.errors import SpecError
+from ejsgen.errors import Location, SpecError
 from ejsgen.plan import Line, Src, py
 from ejsgen.validate import ViewItem
 from ejsgen.yamlload import Path_
@@ -88,8 +88,15 @@ class ViewCompiler:
             return None
         return Src(f"E.Dynamic(Model.{name}, {text!r})")
 
-    def interpolated(self, path: Path_, text: str, base: str, what: str) -> Any:
-        """A text with {expr} / {expr:fmt}: a constant if it has none, else a Dynamic f-string."""
+    def interpolated(self, path: Path_, text: str, base: str, what: str, *, markdown: bool = False, origin: Any = None) -> Any:
+        """A text with {expr} / {expr:fmt}: a constant if it has none, else a Dynamic f-string.
+
+        ``markdown``: the text is shown through the Markdown renderer (a ``label``); each
+        value is then passed through ``E.escaped`` so that what it holds (text typed by a
+        user, say) is shown as text and never read as Markdown or HTML; the author's own
+        text stays Markdown. ``origin``: where the text starts, when it is not the scalar at
+        ``path`` (a mapping key).
+        """
         try:
             parsed = list(string.Formatter().parse(text))
         except ValueError as exc:
@@ -97,7 +104,8 @@ class ViewCompiler:
             return text
         if all(f is None for _, f, _, _ in parsed):
             return text.replace("{{", "{").replace("}}", "}")
-        origin = self.c.doc.origins.get(path)
+        if origin is None:
+            origin = self.c.doc.origins.get(path)
         values: list[ast.expr] = []
         pos = 0
         for literal, field, spec, conv in parsed:
@@ -118,17 +126,63 @@ class ViewCompiler:
                 line = origin.line + before.count("\n")
                 col = (origin.col + len(before)) if "\n" not in before else len(before.rsplit("\n", 1)[1]) + (origin.col if origin.block else 1)
                 sub_origin = TextOrigin(line, col, False)
+            if spec and ("{" in spec or "}" in spec):
+                loc = Location(self.c.doc.file, sub_origin.line, sub_origin.col) if sub_origin else self.c.loc(path)
+                self.c.errors.append(SpecError(loc, f"a format inside a format is not supported in {what}: '{{{field}:{spec}}}'", "write the format out, e.g. {x:8.3f}"))
+                continue
             res = self._expr_with_origin(field, sub_origin, path, f"{{{field}}} in {what}")
             if res is None:
                 continue
-            fmt = None
-            if spec:
-                fmt = ast.JoinedStr([ast.Constant(spec)])
-            values.append(ast.FormattedValue(res, ord(conv) if conv else -1, fmt))
+            if markdown:
+                if conv:
+                    res = ast.Call(ast.Name({"r": "repr", "s": "str", "a": "ascii"}[conv]), [res], [])
+                args: list[ast.expr] = [res] + ([ast.Constant(spec)] if spec else [])
+                call = ast.Call(ast.Attribute(ast.Name("E"), "escaped"), args, [])
+                values.append(ast.FormattedValue(call, -1, None))
+            else:
+                fmt = ast.JoinedStr([ast.Constant(spec)]) if spec else None
+                values.append(ast.FormattedValue(res, ord(conv) if conv else -1, fmt))
         joined = ast.JoinedStr(values)
         name = self.c.method_name(base)
         self.c.add_method(name, "self", f"View: {what}.", [Line(f"return {ast.unparse(joined)}", self.c.loc(path))])
         return Src(f"E.Dynamic(Model.{name}, {text!r})")
+
+    def _unit_of(self, expr: Any) -> str | None:
+        """The declared unit of a plain variable (or element of an array variable) expression."""
+        if not isinstance(expr, str):
+            return None
+        try:
+            node = ast.parse(expr.strip(), mode="eval").body
+        except SyntaxError:
+            return None
+        if isinstance(node, ast.Subscript):
+            node = node.value
+        if not isinstance(node, ast.Name) or node.id not in self.c.var_decls:
+            return None
+        decl = self.c.var_decls[node.id].decl
+        unit = getattr(decl, "unit", None)
+        if unit is None and node.id == "t" and node.id in self.c.independents:
+            unit = "s"  # the independent variable t is time, in seconds, unless declared otherwise
+        return unit
+
+    def _axis_title(self, expr: Any) -> str:
+        """An x axis title: the expression and its unit, 't (s)'."""
+        if not isinstance(expr, str):
+            return ""
+        unit = self._unit_of(expr)
+        return f"{expr.strip()} ({unit})" if unit else expr.strip()
+
+    def _key_origin(self, path: Path_) -> Any:
+        """Where the text of the mapping key at ``path`` starts (past an opening quote)."""
+        from ejsgen.yamlload import TextOrigin
+
+        loc = self.c.doc.key_loc(path)
+        try:
+            line_text = self.c.spec_path.read_text(encoding="utf-8").splitlines()[loc.line - 1]
+            quoted = line_text[loc.col - 1] in "'\""
+        except (OSError, IndexError):
+            quoted = False
+        return TextOrigin(loc.line, loc.col + (1 if quoted else 0), False)
 
     def _expr_with_origin(self, text: str, origin: Any, path: Path_, what: str) -> ast.expr | None:
         from ejsgen._resolve import Snippet, parse_snippet, rewrite
@@ -298,12 +352,14 @@ class ViewCompiler:
         base = f"_view{n}"
         if kind == "folder":
             kids = _Children([self.element(ch, indent + 8) for ch in item.children])
-            return self.call("E.Folder", {"label": p.label, "expanded": p.expanded, "where": where, "children": kids}, indent)
+            label = self.interpolated(path + ("label",), p.label, f"{base}_label", "a folder's label")
+            return self.call("E.Folder", {"label": label, "expanded": p.expanded, "where": where, "children": kids}, indent)
         if kind == "tabs":
             pad = " " * indent
             lines = [f"{pad}E.Tabs(", f"{pad}    tabs=["]
-            for label, children in item.tabs:
-                lines.append(f"{pad}        ({label!r}, [")
+            for i, (label, children) in enumerate(item.tabs):
+                shown = self.interpolated(path + ("tabs", label), label, f"{base}_tab{i + 1}", "a tab's label", origin=self._key_origin(path + ("tabs", label)))
+                lines.append(f"{pad}        ({py(shown)}, [")
                 for ch in children:
                     lines.extend(self.element(ch, indent + 12))
                 lines.append(f"{pad}        ]),")
@@ -312,32 +368,46 @@ class ViewCompiler:
         if kind == "markdown":
             return self.call("E.Markdown", {"text": p.text, "where": where}, indent)
         if kind == "label":
-            return self.call("E.Label", {"text": self.interpolated(path + ("text",), p.text, f"{base}_text", "a label"), "where": where}, indent)
+            return self.call("E.Label", {"text": self.interpolated(path + ("text",), p.text, f"{base}_text", "a label", markdown=True), "where": where}, indent)
         if kind in ("slider", "number", "checkbox", "text", "dropdown"):
             return self.control(item, n, indent)
         if kind == "button":
             lines = c.code_lines(p.action, path + ("action",), f"the action of button '{p.label}'")
             name = c.add_method(c.method_name(f"_action_{_slug(p.label)}"), "self", f"Action of the button '{p.label}'.", lines)
-            return self.call("E.Button", {"label": p.label, "action": Src(f"Model.{name}"), "where": where}, indent)
+            label = self.interpolated(path + ("label",), p.label, f"{base}_label", f"the label of button '{p.label}'")
+            return self.call("E.Button", {"label": label, "action": Src(f"Model.{name}"), "where": where}, indent)
         if kind == "plot":
             x = self.number(p.x, path + ("x",), f"{base}_x", "the plot's x")
             series = []
             for i, s in enumerate(p.series):
                 spath = path + ("series", i)
                 y = self.number(s.y, spath + ("y",), f"{base}_y{i}", f"series {i + 1} of the plot")
-                label = s.label if s.label is not None else str(s.y)
+                if s.label is not None:
+                    label = self.interpolated(spath + ("label",), s.label, f"{base}_label{i}", f"the label of series {i + 1}")
+                else:
+                    label = str(s.y)
                 if s.color is not None:
                     self.color(s.color, spath + ("color",), f"{base}_c{i}")
-                series.append(Src("E.Series(" + ", ".join([f"y={py(y)}", f"label={label!r}", f"color={s.color!r}", f"where={self.c.where(spath)!r}"]) + ")"))
+                series.append(Src("E.Series(" + ", ".join([f"y={py(y)}", f"label={py(label)}", f"color={s.color!r}", f"where={self.c.where(spath)!r}"]) + ")"))
             if p.y_range is not None and (len(p.y_range) != 2 or p.y_range[0] >= p.y_range[1]):
                 c.errors.append(SpecError(c.loc(path + ("y_range",)), "y_range is [ymin, ymax] with ymin < ymax"))
             y_range = tuple(float(v) for v in p.y_range) if p.y_range else None
-            kw = {"title": p.title, "x": x, "series": series, "window": p.window, "max_points": p.max_points, "y_range": y_range, "where": where}
+            title = self.interpolated(path + ("title",), p.title, f"{base}_title", "the plot's title")
+            x_label = p.x_label if p.x_label is not None else self._axis_title(p.x)
+            y_units = {self._unit_of(s.y) for s in p.series}
+            y_label = p.y_label if p.y_label is not None else (y_units.pop() or "" if len(y_units) == 1 else "")
+            kw = {"title": title, "x": x, "series": series, "window": p.window, "max_points": p.max_points, "y_range": y_range}
+            if x_label:
+                kw["x_label"] = x_label
+            if y_label:
+                kw["y_label"] = y_label
+            kw["where"] = where
             return self.call("E.Plot", kw, indent)
         if kind == "image":
             src = self.dynamic(path + ("source",), f"{base}_source", "an image source", p.source)
             pts = self.dynamic(path + ("points",), f"{base}_points", "the image's points", p.points) if p.points is not None else None
-            return self.call("E.Image", {"source": src, "label": p.label or "", "points": pts, "where": where}, indent)
+            label = self.interpolated(path + ("label",), p.label or "", f"{base}_label", "the image's label")
+            return self.call("E.Image", {"source": src, "label": label, "points": pts, "where": where}, indent)
         if kind == "scene":
             kids = _Children([self.node3d(ch, indent + 8) for ch in item.children])
             return self.call("E.Scene", {"where": where, "children": kids}, indent)
@@ -362,7 +432,7 @@ class ViewCompiler:
         if p.on_change is not None:
             lines = c.code_lines(p.on_change, path + ("on_change",), f"the on_change of the {kind} of {p.bind}")
             on_change = Src("Model." + c.add_method(c.method_name(f"_on_change_{_slug(p.bind)}"), "self", f"Runs after the user changes {p.bind}.", lines))
-        kw: dict[str, Any] = {"bind": p.bind, "get": Src(f"Model.{getter}"), "set": Src(f"Model.{setter}"), "label": p.label if p.label is not None else p.bind, "on_change": on_change, "vtype": vtype}
+        kw: dict[str, Any] = {"bind": p.bind, "get": Src(f"Model.{getter}"), "set": Src(f"Model.{setter}"), "label": self.interpolated(path + ("label",), p.label, f"_view{n}_label", f"the label of the {kind} of {p.bind}") if p.label is not None else p.bind, "on_change": on_change, "vtype": vtype}
         decl = c.var_decls.get(var)
         if kind == "slider":
             if p.min >= p.max:

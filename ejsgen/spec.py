@@ -318,6 +318,10 @@ class PlotEl(Strict):
     """Most points kept per curve."""
     y_range: list[Number] | None = None
     """Fixed [ymin, ymax] (default: automatic)."""
+    x_label: str | None = None
+    """Title of the x axis (default: the x expression and its variable's unit, 't (s)')."""
+    y_label: str | None = None
+    """Title of the y axis (default: the unit the series' variables share, if any)."""
 
 
 class ImageEl(Strict):
@@ -545,6 +549,8 @@ class Simulation(Strict):
     """Pace the independent variable to the wall clock."""
     controls: bool = True
     """Show the play/pause/step/reset bar."""
+    panel_width: int | None = Field(default=None, ge=200, le=1200)
+    """Width of the control panel in pixels (default: the browser's choice, about 320)."""
 
 
 class Spec(Strict):

@@ -36,6 +36,8 @@ from ejsrl.view.elements import (
     Slider,
     Tabs,
     Text,
+    is_dynamic,
+    keep_spaces,
 )
 
 __all__ = ["Panel", "ControlBinding", "USER_HOLD_SECONDS"]
@@ -59,6 +61,20 @@ def _finite(x: Any) -> bool:
 _UNSET = object()
 
 
+class TextBinding:
+    """A text property that may change at run time (a label with ``{expr}``) and its setter.
+
+    ``shown`` is the text last sent; :meth:`Panel.refresh` calls ``show(text)`` only when
+    the model's value makes a different one.
+    """
+
+    def __init__(self, prop: Any, where: str, show: Callable[[str], None], shown: str) -> None:
+        self.prop = prop
+        self.where = where
+        self.show = show
+        self.shown = shown
+
+
 class ControlBinding:
     """One control and its viser handle.
 
@@ -77,6 +93,17 @@ class ControlBinding:
         #: when the model's value moves away from it, never just because the browser's
         #: in-progress text differs (which raced with typing on a loaded machine)
         self.last: Any = _UNSET
+
+
+def _key(label: Any) -> str:
+    """How a label is looked up (tests, scripted input): its spec text, ``{expr}`` and all."""
+    return label.source if isinstance(label, Dynamic) else ("" if label is None else str(label))
+
+
+def _set_tab_label(group: Any, index: int, text: str) -> None:
+    labels = list(group._tab_labels)
+    labels[index] = text
+    group._tab_labels = tuple(labels)
 
 
 def _same_value(a: Any, b: Any) -> bool:
@@ -142,6 +169,9 @@ class Panel:
         self.notify = notify
         self.controls: list[ControlBinding] = []
         self.labels: list[tuple[Label, Any]] = []
+        #: the labels of controls, buttons, folders, tabs, plots and images that hold {expr}
+        self.texts: list[TextBinding] = []
+        self._label_shown: dict[int, str] = {}
         self.plots: list[PlotBinding] = []
         self.images: list[ImageBinding] = []
         self.buttons: dict[str, Any] = {}
@@ -164,13 +194,16 @@ class Panel:
         meta = getattr(app, "meta", None)
         title = getattr(meta, "title", "") or "ejsgen simulation"
         gui.set_panel_label(title)
+        width = getattr(getattr(app, "sim", None), "panel_width", None)
+        if width:
+            gui.main_panel.set_width(float(width))
         self.error_box = gui.add_html("", visible=False)
         if getattr(getattr(app, "sim", None), "controls", True):
             self._build_controls_bar()
         description = getattr(meta, "description", "") or ""
         author = getattr(meta, "author", "") or ""
         if description or author:
-            with gui.add_folder("About", expand_by_default=False):
+            with gui.add_folder("About", expand_by_default=True):
                 text = description
                 if author:
                     text += f"\n\n*Author: {author}*"
@@ -207,17 +240,21 @@ class Panel:
         for el in elements:
             try:
                 if isinstance(el, Folder):
-                    with gui.add_folder(el.label, expand_by_default=el.expanded):
+                    folder = gui.add_folder(self._text(el.label, el.where), expand_by_default=el.expanded)
+                    self._track(el.label, el.where, folder, "label")
+                    with folder:
                         self._build_elements(el.children)
                 elif isinstance(el, Tabs):
                     group = gui.add_tab_group()
-                    for label, children in el.tabs:
-                        with group.add_tab(label):
+                    for i, (label, children) in enumerate(el.tabs):
+                        with group.add_tab(self._text(label, el.where)):
                             self._build_elements(children)
+                        if is_dynamic(label):
+                            self.texts.append(TextBinding(label, el.where, lambda t, g=group, i=i: _set_tab_label(g, i, t), self._text(label, el.where)))
                 elif isinstance(el, Markdown):
                     gui.add_markdown(el.text)
                 elif isinstance(el, Label):
-                    handle = gui.add_markdown("")
+                    handle = gui.add_markdown("" if is_dynamic(el.text) else keep_spaces(str(el.text)))
                     self.labels.append((el, handle))
                 elif isinstance(el, Control):
                     self._build_control(el)
@@ -225,9 +262,18 @@ class Panel:
                     self._build_button(el)
                 elif isinstance(el, Plot):
                     x_label = getattr(el.x, "source", "") or self._time_name or "x"
-                    self.plots.append(PlotBinding(gui, el, x_label=x_label))
+                    labels = [self._text(s.label, s.where or el.where) for s in el.series]
+                    binding = PlotBinding(gui, el, x_label=x_label, title=self._text(el.title, el.where), labels=labels)
+                    self.plots.append(binding)
+                    if is_dynamic(el.title):
+                        self.texts.append(TextBinding(el.title, el.where, binding.set_title, binding.title))
+                    for i, s in enumerate(el.series):
+                        if is_dynamic(s.label):
+                            self.texts.append(TextBinding(s.label, s.where or el.where, lambda t, b=binding, i=i: b.set_label(i, t), labels[i]))
                 elif isinstance(el, Image):
-                    self.images.append(ImageBinding(gui, el))
+                    binding = ImageBinding(gui, el, label=self._text(el.label, el.where))
+                    self.images.append(binding)
+                    self._track(el.label, el.where, binding.handle, "label")
                 elif isinstance(el, Scene):
                     pass  # mirrored from the world by the scene mirror
                 else:
@@ -236,6 +282,19 @@ class Panel:
                 log.exception("ejsrl.view: could not build %s at %s", type(el).__name__, el.where)
                 gui.add_markdown(f"*Could not show {type(el).__name__} ({el.where}): {exc}*")
 
+    def _text(self, prop: Any, where: str) -> str:
+        """The current text of a label property (constant, or ``Dynamic`` read now)."""
+        if not is_dynamic(prop):
+            return "" if prop is None else str(prop)
+        with self.app.lock:
+            value = self.app.safe_value(prop, where)
+        return "" if value is None else str(value)
+
+    def _track(self, prop: Any, where: str, handle: Any, attr: str) -> None:
+        """Keep ``handle.<attr>`` showing ``prop`` if it changes at run time."""
+        if is_dynamic(prop):
+            self.texts.append(TextBinding(prop, where, lambda t: setattr(handle, attr, t), str(getattr(handle, attr))))
+
     def _initial(self, control: Control) -> Any:
         with self.app.lock:
             value = self.app.safe_value(Dynamic(control.get, control.bind), control.where)
@@ -243,9 +302,9 @@ class Panel:
 
     def _build_control(self, c: Control) -> None:
         gui = self.gui
-        label = c.label or c.bind
+        label = self._text(c.label, c.where) or c.bind
         shown = self._initial(c)
-        hint = f"{c.bind}" if c.label and c.label != c.bind else None
+        hint = f"{c.bind}" if label != c.bind else None
         if isinstance(c, Slider):
             is_int = c.vtype == "int"
             lo, hi = float(c.min), float(c.max)
@@ -284,12 +343,14 @@ class Panel:
             handle = gui.add_text(label, "" if shown is None else str(shown), hint=hint)
         binding = ControlBinding(c, handle, _display_fn(c))
         self.controls.append(binding)
-        self.handles_by_label[label] = handle
+        self.handles_by_label[_key(c.label) or c.bind] = handle
+        self._track(c.label, c.where, handle, "label")
         handle.on_update(lambda event, b=binding: self._on_user_change(b, event))
 
     def _build_button(self, b: Button) -> None:
-        handle = self.gui.add_button(b.label)
-        self.buttons[b.label] = handle
+        handle = self.gui.add_button(self._text(b.label, b.where))
+        self.buttons[_key(b.label)] = handle
+        self._track(b.label, b.where, handle, "label")
 
         @handle.on_click
         def _(_e: Any) -> None:
@@ -338,9 +399,19 @@ class Panel:
         self._show_readout()
         now = time.monotonic()
         for label, handle in self.labels:
+            if not is_dynamic(label.text):
+                continue
             text = app.safe_value(label.text, label.where)
             if text is not None:
-                handle.content = str(text)
+                content = keep_spaces(str(text))
+                if self._label_shown.get(id(handle)) != content:
+                    handle.content = content
+                    self._label_shown[id(handle)] = content
+        for t in self.texts:
+            value = app.safe_value(t.prop, t.where)
+            if value is not None and str(value) != t.shown:
+                t.shown = str(value)
+                t.show(t.shown)
         for b in self.controls:
             if now - b.user_time < USER_HOLD_SECONDS:
                 continue

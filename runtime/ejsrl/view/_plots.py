@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from ejsrl.view.elements import Image, Plot
+from ejsrl.view.elements import Image, Plot, escape_markdown
 from ejsrl.world.colors import to_rgb
 
 __all__ = ["PlotBuffer", "PlotBinding", "ImageBinding", "prepare_image", "PALETTE"]
@@ -92,32 +92,89 @@ class PlotBuffer:
         return (self._x[s:e].copy(), *(self._y[i, s:e].copy() for i in range(self.n_series)))
 
 
-class PlotBinding:
-    """One ``Plot`` element shown as a viser uPlot chart."""
+def _value_text(v: float) -> str:
+    return f"{v:.4g}".replace("-", "\u2212")
 
-    def __init__(self, gui: Any, plot: Plot, *, x_label: str = "", max_rate: float = 15.0) -> None:
+
+class PlotBinding:
+    """One ``Plot`` element shown as a viser uPlot chart, with a line of current values below.
+
+    The x axis is labelled with ``plot.x_label`` (else ``x_label``, the x expression), the
+    y axis with ``plot.y_label``. uPlot's own legend shows values only under the mouse
+    (``--`` otherwise), so the chart's legend is replaced by a Markdown line that shows
+    each series' colour, label and latest value, and x's latest value.
+    ``title`` / ``labels``: the title and series labels as shown now (they may hold
+    ``{expr}``; :meth:`set_title` and :meth:`set_label` change them).
+    """
+
+    def __init__(
+        self,
+        gui: Any,
+        plot: Plot,
+        *,
+        x_label: str = "",
+        title: str | None = None,
+        labels: list[str] | None = None,
+        max_rate: float = 15.0,
+    ) -> None:
         self.plot = plot
         self.buffer = PlotBuffer(len(plot.series), window=plot.window, max_points=plot.max_points)
         self.max_rate = max_rate
         self._sent_rev = -1
         self._last_push = 0.0
-        series = [{"label": x_label or "x"}]
+        self.title = str(plot.title) if title is None else title
+        self.labels = [str(s.label) for s in plot.series] if labels is None else list(labels)
+        self.x_name = x_label or "x"
+        self.colors = [_css(s.color, i) for i, s in enumerate(plot.series)]
+        series = [{"label": self.x_name}]
         for i, s in enumerate(plot.series):
-            series.append({"label": s.label or f"y{i + 1}", "stroke": _css(s.color, i), "width": 2})
+            series.append({"label": self.labels[i] or f"y{i + 1}", "stroke": self.colors[i], "width": 2})
         scales: dict[str, Any] = {"x": {"time": False, "auto": True}}
         if plot.y_range is not None:
             lo, hi = (float(v) for v in plot.y_range)
             scales["y"] = {"auto": False, "range": [lo, hi]}
         else:
             scales["y"] = {"auto": True}
+        x_axis = getattr(plot, "x_label", "") or self.x_name
+        y_axis = getattr(plot, "y_label", "") or None
         empty = np.zeros(0)
         self.handle = gui.add_uplot(
             data=(empty, *(empty for _ in plot.series)),
             series=tuple(series),
-            title=plot.title or None,
+            title=self.title or None,
             scales=scales,
+            # room for tick labels such as "-0.0025" on the left and a last x tick on the right
+            axes=({"label": x_axis, "size": 40, "labelSize": 18}, {"label": y_axis, "size": 58, "labelSize": 18 if y_axis else 0}),
+            legend={"show": False},
+            padding=(8, 28, 0, 4),
             aspect=1.6,
         )
+        self.values = gui.add_markdown(self._values_text())
+
+    def _values_text(self) -> str:
+        """The legend: colour, label and latest value of each series, then x's value."""
+        n = len(self.buffer)
+        last = [col[-1] for col in self.buffer.data()] if n else None
+        parts = []
+        for i, label in enumerate(self.labels):
+            name = escape_markdown(label or f"y{i + 1}")
+            value = f" = {_value_text(last[i + 1])}" if last is not None else ""
+            parts.append(f'<span style="color:{self.colors[i]}">&#9632;</span>&nbsp;{name}{value}')
+        x = f" &nbsp;at {escape_markdown(self.x_name)} = {_value_text(last[0])}" if last is not None else ""
+        return " &nbsp; ".join(parts) + x
+
+    def set_title(self, text: str) -> None:
+        """Show a new title (a title with ``{expr}`` whose value changed)."""
+        self.title = text
+        self.handle.title = text or None
+
+    def set_label(self, index: int, text: str) -> None:
+        """Show a new label for series ``index`` (0-based)."""
+        self.labels[index] = text
+        series = [dict(s) for s in self.handle.series]
+        series[index + 1]["label"] = text or f"y{index + 1}"
+        self.handle.series = tuple(series)
+        self.values.content = self._values_text()
 
     def append(self, x: Any, ys: list[Any]) -> None:
         """Record this frame's point (None or non-numeric values skip the frame)."""
@@ -136,6 +193,9 @@ class PlotBinding:
         if not force and now - self._last_push < 1.0 / self.max_rate:
             return False
         self.handle.data = self.buffer.data()
+        text = self._values_text()
+        if text != self.values.content:
+            self.values.content = text
         self._sent_rev = self.buffer.rev
         self._last_push = now
         return True
@@ -187,7 +247,7 @@ def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
 class ImageBinding:
     """One ``Image`` element: sends the picture only when the source or the points changed."""
 
-    def __init__(self, gui: Any, image: Image, *, max_rate: float = 20.0) -> None:
+    def __init__(self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = 20.0) -> None:
         self.image = image
         self.max_rate = max_rate
         self._last_src: np.ndarray | None = None
@@ -195,7 +255,8 @@ class ImageBinding:
         self._last_push = 0.0
         self.pushes = 0
         placeholder = np.full((2, 2, 3), 40, dtype=np.uint8)
-        self.handle = gui.add_image(placeholder, label=image.label or None, format="jpeg", jpeg_quality=85)
+        label = str(image.label or "") if label is None else label
+        self.handle = gui.add_image(placeholder, label=label or None, format="jpeg", jpeg_quality=85)
 
     def update(self, src: Any, pts: Any) -> bool:
         """Send the image if it changed (at most ``max_rate`` a second); True if sent."""

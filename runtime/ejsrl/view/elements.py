@@ -11,14 +11,21 @@ error its expressions raise.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
+
+import numpy as np
 
 __all__ = [
     "Dynamic",
     "is_dynamic",
     "value_of",
+    "format_value",
+    "escape_markdown",
+    "escaped",
+    "keep_spaces",
     "Element",
     "Folder",
     "Tabs",
@@ -69,6 +76,82 @@ def value_of(prop: Any, model: Any) -> Any:
     return prop(model) if isinstance(prop, Dynamic) else prop
 
 
+# -- text shown in labels --------------------------------------------------------------
+
+
+def format_value(value: Any, spec: str = "") -> str:
+    """``format(value, spec)``, as ``{value:spec}`` in an f-string, extended to arrays.
+
+    An array (or a list of numbers) is formatted element by element with ``spec``: a
+    vector as ``[a b c]``, a matrix as one row per line with its columns aligned
+    (right-justified), so that ``{T:+.3f}`` shows a 4x4 pose as a readable block.
+    """
+    if isinstance(value, (list, tuple)) and spec:
+        try:
+            value = np.asarray(value, dtype=float)
+        except (TypeError, ValueError):
+            return format(value, spec)
+    if isinstance(value, np.ndarray) and value.ndim in (1, 2) and value.dtype.kind in "biuf":
+        if not spec:
+            spec = "g" if value.dtype.kind == "f" else "d"
+        cells = [[format(x.item(), spec) for x in row] for row in np.atleast_2d(value)]
+        width = max((len(c) for row in cells for c in row), default=0)
+        rows = ["[" + " ".join(c.rjust(width) for c in row) + "]" for row in cells]
+        if value.ndim == 1:
+            return rows[0]
+        return "\n".join(rows)
+    return format(value, spec)
+
+
+_MD_SPECIAL = re.compile(r"[^\w\s\u00a0-\uffff]|_", re.ASCII)
+
+
+def escape_markdown(text: str) -> str:
+    """``text`` made inert for the Markdown (and raw HTML) renderer of the control panel.
+
+    Every ASCII character other than letters, digits and whitespace becomes a numeric
+    character reference (``<`` -> ``&#60;``), so no tag, entity, emphasis, link, image,
+    list, heading or code span can start inside it; the renderer shows the characters
+    themselves. Spaces and line breaks are left for :func:`keep_spaces`.
+    """
+    return _MD_SPECIAL.sub(lambda m: f"&#{ord(m.group())};", text)
+
+
+#: a matrix value is shown as one block: its rows one under the other, columns aligned
+_BLOCK = '<span style="display:inline-block;vertical-align:middle;font-family:monospace;white-space:pre">'
+
+
+def escaped(value: Any, spec: str = "") -> str:
+    """A value interpolated into a label: formatted (:func:`format_value`), then escaped.
+
+    The generated code wraps every ``{expr}`` of a ``label`` in this, so that a value --
+    text a user typed into a field, say -- is shown as text to every client, never run
+    as HTML. A value of several lines (a matrix) is shown as one aligned block.
+    """
+    text = escape_markdown(format_value(value, spec))
+    if "\n" in text:
+        return _BLOCK + text.replace(" ", "&#32;").replace("\n", "<br>") + "</span>"
+    return text
+
+
+_RUN = re.compile(r" {2,}")
+
+
+def keep_spaces(text: str) -> str:
+    """Markdown that shows ``text``'s spaces and line breaks as written.
+
+    Runs of spaces and the spaces that start a line become non-breaking spaces (the
+    renderer would collapse them, and would show a line indented by four as a code
+    box); a line break becomes ``<br>``.
+    """
+    lines = []
+    for line in text.replace("\t", "    ").split("\n"):
+        body = line.lstrip(" ")
+        lead = "&nbsp;" * (len(line) - len(body))
+        lines.append(lead + _RUN.sub(lambda m: " " + "&nbsp;" * (len(m.group()) - 1), body))
+    return "<br>".join(lines)
+
+
 @dataclass
 class Element:
     """Base of every view element; ``where`` is its spec location."""
@@ -81,18 +164,18 @@ class Element:
 
 @dataclass
 class Folder(Element):
-    """A collapsible group of GUI elements."""
+    """A collapsible group of GUI elements; ``label`` is text or a ``Dynamic`` giving text."""
 
-    label: str
+    label: Any
     children: list[Element]
     expanded: bool = True
 
 
 @dataclass
 class Tabs(Element):
-    """Tabs: ``tabs`` is a list of ``(tab label, children)``."""
+    """Tabs: ``tabs`` is a list of ``(tab label, children)``; a label may be a ``Dynamic``."""
 
-    tabs: list[tuple[str, list[Element]]]
+    tabs: list[tuple[Any, list[Element]]]
 
 
 @dataclass
@@ -119,13 +202,13 @@ class Control(Element):
     ``bind``: the spec's target text (``"L"`` or ``"q[2]"``); ``get(model)`` reads it and
     ``set(model, value)`` writes it; ``on_change(model)`` runs after a change made in the UI
     (then the app runs the fixed relations). ``vtype`` is the variable's value type:
-    ``"float"``, ``"int"``, ``"bool"`` or ``"str"``.
+    ``"float"``, ``"int"``, ``"bool"`` or ``"str"``. ``label``: text or a ``Dynamic``.
     """
 
     bind: str
     get: Callable[[Any], Any]
     set: Callable[[Any, Any], None]
-    label: str = ""
+    label: Any = ""
     on_change: Callable[[Any], None] | None = None
     vtype: str = "float"
 
@@ -167,9 +250,9 @@ class Dropdown(Control):
 
 @dataclass
 class Button(Element):
-    """A button running ``action(model)`` (then the fixed relations)."""
+    """A button running ``action(model)`` (then the fixed relations); ``label`` may be a ``Dynamic``."""
 
-    label: str
+    label: Any
     action: Callable[[Any], None]
 
 
@@ -181,7 +264,7 @@ class Series(Element):
     """One curve of a plot: ``y`` is a ``Dynamic`` giving a number."""
 
     y: Any
-    label: str = ""
+    label: Any = ""
     color: Any = None
 
 
@@ -190,15 +273,19 @@ class Plot(Element):
     """A line plot of ``series`` against the numeric ``x`` (a ``Dynamic``), one point a frame.
 
     ``window``: the x-span kept (None keeps everything up to ``max_points``);
-    ``y_range``: fixed ``(ymin, ymax)`` or None for automatic.
+    ``y_range``: fixed ``(ymin, ymax)`` or None for automatic. ``title`` and each series'
+    ``label`` are constant text or a ``Dynamic`` (a text with ``{expr}``).
     """
 
-    title: str
+    title: Any
     x: Any
     series: list[Series]
     window: float | None = None
     max_points: int = 2000
     y_range: tuple[float, float] | None = None
+    #: axis titles ("t (s)"); empty: the x expression, and no y title
+    x_label: str = ""
+    y_label: str = ""
 
 
 @dataclass
@@ -206,7 +293,7 @@ class Image(Element):
     """An image: ``source`` gives an (H, W) or (H, W, 3) uint8 array; ``points`` (N, 2) (x, y)."""
 
     source: Any
-    label: str = ""
+    label: Any = ""
     points: Any = None
 
 
