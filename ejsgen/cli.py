@@ -23,7 +23,7 @@ __all__ = ["main", "load_plan", "build"]
 STARTER = '''\
 # {title}: a starter spec made by `ejsgen new`. Build and serve it with
 #   ejsgen run {file}
-# The language is described in the ejsgen README and specs/reference.md.
+# The language: `ejsgen docs` (specs/language.md); a step-by-step tutorial: `ejsgen docs tutorial`.
 ejs: 1
 title: {title}
 description: |
@@ -164,6 +164,9 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("spec", metavar="SPEC")
     r.add_argument("-o", "--output", metavar="DIR", help="keep the built app in this folder")
     sub.add_parser("schema", help="print the JSON Schema of the spec language")
+    from ejsgen._docs import add_parser as _add_docs_parser
+
+    _add_docs_parser(sub)
     return p
 
 
@@ -189,6 +192,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _cmd_run(args, app_args)
         if args.command == "schema":
             return _cmd_schema(args)
+        if args.command == "docs":
+            from ejsgen._docs import cmd_docs
+
+            return cmd_docs(args)
     except EjsError as exc:
         print(exc, file=sys.stderr)
         return 1
