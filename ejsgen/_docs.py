@@ -183,7 +183,7 @@ def _yaml_value(value: Any) -> str:
         return "[" + ", ".join(_yaml_value(v) for v in value) + "]"
     if isinstance(value, dict):
         return "{}" if not value else str(value)
-    if hasattr(value, "model_fields"):  # a pydantic model: its own table lists its defaults
+    if hasattr(type(value), "model_fields"):  # a pydantic model: its own table lists its defaults
         return "(see its table)"
     return str(value)
 
