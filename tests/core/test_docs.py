@@ -466,6 +466,19 @@ def test_every_link_inside_the_documents_leads_to_a_heading() -> None:
             assert anchor in anchors[target_doc or doc.name], f"{doc.name} links to #{anchor}, which is no heading of {target_doc or doc.name}"
 
 
+def test_the_wheel_ships_the_documents_for_ejsgen_docs() -> None:
+    import tomllib
+
+    from ejsgen._docs import DOC_FILES, docs_dir
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert config["package-dir"]["ejsgen.specs"] == "specs" and "ejsgen.specs" in config["packages"]
+    assert "*.md" in config["package-data"]["ejsgen.specs"]
+    assert docs_dir() is not None
+    for name in DOC_FILES.values():
+        assert (docs_dir() / name).is_file()
+
+
 def test_readme_points_to_the_shipped_reference_and_tutorial() -> None:
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     assert "specs/language.md" in readme and "specs/tutorial.md" in readme
