@@ -19,7 +19,8 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from ejsgen._suggest import did_you_mean
-from ejsgen.errors import Location, SpecError
+from ejsgen.errors import CodeSyntaxError, Location, SpecError, UnknownNameError
+from ejsgen.validate import MATH_NAMES
 from ejsgen.yamlload import TextOrigin
 
 __all__ = ["Names", "Snippet", "parse_snippet", "rewrite", "BUILTIN_NAMES"]
@@ -105,7 +106,7 @@ def parse_snippet(snippet: Snippet) -> ast.AST:
             msg += " (code in a YAML block starts at the block's indentation)"
         if msg == "unexpected EOF while parsing" or "was never closed" in msg:
             msg = msg.replace("'('", "a parenthesis") if snippet.mode == "eval" else msg
-        raise SpecError(snippet.location(lineno, col), f"Python syntax error in {snippet.what}: {msg}") from None
+        raise CodeSyntaxError(snippet.location(lineno, col), f"Python syntax error in {snippet.what}: {msg}") from None
     if snippet.mode == "eval":
         for node in ast.walk(tree):
             if getattr(node, "lineno", None) == 1:
@@ -113,6 +114,13 @@ def parse_snippet(snippet: Snippet) -> ast.AST:
             if getattr(node, "end_lineno", None) == 1 and node.end_col_offset is not None:  # type: ignore[attr-defined]
                 node.end_col_offset = max(node.end_col_offset - 1, 0)  # type: ignore[attr-defined]
     return tree
+
+
+_MATH_CONSTANTS = frozenset({"pi", "e", "inf"})
+#: builtins that code uses without calling them (``dtype=float``)
+_VALUE_BUILTINS = frozenset({"float", "int", "bool", "complex", "str", "list", "tuple", "dict", "set"})
+#: words that YAML 1.1 reads as booleans; in specs they are text, and in code they are names
+_YAML11_WORDS = ("yes", "no", "on", "off")
 
 
 # -- scope analysis ---------------------------------------------------------------------------------
@@ -181,7 +189,7 @@ class _Rewriter(ast.NodeTransformer):
         self.snippet = snippet
         self.scopes: list[set[str]] = [block_locals]
         self.errors: list[SpecError] = []
-        self.known = names.known()
+        self._called: set[int] = set()
 
     # scope helpers
     def _is_local(self, name: str) -> bool:
@@ -191,8 +199,8 @@ class _Rewriter(ast.NodeTransformer):
                 return True
         return False
 
-    def _err(self, node: ast.AST, message: str, hint: str = "") -> None:
-        self.errors.append(SpecError(self.snippet.location(node.lineno, node.col_offset), message, hint))  # type: ignore[attr-defined]
+    def _err(self, node: ast.AST, message: str, hint: str = "", *, kind: type[SpecError] = SpecError) -> None:
+        self.errors.append(kind(self.snippet.location(node.lineno, node.col_offset), message, hint))  # type: ignore[attr-defined]
 
     def _model_attr(self, node: ast.Name) -> ast.Attribute:
         attr = ast.Attribute(value=ast.Name(id="self", ctx=ast.Load()), attr=node.id, ctx=node.ctx)
@@ -225,8 +233,41 @@ class _Rewriter(ast.NodeTransformer):
         if name in ("eval", "exec", "compile", "__import__", "globals", "locals", "vars", "open", "input", "breakpoint"):
             self._err(node, f"'{name}' is not available in spec code")
             return node
-        self._err(node, f"unknown name '{name}'", did_you_mean(name, self.known | set().union(*self.scopes)))
+        self._err(node, f"unknown name '{name}'", self._suggest(name, called=id(node) in self._called), kind=UnknownNameError)
         return node
+
+    def _suggest(self, name: str, *, called: bool) -> str:
+        """The closest name that fits where ``name`` stands, the spec's own names first.
+
+        A called name is looked for among functions, any other among values; the spec's
+        variables, functions and locals come before the prelude and imports, and Python's
+        builtins (``range``, ``round``...) are suggested last, only when very close.
+        """
+        lower = name.lower()
+        if lower in _YAML11_WORDS:
+            value = "True" if lower in ("yes", "on") else "False"
+            return f"did you mean {value.lower()} ({value} in code)? in specs only true and false are booleans; yes, no, on and off are text"
+        n = self.names
+        local = set().union(*self.scopes)
+        math_functions = set(MATH_NAMES) - _MATH_CONSTANTS
+        if called:
+            tiers = [(n.functions | n.extra | local, 0.6), (n.controls | n.globals, 0.6), (set(BUILTIN_NAMES), 0.8)]
+        else:
+            tiers = [
+                (n.variables | local, 0.6),
+                (n.globals - math_functions, 0.6),
+                (n.functions | n.extra | n.controls | math_functions | (_VALUE_BUILTINS & BUILTIN_NAMES), 0.8),
+            ]
+        for candidates, cutoff in tiers:
+            hint = did_you_mean(name, candidates, cutoff=cutoff)
+            if hint:
+                return hint
+        return ""
+
+    def visit_Call(self, node: ast.Call) -> ast.AST:
+        if isinstance(node.func, ast.Name):
+            self._called.add(id(node.func))
+        return self.generic_visit(node)
 
     def _shadowing(self, name: str) -> bool:
         """A parameter/comprehension/lambda scope (not the block) binds ``name``."""

@@ -281,6 +281,9 @@ class ViewCompiler:
         if isinstance(value, str):
             if is_color_literal(value):
                 return value
+            if value.startswith("#"):
+                self.c.errors.append(SpecError(self.c.loc(path), f"'{value}' is not a colour: '#' must be followed by six hex digits (0-9, a-f)", 'write it like "#3366aa", in quotes'))
+                return None
             if re.fullmatch(r"#?[0-9a-fA-F]{3,8}", value) or (value.isalpha() and value.islower() and value not in self.c.names.variables and value not in self.c.names.functions):
                 from ejsrl.world.colors import CSS_COLORS
 

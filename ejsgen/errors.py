@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["EjsError", "SpecError", "SpecErrors", "Location"]
+__all__ = ["EjsError", "SpecError", "SpecErrors", "Location", "CodeSyntaxError", "UnknownNameError"]
 
 
 @dataclass(frozen=True)
@@ -39,9 +39,24 @@ class SpecError(EjsError):
         return text
 
 
+class CodeSyntaxError(SpecError):
+    """A Python syntax error in a code block or expression of the spec."""
+
+
+class UnknownNameError(SpecError):
+    """A name in spec code that no rule of the language resolves."""
+
+
 class SpecErrors(EjsError):
-    """Several problems in one spec, in file order."""
+    """Several problems in one spec, in file order, Python syntax errors first.
+
+    Code that cannot be parsed cannot be checked, and the functions it defines are unknown
+    everywhere else; so when there is a syntax error, unknown-name errors (likely its echoes)
+    are left out, and the syntax errors come before every other problem.
+    """
 
     def __init__(self, errors: list[SpecError]) -> None:
-        self.errors = sorted(errors, key=lambda e: (e.where.file, e.where.line, e.where.col))
+        if any(isinstance(e, CodeSyntaxError) for e in errors):
+            errors = [e for e in errors if not isinstance(e, UnknownNameError)]
+        self.errors = sorted(errors, key=lambda e: (not isinstance(e, CodeSyntaxError), e.where.file, e.where.line, e.where.col))
         super().__init__("\n".join(e.format() for e in self.errors))

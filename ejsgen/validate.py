@@ -245,6 +245,9 @@ def _view_items(doc: Document, items: Any, path: Path_, errors: list[SpecError],
     out: list[ViewItem] = []
     for i, item in enumerate(items):
         ipath = path + (i,)
+        if isinstance(item, dict) and len(item) > 1 and next(iter(item)) in kinds:
+            errors.append(_misplaced_key(doc, item, ipath, kinds))
+            continue
         if not isinstance(item, dict) or len(item) != 1:
             errors.append(
                 SpecError(doc.loc(ipath), f"each {where} is a one-key mapping 'kind: {{properties}}'", f"kinds: {', '.join(kinds)}")
@@ -279,6 +282,19 @@ def _view_items(doc: Document, items: Any, path: Path_, errors: list[SpecError],
             vi.children = _view_items(doc, model.children, kpath + ("children",), errors, scene=True)
         out.append(vi)
     return out
+
+
+def _misplaced_key(doc: Document, item: dict[str, Any], ipath: Path_, kinds: dict[str, Any]) -> SpecError:
+    """A '- ' item with a second key: a property indented like its element, or two elements."""
+    kind, other = list(item)[:2]
+    where = doc.key_loc(ipath + (other,))
+    if other in kinds:
+        return SpecError(where, f"'{other}' and '{kind}' are in one '- ' item", f"start '{other}' on its own line with '- '")
+    return SpecError(
+        where,
+        f"'{other}' is indented like '{kind}', so it stands beside the element instead of being one of its properties",
+        f"indent '{other}' under '{kind}', like its other properties",
+    )
 
 
 def validate(doc: Document) -> Checked:

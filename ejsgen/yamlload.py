@@ -8,12 +8,14 @@ point at their own lines and columns in the spec).
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import yaml
 
+from ejsgen._yaml_errors import explain
 from ejsgen.errors import Location, SpecError
 
 __all__ = ["Document", "TextOrigin", "load_yaml", "Path_"]
@@ -84,6 +86,7 @@ class _Builder:
                 if key in out:
                     raise self.error(key_node.start_mark, f"duplicate key '{key}'")
                 self.positions[("__key__",) + path + (key,)] = (key_node.start_mark.line + 1, key_node.start_mark.column + 1)
+                self._check_hidden_value(key, key_node, value_node)
                 out[key] = self.build(value_node, path + (key,))
             return out
         if isinstance(node, yaml.SequenceNode):
@@ -95,6 +98,20 @@ class _Builder:
             self.origins[path] = self._origin(node)
             return value
         return resolved
+
+    def _check_hidden_value(self, key: str, key_node: yaml.Node, value_node: yaml.Node) -> None:
+        """Refuse ``key: #3366aa``: the '#' starts a comment, so the key silently has no value."""
+        if not (isinstance(value_node, yaml.ScalarNode) and value_node.tag == "tag:yaml.org,2002:null" and value_node.value == ""):
+            return
+        line = self.lines[key_node.end_mark.line] if key_node.end_mark.line < len(self.lines) else ""
+        m = _HIDDEN_VALUE.match(line, key_node.end_mark.column)
+        if m:
+            word = m.group(2)
+            raise SpecError(
+                Location(self.file, key_node.end_mark.line + 1, m.start(2) + 1),
+                f"'{word}' starts a YAML comment here, so '{key}' has no value",
+                f'write text that starts with \'#\' in quotes, e.g. {key}: "{word}"',
+            )
 
     def _origin(self, node: yaml.ScalarNode) -> TextOrigin:
         line, col = node.start_mark.line, node.start_mark.column
@@ -112,10 +129,22 @@ class _Builder:
 
 
 _LOADER = yaml.SafeLoader("")
+_HIDDEN_VALUE = re.compile(r"(\s*:[ \t]+)(#[0-9A-Za-z]{3,8})\b")
+
+
+_BOOL_WORDS = ("true", "false")
 
 
 def _resolve(node: yaml.ScalarNode) -> Any:
+    """The value of a scalar, by YAML 1.2's rules for booleans.
+
+    YAML 1.1 (PyYAML's default) also reads ``yes``/``no``/``on``/``off`` as booleans, so a
+    dropdown option ``off`` or a value ``on`` would silently become ``False``/``True``; in a
+    spec, as in YAML 1.2, only ``true`` and ``false`` are booleans and those words are text.
+    """
     if node.tag == "tag:yaml.org,2002:str":
+        return str(node.value)
+    if node.tag == "tag:yaml.org,2002:bool" and node.value.lower() not in _BOOL_WORDS:
         return str(node.value)
     try:
         return _LOADER.construct_object(node, deep=True)
@@ -138,16 +167,8 @@ def load_yaml(path: str | Path, *, text: str | None = None, display_name: str | 
     try:
         nodes = list(yaml.compose_all(text, Loader=yaml.SafeLoader))
     except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        problem = exc.problem or "invalid YAML"
-        if exc.context and "found character '\\t'" in problem:
-            problem = "a tab character cannot indent YAML; use spaces"
-        line = mark.line + 1 if mark else 1
-        col = mark.column + 1 if mark else 1
-        hint = ""
-        if "flow mapping" in str(exc.context or "") or "expected ',' or '}'" in problem:
-            hint = "inside {...}, text with [ ] { } , or : must be quoted, e.g. bind: \"q[2]\""
-        raise SpecError(Location(name, line, col), f"invalid YAML: {problem}", hint) from None
+        why = explain(exc, text)
+        raise SpecError(Location(name, why.line, why.col), why.message, why.hint) from None
     except yaml.YAMLError as exc:
         raise SpecError(Location(name, 1, 1), f"invalid YAML: {exc}") from None
     if len(nodes) != 1 or nodes[0] is None:
