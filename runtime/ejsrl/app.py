@@ -16,6 +16,7 @@ import argparse
 import ast
 import csv
 import math
+import signal
 import sys
 import threading
 import time
@@ -26,7 +27,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from ejsrl.sim.model import Controller, ModelBase, UserCodeError, describe_error
+from ejsrl.sim.model import Controller, ModelBase, SetValueError, UserCodeError, describe_error
 from ejsrl.view.elements import Button, Control, Dynamic
 from ejsrl.view.scene_sync import SceneSync, scene_elements
 
@@ -89,8 +90,15 @@ class App(Controller):
         self._world_functions: Any = None
         self._loop_thread: threading.Thread | None = None
         self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
+        self.interrupted: int | None = None
+        """A signal's number once SIGINT/SIGTERM asked a headless run to stop (set by ``main``)."""
         self.model = model_cls(self, overrides, start=False)
-        self.guard(self.model._ejs_reset)
+        try:
+            self.model._ejs_reset()
+        except SetValueError:
+            raise  # a --set value that does not fit its variable: the command line's error
+        except Exception as exc:  # noqa: BLE001 - user code may raise anything
+            self.fail(exc)
         if self.error is None:
             self.scene.update(self.model, self.safe_value, first=True)
         self.playing = bool(self.sim.autoplay) and self.error is None
@@ -162,18 +170,20 @@ class App(Controller):
 
     def _apply_pending(self) -> None:
         while self._pending is not None:
+        """A reset (paused, the user's settings forgotten) or an initialize (the user's
+        settings kept, playing on if it was) requested during the last change or step."""
             what, self._pending = self._pending, None
             if what == "reset":
                 self.playing = False
-                self.error = None
-                self.error_rev += 1
-                self.scene.reset()
-                self.guard(self.model._ejs_reset)
-                for v in self.views:
-                    if hasattr(v, "on_reset"):
-                        v.on_reset()
-            else:
-                self.guard(self.model._ejs_initialize)
+                self.user_values.clear()
+            self.error = None
+            self.error_rev += 1
+            self.scene.reset()
+            self.guard(self.model._ejs_reset if what == "reset" else self.model._ejs_initialize)
+            self._wall0 = None  # realtime pacing starts again from the new time
+            for v in self.views:
+                if hasattr(v, "on_reset"):
+                    v.on_reset()
 
     def apply_control(self, control: Control, value: Any) -> None:
         """Write an already validated value from the UI, then ``on_change`` and the fixed relations."""
@@ -181,6 +191,7 @@ class App(Controller):
             if self.guard(lambda: control.set(self.model, value), control.where) is None and self.error is not None:
                 return
             if control.on_change is not None:
+            self.remember_user_value(control.bind, control.set, value)
                 self.guard(lambda: control.on_change(self.model), control.where)  # type: ignore[misc]
             self._after_change()
 
@@ -201,6 +212,7 @@ class App(Controller):
                     element = b.element
                     self.guard(lambda: element.set(self.model, T), element.where)  # type: ignore[misc]
                     if element.on_change is not None:
+                    self.remember_user_value(f"gizmo {name}", element.set, T)  # type: ignore[arg-type]
                         self.guard(lambda: element.on_change(self.model), element.where)  # type: ignore[misc]
                     self._after_change()
                 return
@@ -340,7 +352,12 @@ class App(Controller):
         every: int = 1,
         log: TextIO = sys.stderr,
     ) -> int:
-        """Run for ``duration`` units of the independent variable; returns the exit status."""
+        """Run for ``duration`` units of the independent variable; returns the exit status.
+
+        When ``interrupted`` becomes a signal's number (``main`` sets it on SIGINT/SIGTERM),
+        the run stops after the step in progress, with every row written so far flushed,
+        and returns 128 + that number.
+        """
         model = self.model
         if self.error is not None:
             print(_format_error(self.error), file=log)
@@ -374,6 +391,8 @@ class App(Controller):
                 break
             if t_new <= last_t:
                 print(f"error: the independent variable '{model.INDEPENDENT}' did not advance in a step (t = {t_new:g})", file=log)
+            if self.interrupted is not None:
+                return self._report_interrupt(csv_file, log)
                 return 2
             last_t = t_new
         for text in self.pop_alerts():
@@ -401,6 +420,19 @@ def load_app(app_dir: Path | str, *, overrides: dict[str, Any] | None = None) ->
         raise FileNotFoundError(f"no app.py in {folder}")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # so tracebacks and SPEC_LINES find the module
+    def _report_interrupt(self, csv_file: TextIO | None, log: TextIO) -> int:
+        signum = self.interrupted or signal.SIGTERM
+        if csv_file is not None:
+            csv_file.flush()
+        t = self.model._ejs_time()
+        print(
+            f"stopped by {signal.Signals(signum).name} at {self.model.INDEPENDENT} = {t:g}"
+            + ("; the CSV holds the rows written so far" if csv_file is not None else ""),
+            file=log,
+        )
+        return 128 + int(signum)
+
+
     spec.loader.exec_module(module)
     return App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides)
 
@@ -415,12 +447,14 @@ def _format_error(err: UserCodeError) -> str:
 def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tuple[str, Callable[[], Any]]]:
     """The CSV columns: (header, getter). Arrays are spread as ``q[0]``, ``q[1]``, ...
 
-    With no ``names``, every numeric variable (numbers and numeric arrays; not booleans
-    or strings) in declaration order.
+    With no ``names``, every numeric variable (numbers and arrays of numbers, ``expr:``
+    variables included; not booleans or text) in declaration order. Named variables may
+    also be booleans (written 0/1), arrays of booleans and text; naming any other kind of
+    value (a robot, say) raises ``UserCodeError``.
     """
     types = model.VARIABLES
     if names is None:
-        names = [n for n, kind in types.items() if kind in ("float", "int", "array")]
+        names = [n for n, kind in types.items() if kind in ("float", "int", "array", "auto") and _is_numeric(getattr(model, n))]
     else:
         for n in names:
             if n not in types:
@@ -432,13 +466,11 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
     columns: list[tuple[str, Callable[[], Any]]] = []
     for n in names:
         value = getattr(model, n)
-        if isinstance(value, np.ndarray):
-            if not np.issubdtype(value.dtype, np.number):
-                continue
+        if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
             for idx in np.ndindex(value.shape):
                 label = f"{n}[{']['.join(str(i) for i in idx)}]"
                 columns.append((label, (lambda n=n, idx=idx: getattr(model, n)[idx])))
-        elif isinstance(value, (bool, int, float, np.number)):
+        elif isinstance(value, (bool, int, float, str, np.bool_, np.integer, np.floating)):
             columns.append((n, (lambda n=n: getattr(model, n))))
     return columns
 
@@ -455,17 +487,34 @@ def _row(model: ModelBase, columns: list[tuple[str, Callable[[], Any]]]) -> list
             out.append(repr(float(v)))
     return out
 
+        else:
+            what = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
+            raise UserCodeError(
+                f"--vars: '{n}' holds {what}; the CSV takes numbers, booleans, text and arrays of numbers"
+            )
 
 # -- the command line ----------------------------------------------------------------------------------
+
+def _is_numeric(value: Any) -> bool:
+    """A number (not a boolean) or an array of numbers."""
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "iuf"
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
+
 
 
 def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
     """Parse ``NAME=VALUE`` for ``--set``: the value is a literal of the variable's type.
 
     Raises ``ValueError`` with a message for the user. Nothing is evaluated: numbers,
-    booleans, strings and (nested) lists of numbers only.
+    booleans, strings and (nested) lists of numbers only. For an ``expr:`` variable (type
+    ``"auto"``) the value is a function of the declared value, which parses the literal
+    for the type the expression gave when the model declares it (``SetValueError`` if it
+    does not fit).
     """
     if "=" not in text:
+        elif isinstance(v, str):
+            out.append(v)  # the csv writer quotes it if it needs quotes
         raise ValueError(f"--set takes NAME=VALUE, got {text!r}")
     name, raw = (s.strip() for s in text.split("=", 1))
     if name not in types:
@@ -482,14 +531,52 @@ def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
                 value = raw
         except (ValueError, SyntaxError):
             value = raw
-        return name, value
+        return value
     if kind == "bool":
         low = raw.lower()
         if low in ("true", "1", "yes", "on"):
-            return name, True
+            return True
         if low in ("false", "0", "no", "off"):
-            return name, False
+            return False
         raise ValueError(f"--set {name}: expected true or false, got {raw!r}")
+    if kind == "auto":
+        return name, _DeclaredSet(name, raw)
+    return name, _parse_value(name, raw, kind)
+
+
+class _DeclaredSet:
+    """A ``--set`` value for an ``expr:`` variable, parsed for the type of its declared value."""
+
+    def __init__(self, name: str, raw: str) -> None:
+        self.name, self.raw = name, raw
+
+    def __call__(self, declared: Any) -> Any:
+        if isinstance(declared, (bool, np.bool_)):
+            kind = "bool"
+        elif isinstance(declared, (int, np.integer)):
+            kind = "int"
+        elif isinstance(declared, (float, np.floating)):
+            kind = "float"
+        elif isinstance(declared, str):
+            kind = "str"
+        elif isinstance(declared, np.ndarray) and declared.dtype.kind in "iuf":
+            kind = "array"
+        else:
+            raise SetValueError(
+                f"--set {self.name}: its expression gives a {type(declared).__name__}, which cannot be set "
+                "from the command line (numbers, booleans, text and arrays of numbers can)"
+            )
+        try:
+            return _parse_value(self.name, self.raw, kind)
+        except ValueError as exc:
+            raise SetValueError(str(exc)) from None
+
+    def __repr__(self) -> str:
+        return f"<--set {self.name}={self.raw} (for an expr: variable)>"
+
+
+def _parse_value(name: str, raw: str, kind: str) -> Any:
+    """The literal ``raw`` as a value of type ``kind`` (``ValueError`` if it is not one)."""
     try:
         value = ast.literal_eval(raw)
     except (ValueError, SyntaxError):
@@ -497,11 +584,11 @@ def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
     if kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise ValueError(f"--set {name}: expected an integer, got {raw!r}")
-        return name, value
+        return value
     if kind == "float":
         if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
             raise ValueError(f"--set {name}: expected a finite number, got {raw!r}")
-        return name, float(value)
+        return float(value)
     if kind == "array":
         try:
             arr = np.array(value, dtype=float)
@@ -509,7 +596,7 @@ def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
             raise ValueError(f"--set {name}: expected a list of numbers, got {raw!r}") from None
         if arr.ndim == 0 or not np.all(np.isfinite(arr)):
             raise ValueError(f"--set {name}: expected a list of finite numbers, got {raw!r}")
-        return name, arr
+        return arr
     raise ValueError(f"--set {name}: this variable's type cannot be set from the command line")
 
 
@@ -535,7 +622,40 @@ def main(
     base_dir: Path | str,
     argv: Sequence[str] | None = None,
 ) -> int:
-    """The generated app's entry point; returns the process exit status."""
+    """The generated app's entry point; returns the process exit status.
+
+    SIGINT (Ctrl+C) and SIGTERM stop the app cleanly, with a one-line message and no
+    traceback: a served app stops its server, a headless run keeps the rows written so
+    far. The status is then 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
+    """
+    stop = _StopSignals()
+    status = 1
+    with stop:
+        try:
+            status = _main(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, argv=argv, stop=stop)
+        except SetValueError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:  # _Interrupted, or Ctrl+C before the handlers were installed
+            if stop.signum is None:
+                stop.signum = signal.SIGINT
+    if stop.signum is not None:
+        if status != 128 + stop.signum:  # a headless run reports its own stop
+            print(f"{meta.title}: stopped by {signal.Signals(stop.signum).name}", file=sys.stderr, flush=True)
+        return 128 + int(stop.signum)
+    return status
+
+
+def _main(
+    model_cls: type[ModelBase],
+    view: list[Any],
+    *,
+    sim: SimConfig,
+    meta: AppMeta,
+    base_dir: Path | str,
+    argv: Sequence[str] | None,
+    stop: _StopSignals,
+) -> int:
     args = _parser(meta.title).parse_args(argv)
     # NumPy's overflow/invalid warnings would point at app.py; a state that becomes
     # non-finite is reported instead, with the spec location of its equations.
@@ -547,6 +667,52 @@ def main(
             overrides[name] = value
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
+class _Interrupted(KeyboardInterrupt):
+    """Raised in the main thread by SIGINT/SIGTERM (a ``KeyboardInterrupt``, so a served app stops as on Ctrl+C)."""
+
+
+class _StopSignals:
+    """SIGINT and SIGTERM as a clean stop, while ``main`` runs (in the main thread only).
+
+    The first signal raises :class:`_Interrupted` (serving stops its server), or, once a
+    headless ``App`` is given to :meth:`defer_to`, sets its ``interrupted`` so that the run
+    ends between two steps with its rows written; a second signal then raises, in case a
+    step never ends. Further signals while stopping are ignored.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._app: App | None = None
+        self._raised = False
+        self._old: dict[int, Any] = {}
+
+    def __enter__(self) -> _StopSignals:
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+
+    def defer_to(self, app: App) -> None:
+        self._app = app
+        if self.signum is not None:
+            app.interrupted = self.signum
+
+    def _handle(self, signum: int, frame: object) -> None:
+        first = self.signum is None
+        if first:
+            self.signum = signum
+        if first and self._app is not None:
+            self._app.interrupted = signum
+            return
+        if not self._raised:
+            self._raised = True
+            raise _Interrupted(signum)
+
+
         return 2
     if args.headless:
         if args.duration is None or not math.isfinite(args.duration) or args.duration < 0:
@@ -562,7 +728,12 @@ def main(
                 return app.run_headless(args.duration, variables=names, every=args.every)
             if args.csv == "-":
                 return app.run_headless(args.duration, csv_file=sys.stdout, variables=names, every=args.every)
-            with open(args.csv, "w", newline="") as fh:
+            try:
+                fh = open(args.csv, "w", newline="")  # noqa: SIM115 - closed below
+            except OSError as exc:
+                print(f"error: cannot write {args.csv}: {exc.strerror or exc}", file=sys.stderr)
+                return 2
+            with fh:
                 return app.run_headless(args.duration, csv_file=fh, variables=names, every=args.every)
         except UserCodeError as exc:
             print(f"error: {exc.message}", file=sys.stderr)
@@ -573,3 +744,6 @@ def main(
     app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
     app.serve(args.host, args.port)
     return 0
+        stop.defer_to(app)
+            if app.error is None:
+                csv_columns(app.model, names)  # refuse bad --vars before any file is written

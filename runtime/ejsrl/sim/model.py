@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-__all__ = ["ModelBase", "CodePage", "OdePage", "UserCodeError", "Controller", "locate_error"]
+__all__ = ["ModelBase", "CodePage", "OdePage", "UserCodeError", "SetValueError", "Controller", "locate_error"]
 
 
 class UserCodeError(Exception):
@@ -35,17 +35,35 @@ class UserCodeError(Exception):
         self.where = where
 
 
+class SetValueError(ValueError):
+    """A ``--set`` value that does not fit its variable (found when the variable is declared)."""
+
+
 class Controller:
     """What the prelude's simulation controls talk to (an app, or a headless run).
 
     This default is used when a model runs on its own (in tests): play/pause only set a
     flag, alerts are collected, reset and initialize run at once.
+
+    ``user_values`` are the values the user set from the view (by bind target, in the
+    order set), which ``initialize()`` keeps and ``reset()`` forgets.
     """
 
     def __init__(self) -> None:
         self.playing = False
         self.alerts: list[str] = []
         self.model: ModelBase | None = None
+        self.user_values: dict[str, tuple[Callable[[Any, Any], None], Any]] = {}
+
+    def remember_user_value(self, key: str, setter: Callable[[Any, Any], None], value: Any) -> None:
+        """Note that the user set ``key`` (a bind target) to ``value``; ``setter(model, value)`` writes it."""
+        self.user_values.pop(key, None)  # the latest setting goes last
+        self.user_values[key] = (setter, value.copy() if isinstance(value, np.ndarray) else value)
+
+    def restore_user_values(self, model: ModelBase) -> None:
+        """Write the values the user set from the view back into ``model``, in the order they were set."""
+        for setter, value in self.user_values.values():
+            setter(model, value.copy() if isinstance(value, np.ndarray) else value)
 
     def play(self) -> None:
         self.playing = True
@@ -61,6 +79,7 @@ class Controller:
             self.model._ejs_step()
 
     def request_reset(self) -> None:
+        self.user_values.clear()
         if self.model is not None:
             self.model._ejs_reset()
 
@@ -199,7 +218,7 @@ class ModelBase:
     Class attributes set by the generated code:
     ``SPEC`` (the spec's file name), ``SPEC_LINES`` (app.py line -> (spec line, column)),
     ``VARIABLES`` (name -> value type: ``float``, ``int``, ``bool``, ``str``, ``array``,
-    ``object``), ``INDEPENDENT`` (the independent variable of the first ODE page, or
+    ``object``, or ``auto`` for an ``expr:`` variable), ``INDEPENDENT`` (the independent variable of the first ODE page, or
     ``"t"`` if declared, else None).
     """
 
@@ -240,9 +259,15 @@ class ModelBase:
         return []
 
     # -- lifecycle ------------------------------------------------------------------------
-    def _ejs_reset(self) -> None:
-        """Initial values, ``--set`` overrides, fresh solvers, ``init``, fixed relations."""
+    def _ejs_reset(self, keep: Callable[[], None] | None = None) -> None:
+        """Initial values, ``--set`` overrides, fresh solvers, ``init``, fixed relations.
+
+        ``keep()``, if given, runs right after the variables take their initial values
+        (before ``init``), to put back values that a restart keeps.
+        """
         self._ejs_declare()
+        if keep is not None:
+            keep()
         self._ejs_pages = self._evolution()
         self._init()
         self._fixed_relations()
@@ -253,8 +278,11 @@ class ModelBase:
         """``_declare`` with the ``--set`` overrides taking each variable's place as it is declared.
 
         So a later ``expr:`` variable sees the overridden value (``--set N=10`` sizes arrays
-        declared from ``N``). The interception lives in a throwaway subclass used only while
-        declaring, so attribute writes elsewhere (the hot path) pay nothing.
+        declared from ``N``). An override may be a function of the declared value (for
+        ``expr:`` variables, whose type is known only once their expression has given a
+        value): it returns the value to use, or raises :class:`SetValueError`. The
+        interception lives in a throwaway subclass used only while declaring, so attribute
+        writes elsewhere (the hot path) pay nothing.
         """
         overrides = self._ejs_overrides
         if not overrides:
@@ -263,7 +291,10 @@ class ModelBase:
         cls = type(self)
 
         def __setattr__(obj: Any, name: str, value: Any) -> None:
-            object.__setattr__(obj, name, overrides.get(name, value))
+            if name in overrides:
+                new = overrides[name]
+                value = new(value) if callable(new) else new
+            object.__setattr__(obj, name, value)
 
         declaring = type(f"{cls.__name__}Declaring", (cls,), {"__setattr__": __setattr__})
         self.__class__ = declaring
@@ -276,10 +307,10 @@ class ModelBase:
                 setattr(self, name, value)
 
     def _ejs_initialize(self) -> None:
-        """Run ``init`` and the fixed relations again on the current values."""
-        self._init()
-        self._fixed_relations()
-        self._ejs_restart_solvers()
+        """A reset that keeps the user's settings: every variable takes its initial value
+        except those the user set from the view, which keep the value set there; then
+        fresh solvers, ``init``, the fixed relations, programs stopped."""
+        self._ejs_reset(keep=lambda: self._ejs_ctl.restore_user_values(self))
 
     def _ejs_step(self) -> bool:
         """One simulation step: every page in order, then the fixed relations.
@@ -322,11 +353,19 @@ class ModelBase:
         self._ejs_ctl.step_once()
 
     def reset(self) -> None:
-        """Return every variable to its initial value and run ``init`` (after the current action)."""
+        """Return every variable to its initial value and run ``init`` (after the current action).
+
+        Values set from the view are forgotten; the simulation pauses.
+        """
         self._ejs_ctl.request_reset()
 
     def initialize(self) -> None:
-        """Run ``init`` and the fixed relations again on the current values."""
+        """Restart, keeping the user's settings (after the current action).
+
+        Every variable returns to its initial value except those the user set from the
+        view (sliders, fields, gizmos), which keep the value set there; then ``init`` and
+        the fixed relations run. The simulation goes on playing if it was.
+        """
         self._ejs_ctl.request_initialize()
 
     def is_playing(self) -> bool:
