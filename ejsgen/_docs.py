@@ -183,8 +183,6 @@ def _yaml_value(value: Any) -> str:
         return "[" + ", ".join(_yaml_value(v) for v in value) + "]"
     if isinstance(value, dict):
         return "{}" if not value else str(value)
-    if hasattr(type(value), "model_fields"):  # a pydantic model: its own table lists its defaults
-        return "(see its table)"
     return str(value)
 
 
@@ -203,6 +201,8 @@ def field_default(cls: type[BaseModel], field: str) -> str:
         return "**required**"
     if value is None:
         return "—"
+    if hasattr(type(value), "model_fields"):  # a pydantic model: its own table lists its defaults
+        return "see its table"
     return f"`{_yaml_value(value)}`"
 
 

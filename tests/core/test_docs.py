@@ -228,6 +228,17 @@ def test_the_tutorials_snippets_are_the_step_files() -> None:
     assert len(STEPS) == 7
 
 
+def test_the_error_the_docs_show_is_the_one_ejsgen_prints(tmp_path: Path, monkeypatch, capsys) -> None:
+    step1 = next(p for p in STEPS if p.name.startswith("step1_"))
+    (tmp_path / "pendulum.ejs.yaml").write_text(step1.read_text().replace("sin(theta)", "sin(thta)"))
+    monkeypatch.chdir(tmp_path)
+    assert main(["validate", "pendulum.ejs.yaml"]) == 1
+    printed = capsys.readouterr().err.strip()
+    for doc in (TUTORIAL, LANGUAGE):
+        shown = re.findall(r"^ *(pendulum\.ejs\.yaml:\d+:\d+: error: .*)$", doc.read_text(encoding="utf-8"), re.M)
+        assert shown == [printed], doc.name
+
+
 # -- each step builds, runs and does what it teaches -----------------------------------------------
 
 
