@@ -89,9 +89,9 @@ class App(Controller):
         self._stopped = threading.Event()
         self._world_functions: Any = None
         self._loop_thread: threading.Thread | None = None
-        self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
         self.interrupted: int | None = None
         """A signal's number once SIGINT/SIGTERM asked a headless run to stop (set by ``main``)."""
+        self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
         self.model = model_cls(self, overrides, start=False)
         try:
             self.model._ejs_reset()
@@ -169,9 +169,9 @@ class App(Controller):
             self._refresh_views()
 
     def _apply_pending(self) -> None:
-        while self._pending is not None:
         """A reset (paused, the user's settings forgotten) or an initialize (the user's
         settings kept, playing on if it was) requested during the last change or step."""
+        while self._pending is not None:
             what, self._pending = self._pending, None
             if what == "reset":
                 self.playing = False
@@ -190,8 +190,8 @@ class App(Controller):
         with self.lock:
             if self.guard(lambda: control.set(self.model, value), control.where) is None and self.error is not None:
                 return
-            if control.on_change is not None:
             self.remember_user_value(control.bind, control.set, value)
+            if control.on_change is not None:
                 self.guard(lambda: control.on_change(self.model), control.where)  # type: ignore[misc]
             self._after_change()
 
@@ -211,8 +211,8 @@ class App(Controller):
                 with self.lock:
                     element = b.element
                     self.guard(lambda: element.set(self.model, T), element.where)  # type: ignore[misc]
-                    if element.on_change is not None:
                     self.remember_user_value(f"gizmo {name}", element.set, T)  # type: ignore[arg-type]
+                    if element.on_change is not None:
                         self.guard(lambda: element.on_change(self.model), element.where)  # type: ignore[misc]
                     self._after_change()
                 return
@@ -376,6 +376,8 @@ class App(Controller):
         self.playing = True
         last_t = t_start
         while True:
+            if self.interrupted is not None:
+                return self._report_interrupt(csv_file, log)
             t = model._ejs_time() or 0.0
             if t >= t_end - 1e-9 * max(1.0, abs(t_end)):
                 break
@@ -391,8 +393,6 @@ class App(Controller):
                 break
             if t_new <= last_t:
                 print(f"error: the independent variable '{model.INDEPENDENT}' did not advance in a step (t = {t_new:g})", file=log)
-            if self.interrupted is not None:
-                return self._report_interrupt(csv_file, log)
                 return 2
             last_t = t_new
         for text in self.pop_alerts():
@@ -403,6 +403,19 @@ class App(Controller):
         if not self.playing:
             print(f"stopped at {model.INDEPENDENT} = {model._ejs_time():g} (the simulation paused itself)", file=log)
         return 0
+
+
+    def _report_interrupt(self, csv_file: TextIO | None, log: TextIO) -> int:
+        signum = self.interrupted or signal.SIGTERM
+        if csv_file is not None:
+            csv_file.flush()
+        t = self.model._ejs_time()
+        print(
+            f"stopped by {signal.Signals(signum).name} at {self.model.INDEPENDENT} = {t:g}"
+            + ("; the CSV holds the rows written so far" if csv_file is not None else ""),
+            file=log,
+        )
+        return 128 + int(signum)
 
 
 def load_app(app_dir: Path | str, *, overrides: dict[str, Any] | None = None) -> App:
@@ -420,19 +433,6 @@ def load_app(app_dir: Path | str, *, overrides: dict[str, Any] | None = None) ->
         raise FileNotFoundError(f"no app.py in {folder}")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # so tracebacks and SPEC_LINES find the module
-    def _report_interrupt(self, csv_file: TextIO | None, log: TextIO) -> int:
-        signum = self.interrupted or signal.SIGTERM
-        if csv_file is not None:
-            csv_file.flush()
-        t = self.model._ejs_time()
-        print(
-            f"stopped by {signal.Signals(signum).name} at {self.model.INDEPENDENT} = {t:g}"
-            + ("; the CSV holds the rows written so far" if csv_file is not None else ""),
-            file=log,
-        )
-        return 128 + int(signum)
-
-
     spec.loader.exec_module(module)
     return App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides)
 
@@ -472,7 +472,19 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
                 columns.append((label, (lambda n=n, idx=idx: getattr(model, n)[idx])))
         elif isinstance(value, (bool, int, float, str, np.bool_, np.integer, np.floating)):
             columns.append((n, (lambda n=n: getattr(model, n))))
+        else:
+            what = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
+            raise UserCodeError(
+                f"--vars: '{n}' holds {what}; the CSV takes numbers, booleans, text and arrays of numbers"
+            )
     return columns
+
+
+def _is_numeric(value: Any) -> bool:
+    """A number (not a boolean) or an array of numbers."""
+    if isinstance(value, np.ndarray):
+        return value.dtype.kind in "iuf"
+    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
 
 
 def _row(model: ModelBase, columns: list[tuple[str, Callable[[], Any]]]) -> list[str]:
@@ -483,24 +495,14 @@ def _row(model: ModelBase, columns: list[tuple[str, Callable[[], Any]]]) -> list
             out.append("1" if v else "0")
         elif isinstance(v, (int, np.integer)):
             out.append(str(int(v)))
+        elif isinstance(v, str):
+            out.append(v)  # the csv writer quotes it if it needs quotes
         else:
             out.append(repr(float(v)))
     return out
 
-        else:
-            what = f"an array of {value.dtype}" if isinstance(value, np.ndarray) else f"a {type(value).__name__}"
-            raise UserCodeError(
-                f"--vars: '{n}' holds {what}; the CSV takes numbers, booleans, text and arrays of numbers"
-            )
 
 # -- the command line ----------------------------------------------------------------------------------
-
-def _is_numeric(value: Any) -> bool:
-    """A number (not a boolean) or an array of numbers."""
-    if isinstance(value, np.ndarray):
-        return value.dtype.kind in "iuf"
-    return isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool)
-
 
 
 def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
@@ -513,8 +515,6 @@ def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
     does not fit).
     """
     if "=" not in text:
-        elif isinstance(v, str):
-            out.append(v)  # the csv writer quotes it if it needs quotes
         raise ValueError(f"--set takes NAME=VALUE, got {text!r}")
     name, raw = (s.strip() for s in text.split("=", 1))
     if name not in types:
@@ -524,21 +524,6 @@ def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
         hint = f"; did you mean '{close[0]}'?" if close else ""
         raise ValueError(f"--set: unknown variable '{name}'{hint}")
     kind = types[name]
-    if kind == "str":
-        try:
-            value = ast.literal_eval(raw)
-            if not isinstance(value, str):
-                value = raw
-        except (ValueError, SyntaxError):
-            value = raw
-        return value
-    if kind == "bool":
-        low = raw.lower()
-        if low in ("true", "1", "yes", "on"):
-            return True
-        if low in ("false", "0", "no", "off"):
-            return False
-        raise ValueError(f"--set {name}: expected true or false, got {raw!r}")
     if kind == "auto":
         return name, _DeclaredSet(name, raw)
     return name, _parse_value(name, raw, kind)
@@ -577,6 +562,21 @@ class _DeclaredSet:
 
 def _parse_value(name: str, raw: str, kind: str) -> Any:
     """The literal ``raw`` as a value of type ``kind`` (``ValueError`` if it is not one)."""
+    if kind == "str":
+        try:
+            value = ast.literal_eval(raw)
+            if not isinstance(value, str):
+                value = raw
+        except (ValueError, SyntaxError):
+            value = raw
+        return value
+    if kind == "bool":
+        low = raw.lower()
+        if low in ("true", "1", "yes", "on"):
+            return True
+        if low in ("false", "0", "no", "off"):
+            return False
+        raise ValueError(f"--set {name}: expected true or false, got {raw!r}")
     try:
         value = ast.literal_eval(raw)
     except (ValueError, SyntaxError):
@@ -611,6 +611,52 @@ def _parser(title: str) -> argparse.ArgumentParser:
     p.add_argument("--every", type=int, default=1, metavar="N", help="headless: write a row every N steps (default 1)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="replace a variable's initial value (repeatable)")
     return p
+
+
+class _Interrupted(KeyboardInterrupt):
+    """Raised in the main thread by SIGINT/SIGTERM (a ``KeyboardInterrupt``, so a served app stops as on Ctrl+C)."""
+
+
+class _StopSignals:
+    """SIGINT and SIGTERM as a clean stop, while ``main`` runs (in the main thread only).
+
+    The first signal raises :class:`_Interrupted` (serving stops its server), or, once a
+    headless ``App`` is given to :meth:`defer_to`, sets its ``interrupted`` so that the run
+    ends between two steps with its rows written; a second signal then raises, in case a
+    step never ends. Further signals while stopping are ignored.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._app: App | None = None
+        self._raised = False
+        self._old: dict[int, Any] = {}
+
+    def __enter__(self) -> _StopSignals:
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+
+    def defer_to(self, app: App) -> None:
+        self._app = app
+        if self.signum is not None:
+            app.interrupted = self.signum
+
+    def _handle(self, signum: int, frame: object) -> None:
+        first = self.signum is None
+        if first:
+            self.signum = signum
+        if first and self._app is not None:
+            self._app.interrupted = signum
+            return
+        if not self._raised:
+            self._raised = True
+            raise _Interrupted(signum)
 
 
 def main(
@@ -667,52 +713,6 @@ def _main(
             overrides[name] = value
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
-class _Interrupted(KeyboardInterrupt):
-    """Raised in the main thread by SIGINT/SIGTERM (a ``KeyboardInterrupt``, so a served app stops as on Ctrl+C)."""
-
-
-class _StopSignals:
-    """SIGINT and SIGTERM as a clean stop, while ``main`` runs (in the main thread only).
-
-    The first signal raises :class:`_Interrupted` (serving stops its server), or, once a
-    headless ``App`` is given to :meth:`defer_to`, sets its ``interrupted`` so that the run
-    ends between two steps with its rows written; a second signal then raises, in case a
-    step never ends. Further signals while stopping are ignored.
-    """
-
-    def __init__(self) -> None:
-        self.signum: int | None = None
-        self._app: App | None = None
-        self._raised = False
-        self._old: dict[int, Any] = {}
-
-    def __enter__(self) -> _StopSignals:
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                self._old[sig] = signal.signal(sig, self._handle)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
-
-    def defer_to(self, app: App) -> None:
-        self._app = app
-        if self.signum is not None:
-            app.interrupted = self.signum
-
-    def _handle(self, signum: int, frame: object) -> None:
-        first = self.signum is None
-        if first:
-            self.signum = signum
-        if first and self._app is not None:
-            self._app.interrupted = signum
-            return
-        if not self._raised:
-            self._raised = True
-            raise _Interrupted(signum)
-
-
         return 2
     if args.headless:
         if args.duration is None or not math.isfinite(args.duration) or args.duration < 0:
@@ -722,8 +722,11 @@ class _StopSignals:
             print("error: --every must be at least 1", file=sys.stderr)
             return 2
         app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
+        stop.defer_to(app)
         names = [n.strip() for n in args.vars.split(",") if n.strip()] if args.vars else None
         try:
+            if app.error is None:
+                csv_columns(app.model, names)  # refuse bad --vars before any file is written
             if args.csv is None:
                 return app.run_headless(args.duration, variables=names, every=args.every)
             if args.csv == "-":
@@ -744,6 +747,3 @@ class _StopSignals:
     app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
     app.serve(args.host, args.port)
     return 0
-        stop.defer_to(app)
-            if app.error is None:
-                csv_columns(app.model, names)  # refuse bad --vars before any file is written
