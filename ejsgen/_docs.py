@@ -391,10 +391,16 @@ def cmd_docs(args: argparse.Namespace) -> int:
     path = folder / DOC_FILES[args.document]
     if not path.is_file():
         raise EjsError(f"{path} is missing from this copy of ejsgen")
-    if args.path:
-        print(path)
-    else:
-        sys.stdout.write(path.read_text(encoding="utf-8"))
+    try:
+        if args.path:
+            print(path)
+        else:
+            sys.stdout.write(path.read_text(encoding="utf-8"))
+            sys.stdout.flush()
+    except BrokenPipeError:  # `ejsgen docs | head`: the reader stopped early
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 
