@@ -12,33 +12,66 @@ What the view needs from the app (``ejsrl.app.App`` provides it):
   ``apply_gizmo(name, T_world)``;
 - ``safe_value(prop, where)`` (None on a user-code error), ``error`` / ``error_rev``,
   ``pop_alerts()``.
+
+On a server made by :func:`make_server` every value a browser sends for a control is
+checked by :func:`ejsrl.view._validate.validate_control` before viser stores or broadcasts
+it (see :mod:`ejsrl.view._guard`); the panel checks it again before applying it.
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-from ejsrl.view._gui import Panel
-from ejsrl.view._scene_mirror import SceneMirror
+from ejsrl.view._guard import Verdict, guard_of, start_server
+from ejsrl.view._gui import ControlBinding, Panel
+from ejsrl.view._scene_mirror import SceneMirror, frame_camera
+from ejsrl.view._validate import validate_control
 
-__all__ = ["ViserView", "make_server"]
+__all__ = ["ViserView", "make_server", "control_check"]
 
 log = logging.getLogger("ejsrl.view")
 
 
-def make_server(host: str = "127.0.0.1", port: int = 8080, *, verbose: bool = False) -> tuple[Any, str]:
-    """Start a viser server on ``host:port`` (the next free port if taken; 0: any free one).
+def make_server(
+    host: str = "127.0.0.1",
+    port: int = 8080,
+    *,
+    allow_origins: Sequence[str] = (),
+    label: str | None = None,
+    verbose: bool = False,
+) -> tuple[Any, str]:
+    """Start a viser server on ``host:port`` (the next free port if taken; 0: any free one)
+    behind ejsgen's guards (:mod:`ejsrl.view._guard`): same-origin websockets only (plus
+    ``allow_origins``), small messages, checked values.
 
     Returns ``(server, url)`` with the port actually bound.
     """
-    import viser
-
-    server = viser.ViserServer(host=host, port=port, verbose=verbose)
-    shown_host = "127.0.0.1" if host in ("0.0.0.0", "") else host
+    server = start_server(host, port, allow_origins=allow_origins, label=label, verbose=verbose)
+    shown_host = "127.0.0.1" if host in ("0.0.0.0", "", "::") else host
+    if ":" in shown_host:
+        shown_host = f"[{shown_host}]"
     return server, f"http://{shown_host}:{server.get_port()}"
+
+
+def control_check(b: ControlBinding) -> Any:
+    """The check of a value sent for ``b``'s control: ejsgen's validation (typing,
+    clamping, options), then the form the control's handle shows."""
+    name = b.control.label or b.control.bind
+
+    def check(raw: Any) -> Verdict:
+        checked = validate_control(b.control, raw)
+        if not checked.ok:
+            return Verdict(False, message=checked.message)
+        shown = b.display(checked.value)
+        if shown is None:
+            return Verdict(False, message=f"{name}: {checked.value!r} cannot be shown; the value was not applied.")
+        return Verdict(True, shown)
+
+    return check
 
 
 class ViserView:
@@ -61,15 +94,19 @@ class ViserView:
             if world is not None:
                 with app.lock:
                     self.scene.sync(world)
+        guard = guard_of(server)
+        if guard is not None:
+            guard.notify = lambda client, title, body: self.notify(client, title, body, "red")
+            for b in self.panel.controls:
+                guard.watch(b.handle, control_check(b))
 
         @server.on_client_connect
         def _(client: Any) -> None:
-            # a sensible first view of a scene in metres, z up
+            # a first view that frames the scene's content (metres, z up)
             try:
-                client.camera.position = (2.0, -2.0, 1.5)
-                client.camera.look_at = (0.0, 0.0, 0.3)
+                frame_camera(client.camera, self._world(), app.lock)
             except Exception:
-                pass
+                log.debug("framing the camera failed", exc_info=True)
 
     # -- called by the app's loop -------------------------------------------------------
     def on_frame(self) -> None:

@@ -1,0 +1,546 @@
+"""Transport security of a served app: who may connect, how large a message may be, and
+what a browser may change.
+
+viser serves the page and the websocket on one port and trusts its clients: any page on
+the web could open a websocket to ``ws://127.0.0.1:8080`` and drive the lab, a client
+could switch a control off for everyone (``{"removed": true}``), broadcast ``NaN`` to the
+other clients before ejsgen saw it, or send 50 MB frames. :func:`start_server` starts a
+viser server with three guards in front of it:
+
+- **Who may connect.** A request whose ``Host`` header is not a name of this server is
+  refused (403; this stops DNS rebinding), and so is a websocket handshake whose
+  ``Origin`` is not the page's own (``http://`` + the ``Host`` it connected to) nor one
+  given with ``--allow-origin``. A handshake without an ``Origin`` header (a script, not
+  a browser) is allowed: browsers always send one, and a script can forge any, so the
+  check protects browsers only; the message guard below protects against scripts.
+- **How large.** Incoming messages are capped at :data:`MAX_MESSAGE_BYTES`; a larger one
+  closes that client's connection (code 1009) before its payload is read.
+- **What a client may send.** Every incoming message is checked before viser decodes it:
+  only the kinds the UI sends are let through (the viewer camera, a control's new
+  ``value``, a gizmo drag), each with its fields checked and rebuilt; a control's value
+  is validated, clamped and typed by ejsgen's own rules before viser stores or
+  broadcasts it. A refused value is dropped, that client is told why and its control
+  shows the server's value again. Everything else (file uploads, share links, scene
+  clicks, other properties of a control) is dropped.
+
+This relies on viser internals (see :data:`VISER_TESTED`); :func:`start_server` raises
+if the hooks are not where it expects them, rather than serving without the guards.
+"""
+
+from __future__ import annotations
+
+import http
+import ipaddress
+import logging
+import math
+import socket
+import threading
+import weakref
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+from urllib.parse import urlsplit
+
+__all__ = [
+    "MAX_MESSAGE_BYTES",
+    "VISER_TESTED",
+    "Access",
+    "MessageGuard",
+    "Verdict",
+    "parse_origin",
+    "start_server",
+    "guard_of",
+    "is_loopback",
+]
+
+log = logging.getLogger("ejsrl.serve")
+
+#: the largest message a client may send, in bytes: the UI's messages are a few hundred
+#: bytes; the longest is a text field's value (at most 10,000 characters, 40 kB in UTF-8)
+MAX_MESSAGE_BYTES = 64 * 1024
+
+#: the viser versions whose internals this module hooks (``major.minor``)
+VISER_TESTED = ("1.1",)
+
+#: the largest |coordinate| a client may send for a camera or gizmo position (metres)
+MAX_COORDINATE = 1e6
+
+#: the name of viser's connection handler, to find its call of ``serve``
+_VISER_HANDLER = "WebsockServer._background_worker.<locals>.ws_handler"
+
+_WILDCARD_HOSTS = ("0.0.0.0", "", "::")
+
+
+# -- who may connect ---------------------------------------------------------------------------
+
+
+def parse_origin(text: str) -> str:
+    """``text`` as a normalized origin (``scheme://host[:port]``, lower case, no default port).
+
+    Raises ``ValueError`` with a message for the user if it is not an http(s) origin.
+    """
+    raw = text.strip()
+    if raw == "*":
+        return raw
+    example = "an origin such as http://lab.example.org:8080"
+    try:
+        parts = urlsplit(raw)
+        port = parts.port
+    except ValueError:
+        raise ValueError(f"--allow-origin: {text!r} is not {example}") from None
+    if parts.scheme.lower() not in ("http", "https") or not parts.hostname:
+        raise ValueError(f"--allow-origin: {text!r} is not {example} (scheme http or https, then a host)")
+    if parts.path not in ("", "/") or parts.query or parts.fragment or parts.username or parts.password:
+        raise ValueError(f"--allow-origin: {text!r} has more than scheme://host[:port]; write {example}")
+    return _origin(parts.scheme.lower(), parts.hostname.lower(), port)
+
+
+def _origin(scheme: str, host: str, port: int | None) -> str:
+    default = 443 if scheme == "https" else 80
+    shown = f"[{host}]" if ":" in host else host
+    return f"{scheme}://{shown}" if port in (None, default) else f"{scheme}://{shown}:{port}"
+
+
+def _split_host(value: str) -> tuple[str, int | None] | None:
+    """A ``Host`` header as ``(hostname, port or None)``, or None if malformed."""
+    try:
+        parts = urlsplit("//" + value.strip())
+        port = parts.port
+    except ValueError:
+        return None
+    if not parts.hostname or parts.path or parts.username:
+        return None
+    return parts.hostname.lower(), port
+
+
+def _is_ip(host: str) -> bool:
+    try:
+        ipaddress.ip_address(host)
+    except ValueError:
+        return False
+    return True
+
+
+def is_loopback(host: str) -> bool:
+    """True if binding ``host`` keeps the server on this machine."""
+    if host in ("localhost",):
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False
+
+
+@dataclass
+class Access:
+    """Which ``Host`` headers and websocket ``Origin`` headers a server accepts.
+
+    ``bind``: the address the server binds; ``allow_origins``: extra origins (``*``: any
+    origin and any host, for a proxy you trust).
+    """
+
+    bind: str
+    allow_origins: Sequence[str] = ()
+    names: set[str] = field(init=False)
+    origins: set[str] = field(init=False)
+    anything: bool = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.origins = {parse_origin(o) for o in self.allow_origins}
+        self.anything = "*" in self.origins
+        self.origins.discard("*")
+        names = {"localhost"}
+        if self.bind in _WILDCARD_HOSTS:
+            try:
+                host = socket.gethostname().lower()
+                names |= {host, f"{host}.local", socket.getfqdn().lower()}
+            except OSError:  # pragma: no cover - no hostname
+                pass
+        elif self.bind:
+            names.add(self.bind.strip("[]").lower())
+        for origin in self.origins:
+            hostname = urlsplit(origin).hostname
+            if hostname:
+                names.add(hostname)
+        self.names = names
+
+    def host_ok(self, hostname: str) -> bool:
+        """A name this server answers to: its own names, any IP address (a DNS rebinding
+        attack needs a name it controls) and the hosts of the allowed origins."""
+        return self.anything or hostname in self.names or hostname.endswith(".localhost") or _is_ip(hostname)
+
+    def refusal(self, headers: Any) -> str | None:
+        """Why a request with these headers is refused, or None to let it through."""
+        if self.anything:
+            return None
+        host_header = headers.get("Host")
+        host = _split_host(host_header) if host_header else None
+        if host is None or not self.host_ok(host[0]):
+            return f"unknown Host {host_header!r}"
+        if headers.get("Upgrade", "").lower() != "websocket":
+            return None
+        origin_header = headers.get("Origin")
+        if origin_header is None:
+            return None  # not a browser; see the module docstring
+        try:
+            origin = parse_origin(origin_header)
+        except ValueError:
+            return f"origin {origin_header!r} is not this lab's page"
+        if origin in self.origins:
+            return None
+        if origin == _origin("http", host[0], host[1]):
+            return None  # the page was loaded from the address the websocket connects to
+        return f"origin {origin_header!r} is not this lab's page"
+
+
+# -- what a client may send ----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """What to do with one control value: ``ok`` with ``value`` (what the handle stores
+    and every client shows), or refused with ``message`` for the user."""
+
+    ok: bool
+    value: Any = None
+    message: str = ""
+
+
+#: ``check(raw) -> Verdict`` for one control
+Check = Callable[[Any], Verdict]
+
+
+def _finite_number(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def _vector(x: Any, n: int, bound: float = MAX_COORDINATE) -> tuple[float, ...] | None:
+    if not isinstance(x, (list, tuple)) or len(x) != n:
+        return None
+    if not all(_finite_number(v) and abs(v) <= bound for v in x):
+        return None
+    return tuple(float(v) for v in x)
+
+
+def _short_text(x: Any, limit: int = 1024) -> bool:
+    return isinstance(x, str) and len(x) <= limit
+
+
+def _unit_quaternion(x: Any) -> tuple[float, ...] | None:
+    q = _vector(x, 4, 10.0)
+    if q is None:
+        return None
+    norm = math.sqrt(sum(v * v for v in q))
+    if not 0.5 <= norm <= 2.0:
+        return None
+    return tuple(v / norm for v in q)
+
+
+def _camera(msg: dict[str, Any]) -> dict[str, Any] | None:
+    wxyz = _unit_quaternion(msg.get("wxyz"))
+    position = _vector(msg.get("position"), 3)
+    look_at = _vector(msg.get("look_at"), 3)
+    up = _vector(msg.get("up_direction"), 3)
+    fov, near, far = msg.get("fov"), msg.get("near"), msg.get("far")
+    height, width = msg.get("image_height"), msg.get("image_width")
+    if None in (wxyz, position, look_at, up):
+        return None
+    if not all(_finite_number(v) and v > 0 for v in (fov, near, far)) or fov >= math.pi:
+        return None
+    if not all(_finite_number(v) and 0 < v <= 100_000 for v in (height, width)):
+        return None
+    return {"type": "ViewerCameraMessage", "wxyz": wxyz, "position": position, "fov": float(fov),
+            "near": float(near), "far": float(far), "image_height": max(1, int(round(height))),
+            "image_width": max(1, int(round(width))),
+            "look_at": look_at, "up_direction": up}
+
+
+def _gizmo(msg: dict[str, Any]) -> dict[str, Any] | None:
+    name, owner = msg.get("name"), msg.get("owner", "")
+    if not _short_text(name) or not _short_text(owner, 64):
+        return None
+    if msg["type"] != "TransformControlsUpdateMessage":
+        return {"type": msg["type"], "name": name, "owner": owner}
+    wxyz = _unit_quaternion(msg.get("wxyz"))
+    position = _vector(msg.get("position"), 3)
+    if wxyz is None or position is None:
+        return None
+    return {"type": msg["type"], "name": name, "wxyz": wxyz, "position": position, "owner": owner}
+
+
+_GIZMO_MESSAGES = ("TransformControlsUpdateMessage", "TransformControlsDragStartMessage",
+                   "TransformControlsDragEndMessage")
+
+
+def generic_check(handle: Any) -> Check:
+    """The rules for a viser input that ejsgen did not register a check for: the value must
+    already have the control's type (no casting), numbers finite and within the control's
+    range, text at most :data:`ejsrl.view._validate.MAX_TEXT_LENGTH` characters, a dropdown
+    one of its options; a button only takes a click."""
+    import viser
+
+    from ejsrl.view._validate import MAX_TEXT_LENGTH
+
+    label = str(getattr(handle, "label", "") or "control")
+
+    def refuse(why: str) -> Verdict:
+        return Verdict(False, message=f"{label}: {why}; the value was not applied.")
+
+    def check(raw: Any) -> Verdict:
+        current = handle._impl.value
+        if handle._impl.is_button:
+            return Verdict(True, True) if raw is True else refuse("not a click")
+        if isinstance(handle, viser.GuiDropdownHandle):
+            return Verdict(True, raw) if isinstance(raw, str) and raw in handle.options else refuse("not one of the options")
+        if isinstance(current, bool):
+            return Verdict(True, raw) if isinstance(raw, bool) else refuse("not true or false")
+        if isinstance(current, str):
+            if not isinstance(raw, str) or len(raw) > MAX_TEXT_LENGTH:
+                return refuse(f"not a text of at most {MAX_TEXT_LENGTH} characters")
+            return Verdict(True, raw)
+        if isinstance(current, (int, float)):
+            if not _finite_number(raw):
+                return refuse("not a finite number")
+            x = float(raw)
+            lo = getattr(handle._impl.props, "min", None)
+            hi = getattr(handle._impl.props, "max", None)
+            if lo is not None:
+                x = max(x, float(lo))
+            if hi is not None:
+                x = min(x, float(hi))
+            return Verdict(True, int(round(x)) if isinstance(current, int) else x)
+        return refuse("this kind of control takes no value from the browser")
+
+    return check
+
+
+#: ``notify(client, title, body)``: tell one client (a ``viser.ClientHandle``) something
+Notify = Callable[[Any, str, str], Any]
+
+
+class MessageGuard:
+    """Checks every message a client sends to ``server`` (a ``viser.ViserServer``) before
+    viser decodes it; see the module docstring. ``checks`` maps a GUI input's uuid to the
+    ejsgen check of its value (:meth:`watch`); other inputs get :func:`generic_check`.
+    """
+
+    def __init__(self) -> None:
+        self.server: Any = None
+        self.checks: dict[str, Check] = {}
+        self.notify: Notify = _default_notify
+        #: how many messages were dropped, by reason (for tests and logs)
+        self.dropped: dict[str, int] = {}
+        self._ready: weakref.WeakSet[Any] = weakref.WeakSet()
+
+    def watch(self, handle: Any, check: Check) -> None:
+        """Validate values sent for ``handle`` (a viser GUI input) with ``check``."""
+        self.checks[handle._impl.uuid] = check
+
+    # -- called on viser's event loop, for every message ---------------------------------------
+    def filter(self, connection: Any, raw: Any) -> bytes | None:
+        """The message to hand to viser (possibly rewritten), or None to drop it."""
+        import msgspec
+
+        if not isinstance(raw, (bytes, bytearray, memoryview)):
+            return self._drop("not binary")
+        try:
+            msg = msgspec.msgpack.decode(raw)
+        except msgspec.DecodeError:
+            return self._drop("not msgpack")
+        if not isinstance(msg, dict) or not isinstance(msg.get("type"), str):
+            return self._drop("no type")
+        kind = msg["type"]
+        if kind == "ViewerCameraMessage":
+            out = _camera(msg)
+            if out is None:
+                return self._drop("bad camera")
+            self._ready.add(connection)
+        elif kind == "GuiUpdateMessage":
+            if connection not in self._ready:
+                return self._drop("before the first camera message")
+            out = self._gui_update(connection, msg)
+        elif kind in _GIZMO_MESSAGES:
+            if connection not in self._ready:
+                return self._drop("before the first camera message")
+            out = _gizmo(msg)
+        else:
+            return self._drop(f"kind {kind[:60]}")
+        if out is None:
+            return self._drop(kind)
+        return msgspec.msgpack.encode(out)
+
+    def _drop(self, why: str) -> None:
+        if why not in self.dropped:
+            log.info("ejsrl: dropped a client message (%s)", why)
+        self.dropped[why] = self.dropped.get(why, 0) + 1
+        return None
+
+    def _gui_update(self, connection: Any, msg: dict[str, Any]) -> dict[str, Any] | None:
+        uuid, updates = msg.get("uuid"), msg.get("updates")
+        if not isinstance(uuid, str) or not isinstance(updates, dict) or set(updates) != {"value"}:
+            return None
+        handle = self.server.gui._gui_input_handle_from_uuid.get(uuid) if self.server is not None else None
+        if handle is None:
+            return None
+        check = self.checks.get(uuid) or generic_check(handle)
+        raw = updates["value"]
+        try:
+            verdict = check(raw)
+        except Exception:  # noqa: BLE001 - a broken check must refuse, not crash the connection
+            log.exception("ejsrl: checking a value for %s failed", uuid)
+            verdict = Verdict(False, message="the value could not be checked; it was not applied.")
+        if not verdict.ok:
+            client = self._client(connection)
+            if client is not None:
+                self._show(client, uuid, handle._impl.value)
+                try:
+                    self.notify(client, "Value refused", verdict.message)
+                except Exception:  # noqa: BLE001
+                    log.debug("notifying a client failed", exc_info=True)
+            return self._drop("refused value")
+        if not (type(verdict.value) is type(raw) and verdict.value == raw):
+            client = self._client(connection)
+            if client is not None:  # viser echoes to the others only: show the sender the clamped value
+                self._show(client, uuid, verdict.value)
+        return {"type": "GuiUpdateMessage", "uuid": uuid, "updates": {"value": verdict.value}}
+
+    def _client(self, connection: Any) -> Any:
+        server = self.server
+        if server is None:
+            return None
+        for client_id, conn in list(server._websock_server._live_connections.items()):
+            if conn is connection:
+                return server._connected_clients.get(client_id)
+        return None
+
+    @staticmethod
+    def _show(client: Any, uuid: str, value: Any) -> None:
+        """Make ``client``'s control ``uuid`` show ``value`` (only that client)."""
+        from viser._messages import GuiUpdateMessage
+
+        client._websock_connection.queue_message(GuiUpdateMessage(uuid, {"value": value}))
+
+
+def _default_notify(client: Any, title: str, body: str) -> Any:
+    return client.add_notification(title, body, color="red")
+
+
+# -- starting a guarded server ---------------------------------------------------------------------
+
+_SERVE_LOCK = threading.Lock()
+_GUARDS: weakref.WeakKeyDictionary[Any, MessageGuard] = weakref.WeakKeyDictionary()
+
+
+def guard_of(server: Any) -> MessageGuard | None:
+    """The message guard of a server made by :func:`start_server` (None for other servers)."""
+    try:
+        return _GUARDS.get(server)
+    except TypeError:
+        return None
+
+
+class _Hook:
+    """Wraps ``websockets.asyncio.server.serve`` while one viser server starts."""
+
+    def __init__(self, original: Callable[..., Any], access: Access, guard: MessageGuard, max_bytes: int) -> None:
+        self.original = original
+        self.access = access
+        self.guard = guard
+        self.max_bytes = max_bytes
+        self.installed = False
+
+    def __call__(self, handler: Any, *args: Any, **kwargs: Any) -> Any:
+        if getattr(handler, "__qualname__", "") != _VISER_HANDLER or "process_request" not in kwargs:
+            return self.original(handler, *args, **kwargs)
+        inner = kwargs["process_request"]
+        access, guard = self.access, self.guard
+        warned: set[str] = set()
+
+        def process_request(connection: Any, request: Any) -> Any:
+            why = access.refusal(request.headers)
+            if why is not None:
+                if why not in warned:
+                    warned.add(why)
+                    log.warning("ejsrl: refused a connection: %s. If this is how the lab is reached, "
+                                "start it with --allow-origin (see its --help).", why)
+                return connection.respond(http.HTTPStatus.FORBIDDEN, f"This lab refuses the request: {why}.\n")
+            return inner(connection, request) if inner is not None else None
+
+        async def guarded_handler(connection: Any) -> None:
+            recv = connection.recv
+
+            async def checked_recv(decode: bool | None = None) -> Any:
+                while True:
+                    raw = await recv(decode)
+                    out = guard.filter(connection, raw)
+                    if out is not None:
+                        return out
+
+            connection.recv = checked_recv
+            await handler(connection)
+
+        kwargs["process_request"] = process_request
+        kwargs["max_size"] = self.max_bytes
+        self.installed = True
+        return self.original(guarded_handler, *args, **kwargs)
+
+
+def start_server(
+    host: str = "127.0.0.1",
+    port: int = 8080,
+    *,
+    allow_origins: Iterable[str] = (),
+    label: str | None = None,
+    verbose: bool = False,
+    max_message_bytes: int = MAX_MESSAGE_BYTES,
+) -> Any:
+    """Start a ``viser.ViserServer`` on ``host:port`` (the next free port if taken) behind the
+    guards of this module; ``allow_origins``: extra websocket origins (``"*"``: any).
+
+    Raises ``ValueError`` for a malformed origin and ``RuntimeError`` if this viser's
+    internals are not the ones the guards hook (the server is stopped first).
+    """
+    import viser
+    import websockets.asyncio.server as ws_server
+
+    access = Access(host, tuple(allow_origins))
+    guard = MessageGuard()
+    with _SERVE_LOCK:
+        hook = _Hook(ws_server.serve, access, guard, max_message_bytes)
+        ws_server.serve = hook  # type: ignore[assignment]
+        try:
+            server = viser.ViserServer(host=host, port=port, label=label, verbose=verbose)
+        finally:
+            ws_server.serve = hook.original  # type: ignore[assignment]
+    problem = None if hook.installed else "viser did not start its websocket server through websockets.asyncio.server.serve"
+    if problem is None:
+        problem = _missing_internals(server)
+    if problem is not None:
+        server.stop()
+        raise RuntimeError(
+            f"ejsrl cannot guard viser {viser.__version__} ({problem}); it was tested with viser "
+            f"{', '.join(v + '.x' for v in VISER_TESTED)}: install one with pip install 'viser>=1.1,<1.2'"
+        )
+    guard.server = server
+    _GUARDS[server] = guard
+    return server
+
+
+def _missing_internals(server: Any) -> str | None:
+    """What this module needs from viser and does not find, or None."""
+    from viser import _messages
+
+    needs = [
+        (server, "_websock_server"),
+        (server, "_connected_clients"),
+        (server.gui, "_gui_input_handle_from_uuid"),
+        (getattr(server, "_websock_server", None), "_live_connections"),
+    ]
+    for obj, name in needs:
+        if not hasattr(obj, name):
+            return f"no {type(obj).__name__}.{name}"
+    for kind in ("ViewerCameraMessage", "GuiUpdateMessage", *_GIZMO_MESSAGES):
+        if not hasattr(_messages, kind):
+            return f"no message {kind}"
+    return None
+

@@ -1,0 +1,105 @@
+"""A raw websocket client that speaks viser's wire format, for the hostile-client tests.
+
+It does what a browser's viser client does (the ``viser-v<version>`` subprotocol,
+msgpack messages, the viewer camera message that registers a client) and anything else
+a hostile script might: any Origin or Host header, any message, any size.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from typing import Any
+
+import msgspec
+import viser
+import zstandard
+from websockets.asyncio.client import connect
+from websockets.exceptions import ConnectionClosed
+
+SUBPROTOCOL = f"viser-v{viser.__version__}"
+
+CAMERA = {
+    "type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [3.0, 3.0, 3.0], "fov": 1.3,
+    "near": 0.01, "far": 1000.0, "image_height": 800, "image_width": 1280, "look_at": [0.0, 0.0, 0.0],
+    "up_direction": [0.0, 0.0, 1.0],
+}
+
+
+def encode(message: dict[str, Any]) -> bytes:
+    return msgspec.msgpack.encode(message)
+
+
+def decode_frame(data: bytes) -> list[dict[str, Any]]:
+    """The messages in one server frame: [8 B size][8 B compressed size][zstd msgpack][buffers]."""
+    size = int.from_bytes(data[:8], "little")
+    compressed = int.from_bytes(data[8:16], "little")
+    inner = zstandard.ZstdDecompressor().decompress(data[16:16 + compressed], max_output_size=size)
+    return list(msgspec.msgpack.decode(inner)["messages"])
+
+
+def gui_update(uuid: str, **updates: Any) -> dict[str, Any]:
+    return {"type": "GuiUpdateMessage", "uuid": uuid, "updates": updates}
+
+
+class Client:
+    """One websocket connection to a served app, with everything it has received."""
+
+    def __init__(self, ws: Any) -> None:
+        self.ws = ws
+        self.received: list[dict[str, Any]] = []
+        self.closed: ConnectionClosed | None = None
+        self._reader = asyncio.create_task(self._read())
+
+    @classmethod
+    async def open(cls, port: int, *, origin: str | None = None, host: str | None = None,
+                   camera: bool = True, server: Any = None) -> "Client":
+        headers = {"Host": host} if host else None
+        ws = await connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL], origin=origin,
+                           additional_headers=headers, max_size=None, open_timeout=10)
+        client = cls(ws)
+        if camera:
+            before = len(server.get_clients()) if server is not None else 0
+            await client.send(CAMERA)
+            if server is not None:
+                await client.until(lambda: len(server.get_clients()) > before, "the client to be registered")
+        return client
+
+    async def _read(self) -> None:
+        try:
+            async for data in self.ws:
+                if isinstance(data, bytes):
+                    self.received.extend(decode_frame(data))
+        except ConnectionClosed as exc:
+            self.closed = exc
+        if self.closed is None:
+            self.closed = self.ws.close_exc if hasattr(self.ws, "close_exc") else ConnectionClosed(None, None)
+
+    async def send(self, message: dict[str, Any] | bytes | str) -> None:
+        await self.ws.send(message if isinstance(message, (bytes, str)) else encode(message))
+
+    def seen(self, kind: str, **fields: Any) -> list[dict[str, Any]]:
+        return [m for m in self.received if m.get("type") == kind and all(m.get(k) == v for k, v in fields.items())]
+
+    def values_of(self, uuid: str) -> list[Any]:
+        """Every value this client was sent for the control ``uuid`` (what its UI showed)."""
+        return [m["updates"]["value"] for m in self.seen("GuiUpdateMessage", uuid=uuid) if "value" in m["updates"]]
+
+    def notifications(self) -> list[str]:
+        return [f"{m['props']['title']}: {m['props']['body']}" for m in self.seen("NotificationShowMessage")]
+
+    @staticmethod
+    async def until(condition: Any, what: str, timeout: float = 10.0) -> None:
+        deadline = time.monotonic() + timeout
+        while not condition():
+            if time.monotonic() > deadline:
+                raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+            await asyncio.sleep(0.02)
+
+    async def settle(self, seconds: float = 0.3) -> None:
+        """Give the server time to act on what was sent (for asserting that nothing happened)."""
+        await asyncio.sleep(seconds)
+
+    async def close(self) -> None:
+        await self.ws.close()
+        await asyncio.gather(self._reader, return_exceptions=True)
