@@ -8,12 +8,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from ejsgen import __version__
 from ejsgen.errors import EjsError
@@ -131,13 +133,90 @@ def _cmd_build(args: argparse.Namespace) -> int:
     return 0
 
 
+class _Stopped(Exception):
+    """SIGINT or SIGTERM arrived before the app was started."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+class _AppRunner:
+    """Runs the built app as a child process and passes SIGINT/SIGTERM on to it.
+
+    The child has its own process group, so a Ctrl+C in the terminal reaches it once,
+    from here. On the first signal the child gets the same signal and is waited for (it
+    stops its server, or writes its rows, and exits); a second signal, or a child still
+    running after ``grace`` seconds, kills it. A signal before the child starts raises
+    :class:`_Stopped`, so the temporary folder is removed on the way out.
+    """
+
+    def __init__(self, grace: float = 10.0) -> None:
+        self.grace = grace
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.signum: int | None = None
+        self._old: dict[int, Any] = {}
+
+    def __enter__(self) -> _AppRunner:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+
+    def _handle(self, signum: int, frame: object) -> None:
+        proc = self.proc
+        if self.signum is None:
+            self.signum = signum
+            if proc is None:
+                raise _Stopped(signum)
+            _signal_child(proc, signum)
+        elif proc is not None:
+            _signal_child(proc, signal.SIGKILL)
+
+    def run(self, cmd: list[str]) -> int:
+        """Start ``cmd``, wait for it; its exit status (128 + n if signal n stopped it)."""
+        if self.signum is not None:
+            raise _Stopped(self.signum)
+        self.proc = proc = subprocess.Popen(cmd, process_group=0)
+        if self.signum is not None:  # arrived while starting
+            _signal_child(proc, self.signum)
+        while True:
+            try:
+                code = proc.wait(timeout=None if self.signum is None else self.grace)
+                break
+            except subprocess.TimeoutExpired:
+                _signal_child(proc, signal.SIGKILL)
+        if self.signum is not None:
+            return 128 + int(self.signum)
+        return 128 - code if code < 0 else code
+
+
+def _signal_child(proc: subprocess.Popen[bytes], signum: int) -> None:
+    try:
+        proc.send_signal(signum)
+    except ProcessLookupError:
+        pass
+
+
 def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
-    if args.output:
-        out = build(args.spec, args.output)
-        return subprocess.call([sys.executable, str(out / "app.py"), *app_args])
-    with tempfile.TemporaryDirectory(prefix="ejsgen-run-") as tmp:
-        out = build(args.spec, Path(tmp) / "app")
-        return subprocess.call([sys.executable, str(out / "app.py"), *app_args])
+    """Build, then run the app until it ends; SIGINT/SIGTERM stop it and remove the temporary folder.
+
+    The status is the app's, or 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
+    """
+    with _AppRunner() as runner:
+        try:
+            if args.output:
+                out = build(args.spec, args.output)
+                return runner.run([sys.executable, str(out / "app.py"), *app_args])
+            with tempfile.TemporaryDirectory(prefix="ejsgen-run-") as tmp:
+                out = build(args.spec, Path(tmp) / "app")
+                return runner.run([sys.executable, str(out / "app.py"), *app_args])
+        except _Stopped as exc:
+            print(f"ejsgen run: stopped by {exc}", file=sys.stderr)
+            return 128 + int(exc.signum)
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:

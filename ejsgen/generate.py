@@ -10,6 +10,7 @@ half-written.
 from __future__ import annotations
 
 import io
+import os
 import re
 import shutil
 import tempfile
@@ -142,6 +143,7 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
     out_dir = out_dir.resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
+    tmp.chmod(0o777 & ~_umask())  # mkdtemp makes it 0700; the app folder gets the mode of any new folder
     try:
         (tmp / "app.py").write_text(app_text, encoding="utf-8")
         (tmp / "README.md").write_text(readme, encoding="utf-8")
@@ -158,6 +160,13 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return sorted(p for p in out_dir.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+
+
+def _umask() -> int:
+    """The process's umask (read by setting it and putting it back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
 
 
 def _asset_dest(folder: Path, src: Path, rel: str) -> Path:
