@@ -61,6 +61,33 @@ def _finite(x: Any) -> bool:
 _UNSET = object()
 
 
+#: the panel's width (pixels) when the spec sets none: room for plots and images ...
+PANEL_WIDTH = 400
+#: the width (pixels) of the About panel, docked at the left edge
+ABOUT_WIDTH = 300
+#: ... and for the title in the panel's header (pixels per character, and the header's icons)
+_TITLE_PX_PER_CHAR = 7.0
+_HEADER_PX = 130
+
+#: Fixes to viser's page, sent once with the panel (HTML the app writes, never user text):
+#: arrow keys pressed on a focused slider move the slider only (viser's keyboard camera
+#: controls skip inputs but not sliders, so the 3D view turned as well); the panel's title
+#: wraps instead of being cut short.
+CLIENT_TWEAKS = (
+    "<style>.ejs-tweaks{display:none}</style>"
+    '<img class="ejs-tweaks" alt="" src="data:," onerror="'
+    "if(!window.__ejsKeys){window.__ejsKeys=1;document.body.addEventListener('keydown',function(e){"
+    "var t=e.target;if(/^Arrow/.test(e.key)&amp;&amp;t&amp;&amp;t.closest&amp;&amp;t.closest('[role=slider]'))e.stopPropagation();});}"
+    '">'
+)
+
+
+def panel_width_for(title: str, elements: list[Any]) -> int:
+    """The panel width (pixels) that shows ``title`` whole, and plots and images at a readable size."""
+    del elements  # every lab gets the same width, unless its title needs more
+    return int(min(640, max(PANEL_WIDTH, _HEADER_PX + _TITLE_PX_PER_CHAR * len(title))))
+
+
 class TextBinding:
     """A text property that may change at run time (a label with ``{expr}``) and its setter.
 
@@ -194,20 +221,29 @@ class Panel:
         meta = getattr(app, "meta", None)
         title = getattr(meta, "title", "") or "ejsgen simulation"
         gui.set_panel_label(title)
-        width = getattr(getattr(app, "sim", None), "panel_width", None)
-        if width:
-            gui.main_panel.set_width(float(width))
+        width = getattr(getattr(app, "sim", None), "panel_width", None) or panel_width_for(title, list(getattr(app, "view", []) or []))
+        # docked at the right edge: the panel never covers the 3D view, and it gets the
+        # window's full height for plots and camera images
+        gui.main_panel.dock_right()
+        gui.main_panel.set_width(float(width))
+        self.client_tweaks = gui.add_html(CLIENT_TWEAKS)
         self.error_box = gui.add_html("", visible=False)
         if getattr(getattr(app, "sim", None), "controls", True):
             self._build_controls_bar()
         description = getattr(meta, "description", "") or ""
         author = getattr(meta, "author", "") or ""
+        self.about: Any = None
         if description or author:
-            with gui.add_folder("About", expand_by_default=True):
-                text = description
-                if author:
-                    text += f"\n\n*Author: {author}*"
-                gui.add_markdown(text)
+            # the lab's instructions, open from the start in their own panel at the left
+            # edge, so that they push no control, plot or camera image out of sight
+            text = description
+            if author:
+                text += f"\n\n*Author: {author}*"
+            self.about = gui.add_panel()
+            with self.about.add_tab("About"):
+                self.about_text = gui.add_markdown(text)
+            self.about.dock_left()
+            self.about.set_width(ABOUT_WIDTH)
         self._build_elements(list(getattr(app, "view", []) or []))
 
     def _build_controls_bar(self) -> None:

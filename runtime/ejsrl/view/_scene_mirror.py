@@ -26,7 +26,7 @@ import numpy as np
 
 from ejsrl.robotics.transforms import q2r, r2q
 
-__all__ = ["SceneMirror", "ROOT"]
+__all__ = ["SceneMirror", "ROOT", "scene_bounds", "framing_view", "frame_camera"]
 
 #: the viser scene path under which every world node is placed
 ROOT = "/ejs"
@@ -462,3 +462,87 @@ def _safe_remove(handle: Any) -> None:
         handle.remove()
     except Exception:
         pass
+
+
+# -- the first view of the scene --------------------------------------------------------------
+
+#: the direction the initial camera looks from (towards -x, +y, down), and its vertical field of view
+VIEW_FROM = np.array([1.0, -1.0, 0.75])
+VIEW_FOV = np.radians(75.0)  # viser's default
+#: the 3D view's width / height assumed (the canvas between the docked About and control panels)
+VIEW_ASPECT = 0.7
+#: how much larger than the content's bounding sphere the view is
+VIEW_MARGIN = 1.6
+
+
+def scene_bounds(world: Any) -> tuple[np.ndarray, np.ndarray] | None:
+    """``(lo, hi)``: the corners (3,) of the box around everything the world shows, in metres.
+
+    Solids (boxes, meshes, robots ...), the points of lines, trails and point clouds, frames'
+    axes, grids' squares, labels and cameras count; invisible nodes do not. None if empty.
+    """
+    pts: list[np.ndarray] = []
+    tris, _rgb = world.triangles()
+    if len(tris):
+        pts.append(tris.reshape(-1, 3))
+    for node in world.walk():
+        if not world.is_visible(node) or node.opacity <= 0.0:
+            continue
+        T = node.T_world()
+        local: np.ndarray | None = None
+        if node.kind in ("line", "trail", "points"):
+            local = np.asarray(node.props.get("points", np.zeros((0, 3))), dtype=float).reshape(-1, 3)
+        elif node.kind == "frame":
+            local = np.vstack([np.zeros(3), np.eye(3) * float(node.props.get("size", 0.2))])
+        elif node.kind == "grid":
+            h = float(node.props.get("size", 2.0)) / 2.0
+            local = np.array([[-h, -h, 0.0], [h, h, 0.0], [-h, h, 0.0], [h, -h, 0.0]])
+        elif node.kind in ("text3d", "camera"):
+            local = np.zeros((1, 3))
+        if local is not None and len(local):
+            pts.append(local @ T[:3, :3].T + T[:3, 3])
+    if not pts:
+        return None
+    allp = np.concatenate(pts)
+    allp = allp[np.all(np.isfinite(allp), axis=1)]
+    if not len(allp):
+        return None
+    return allp.min(axis=0), allp.max(axis=0)
+
+
+def framing_view(lo: np.ndarray, hi: np.ndarray, *, fov: float = VIEW_FOV, aspect: float = VIEW_ASPECT) -> tuple[np.ndarray, np.ndarray]:
+    """``(position, look_at)`` of a camera that sees the whole box ``lo``..``hi`` (world, metres).
+
+    The camera looks from :data:`VIEW_FROM` at the box's centre, far enough that a sphere
+    around the box, grown by :data:`VIEW_MARGIN` for what moves about (a pendulum swings
+    to the other side), fits in the vertical field of view ``fov`` (radians) and in the
+    horizontal one given ``aspect`` (width / height).
+    """
+    lo = np.asarray(lo, dtype=float)
+    hi = np.asarray(hi, dtype=float)
+    center = (lo + hi) / 2.0
+    radius = max(float(np.linalg.norm(hi - lo)) / 2.0, 0.05) * VIEW_MARGIN
+    half = min(fov / 2.0, float(np.arctan(np.tan(fov / 2.0) * aspect)))
+    distance = radius / np.sin(half)
+    direction = VIEW_FROM / np.linalg.norm(VIEW_FROM)
+    return center + distance * direction, center
+
+
+def frame_camera(camera: Any, world: Any, lock: Any = None) -> None:
+    """Point ``camera`` (a viser client's camera, or ``server.initial_camera``) at the world's content.
+
+    ``lock``: the model lock, held while the world is read. A world with nothing to show
+    leaves the camera where it is.
+    """
+    if world is None:
+        return
+    if lock is not None:
+        with lock:
+            bounds = scene_bounds(world)
+    else:
+        bounds = scene_bounds(world)
+    if bounds is None:
+        return
+    position, look_at = framing_view(*bounds)
+    camera.position = tuple(float(v) for v in position)
+    camera.look_at = tuple(float(v) for v in look_at)
