@@ -54,9 +54,10 @@ class Client:
     @classmethod
     async def open(cls, port: int, *, origin: str | None = None, host: str | None = None,
                    camera: bool = True, server: Any = None) -> "Client":
-        headers = {"Host": host} if host else None
-        ws = await connect(f"ws://127.0.0.1:{port}", subprotocols=[SUBPROTOCOL], origin=origin,
-                           additional_headers=headers, max_size=None, open_timeout=10)
+        # with ``host``, the Host header names it while the TCP connection still goes to 127.0.0.1
+        uri = f"ws://{host or f'127.0.0.1:{port}'}"
+        ws = await connect(uri, subprotocols=[SUBPROTOCOL], origin=origin, host="127.0.0.1", port=port,
+                           max_size=None, open_timeout=10)
         client = cls(ws)
         if camera:
             before = len(server.get_clients()) if server is not None else 0

@@ -173,15 +173,17 @@ class Access:
         """Why a request with these headers is refused, or None to let it through."""
         if self.anything:
             return None
-        host_header = headers.get("Host")
-        host = _split_host(host_header) if host_header else None
+        hosts = headers.get_all("Host")
+        host_header = hosts[0] if len(hosts) == 1 else ", ".join(hosts)
+        host = _split_host(host_header) if len(hosts) == 1 else None
         if host is None or not self.host_ok(host[0]):
             return f"unknown Host {host_header!r}"
-        if headers.get("Upgrade", "").lower() != "websocket":
+        if "websocket" not in (v.lower() for v in headers.get_all("Upgrade")):
             return None
-        origin_header = headers.get("Origin")
-        if origin_header is None:
+        origins = headers.get_all("Origin")
+        if not origins:
             return None  # not a browser; see the module docstring
+        origin_header = ", ".join(origins)
         try:
             origin = parse_origin(origin_header)
         except ValueError:
