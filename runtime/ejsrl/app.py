@@ -319,17 +319,31 @@ class App(Controller):
             thread.join(timeout=5.0)
 
     # -- serving ----------------------------------------------------------------------------------
-    def serve(self, host: str = "127.0.0.1", port: int = 8080, *, block: bool = True) -> Any:
-        """Start the viser server and the loop; returns the server (its real port: ``get_port()``)."""
-        import viser
+    def serve(
+        self, host: str = "127.0.0.1", port: int = 8080, *, block: bool = True, allow_origins: Sequence[str] = ()
+    ) -> Any:
+        """Start the viser server and the loop; returns the server (its real port: ``get_port()``).
 
-        from ejsrl.view.viser_view import ViserView
+        Only pages served by the app itself may open its websocket (and ``allow_origins``;
+        ``"*"``: any); a ``host`` other than this machine's loopback prints a warning.
+        """
+        from ejsrl.view._guard import is_loopback
+        from ejsrl.view.viser_view import ViserView, make_server
 
-        server = viser.ViserServer(host=host, port=port, label=self.meta.title, verbose=False)
+        server, _url = make_server(host, port, allow_origins=allow_origins, label=self.meta.title)
         view = ViserView(self, server)
         self.views.append(view)
         url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
         print(f"{self.meta.title}: serving on http://{url_host}:{server.get_port()} (Ctrl+C to stop)", flush=True)
+        if not is_loopback(host):
+            where = "every network this machine is on" if host in ("0.0.0.0", "", "::") else f"the network at {host}"
+            print(
+                f"warning: --host {host or '0.0.0.0'} opens this lab to {where}: anyone who can reach this "
+                f"machine on port {server.get_port()} can open it, watch it and change the simulation. "
+                "Leave --host out (127.0.0.1) to keep the lab on this machine.",
+                file=sys.stderr,
+                flush=True,
+            )
         if not block:
             self._loop_thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)
             self._loop_thread.start()
@@ -604,6 +618,12 @@ def _parser(title: str) -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(description=f"{title} (an ejsgen app). Serves the UI in the browser, or runs headless.")
     p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this machine only)")
     p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if taken)")
+    p.add_argument(
+        "--allow-origin", action="append", default=[], metavar="ORIGIN",
+        help="also accept the lab's websocket from pages at ORIGIN, e.g. https://labs.example.org behind a proxy "
+        "(repeatable; '*' accepts any page and any Host: only behind a proxy you trust). By default only the "
+        "lab's own page may connect",
+    )
     p.add_argument("--headless", action="store_true", help="run without a server")
     p.add_argument("--duration", type=float, help="headless: how long to run, in units of the independent variable")
     p.add_argument("--csv", metavar="FILE", help="headless: write variables to this CSV file ('-' for standard output)")
@@ -744,6 +764,13 @@ def _main(
     if any(v is not None for v in (args.duration, args.csv, args.vars)):
         print("error: --duration, --csv and --vars go with --headless", file=sys.stderr)
         return 2
+    try:
+        from ejsrl.view._guard import parse_origin
+
+        origins = [parse_origin(o) for o in args.allow_origin]
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
     app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
-    app.serve(args.host, args.port)
+    app.serve(args.host, args.port, allow_origins=origins)
     return 0
