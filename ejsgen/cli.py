@@ -142,13 +142,16 @@ class _Stopped(Exception):
 
 
 class _AppRunner:
-    """Runs the built app as a child process and passes SIGINT/SIGTERM on to it.
+    """Runs the built app as a child process and stops it on SIGINT/SIGTERM.
 
-    The child has its own process group, so a Ctrl+C in the terminal reaches it once,
-    from here. On the first signal the child gets the same signal and is waited for (it
-    stops its server, or writes its rows, and exits); a second signal, or a child still
-    running after ``grace`` seconds, kills it. A signal before the child starts raises
-    :class:`_Stopped`, so the temporary folder is removed on the way out.
+    The child has its own process group, so a Ctrl+C in the terminal reaches only this
+    process. On the first signal the child gets SIGTERM, whichever signal came: the app
+    handles it as a clean stop (its server stopped, or its rows written), and while the
+    child is still starting up (before it handles signals) SIGTERM ends it silently, where
+    a SIGINT would print Python's KeyboardInterrupt traceback. The child is then waited
+    for; a second signal, or a child still running after ``grace`` seconds, kills it. A
+    signal before the child starts raises :class:`_Stopped`, so the temporary folder is
+    removed on the way out.
     """
 
     def __init__(self, grace: float = 10.0) -> None:
@@ -172,7 +175,7 @@ class _AppRunner:
             self.signum = signum
             if proc is None:
                 raise _Stopped(signum)
-            _signal_child(proc, signum)
+            _signal_child(proc, signal.SIGTERM)
         elif proc is not None:
             _signal_child(proc, signal.SIGKILL)
 
@@ -182,7 +185,7 @@ class _AppRunner:
             raise _Stopped(self.signum)
         self.proc = proc = subprocess.Popen(cmd, process_group=0)
         if self.signum is not None:  # arrived while starting
-            _signal_child(proc, self.signum)
+            _signal_child(proc, signal.SIGTERM)
         while True:
             try:
                 code = proc.wait(timeout=None if self.signum is None else self.grace)
@@ -190,6 +193,7 @@ class _AppRunner:
             except subprocess.TimeoutExpired:
                 _signal_child(proc, signal.SIGKILL)
         if self.signum is not None:
+            print(f"ejsgen run: stopped by {signal.Signals(self.signum).name}", file=sys.stderr, flush=True)
             return 128 + int(self.signum)
         return 128 - code if code < 0 else code
 

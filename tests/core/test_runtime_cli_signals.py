@@ -135,7 +135,8 @@ def test_ejsgen_run_stops_the_app_and_removes_its_temporary_folder(tmp_path, sig
         proc.kill()
     err = (tmp_path / "e").read_text()
     assert status == STATUS[sig], err
-    assert "Traceback" not in err and f"stopped by {sig.name}" in err
+    assert "Traceback" not in err and f"ejsgen run: stopped by {sig.name}" in err
+    assert "Damped pendulum: stopped by SIGTERM" in err  # what the app was sent, whichever signal came
     assert gone(app_pid) and not accepts(port)
     assert list(tmp.iterdir()) == []
 
@@ -153,7 +154,7 @@ def test_ejsgen_run_stopped_while_building_leaves_nothing_behind(tmp_path) -> No
     finally:
         proc.kill()
     err = (tmp_path / "e").read_text()
-    assert status == 143 and "Traceback" not in err and "stopped by SIGTERM" in err, err
+    assert status == 143 and "Traceback" not in err and "ejsgen run: stopped by SIGTERM" in err, err
     assert list(tmp.iterdir()) == []
 
 
@@ -168,3 +169,22 @@ def test_built_folders_have_the_mode_of_any_new_folder(tmp_path) -> None:
     assert out.stat().st_mode & 0o777 == 0o755
     assert (out / "ejsrl").stat().st_mode & 0o777 == 0o755
     assert (out / "app.py").stat().st_mode & 0o777 == 0o644
+
+
+def test_ctrl_c_while_the_app_is_starting_up_prints_no_traceback(tmp_path) -> None:
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    proc = start(
+        [sys.executable, "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--port", str(free_port())],
+        tmp_path / "o", tmp_path / "e", env={"TMPDIR": str(tmp)},
+    )
+    try:
+        wait_for(lambda: children(proc.pid), "the app's process", timeout=30)
+        (app_pid,) = children(proc.pid)
+        status = finish(proc, signal.SIGINT)  # the app is still importing its modules
+    finally:
+        proc.kill()
+    err = (tmp_path / "e").read_text()
+    assert status == 130 and "Traceback" not in err and "ejsgen run: stopped by SIGINT" in err, err
+    assert "serving on" not in (tmp_path / "o").read_text()
+    assert gone(app_pid) and list(tmp.iterdir()) == []
