@@ -359,7 +359,9 @@ class SceneMirror:
         elif kind in ("line", "trail"):
             pts = np.asarray(props["points"]).reshape(-1, 3)
             g.points = _polyline_segments(pts)
-            g.colors = np.broadcast_to(np.array(color, dtype=np.uint8), g.points.shape).copy()
+            # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
+            # means; per-vertex colours would be read as linear and shown washed out
+            g.colors = np.array(color, dtype=np.uint8)
             g.thickness = float(props["width"])
             g.visible = len(pts) >= 2
         elif kind == "points":
