@@ -201,6 +201,7 @@ def test_serving_on_every_interface_prints_a_warning(capsys):
 
         async def own_page():  # reached through the loopback address, the lab still works
             c = await Client.open(port, origin=f"http://127.0.0.1:{port}", server=server)
+            await c.settle()  # the view's greeting (it sets the new client's camera) goes out first
             await c.close()
 
         _run(own_page())

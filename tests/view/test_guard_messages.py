@@ -176,6 +176,9 @@ def test_messages_the_ui_never_sends_are_dropped_and_the_connection_keeps_workin
         await evil.send(gui_update(length, value=0.5))
         await Client.until(lambda: served.app.model.L == 0.5, "the same connection's next update to work")
         assert evil.closed is None
+        # and the UI offers no share button (a public tunnel to the lab)
+        themes = evil.seen("ThemeConfigurationMessage")
+        assert themes and themes[-1]["show_share_button"] is False
         await evil.close()
         await other.close()
 

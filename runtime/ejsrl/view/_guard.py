@@ -20,8 +20,9 @@ viser server with three guards in front of it:
   ``value``, a gizmo drag), each with its fields checked and rebuilt; a control's value
   is validated, clamped and typed by ejsgen's own rules before viser stores or
   broadcasts it. A refused value is dropped, that client is told why and its control
-  shows the server's value again. Everything else (file uploads, share links, scene
-  clicks, other properties of a control) is dropped.
+  shows the server's value again. Everything else (file uploads, scene clicks, other
+  properties of a control, requests for a public share link, whose button is hidden) is
+  dropped.
 
 This relies on viser internals (see :data:`VISER_TESTED`); :func:`start_server` raises
 if the hooks are not where it expects them, rather than serving without the guards.
@@ -525,6 +526,8 @@ def start_server(
         )
     guard.server = server
     _GUARDS[server] = guard
+    # the share button asks viser for a public tunnel to the lab; the guard drops that request
+    server.gui.configure_theme(show_share_button=False)
     return server
 
 
