@@ -53,9 +53,9 @@ def explain(exc: yaml.MarkedYAMLError, text: str) -> Explained:
     if stray:
         return Explained(pline + 1, pcol + 1, f"this '{stray.group(1)}' closes nothing", "remove it, or add the '[' or '{' it should close")
     if problem == "mapping values are not allowed here":
-        return _colon_in_value(lines, pline, pcol)
+        return _odd_line_above(lines, pline) or _colon_in_value(lines, pline, pcol)
     if context.startswith("while parsing a block") and problem.startswith("expected <block end>"):
-        return _misindented(lines, pline)
+        return _odd_line_above(lines, pline) or _misindented(lines, pline)
     if "could not find expected ':'" in problem and exc.context_mark is not None:
         cm = exc.context_mark
         word = _line(lines, cm.line)[cm.column:].split(" #")[0].strip()
@@ -233,6 +233,69 @@ def _colon_in_value(lines: list[str], pline: int, pcol: int) -> Explained:
     )
 
 
+def _parses_past(lines: list[str], line: int) -> bool:
+    """Whether ``lines`` parse as YAML, or at least up to and including ``line`` (0-based)."""
+    try:
+        list(yaml.compose_all("\n".join(lines), Loader=yaml.SafeLoader))
+    except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark or exc.context_mark
+        return mark is not None and mark.line > line
+    except yaml.YAMLError:
+        return False
+    return True
+
+
+def _starts_nodes(lines: list[str], at: list[int]) -> bool:
+    """Whether a YAML token starts at the first character of each line in ``at`` (0-based).
+
+    A line that YAML reads as more of the text above it (a plain or block scalar running
+    on) starts no token: re-indenting a line so that its neighbours become text is no fix.
+    """
+    starts = set()
+    try:
+        for tok in yaml.scan("\n".join(lines), Loader=yaml.SafeLoader):
+            starts.add((tok.start_mark.line, tok.start_mark.column))
+    except yaml.YAMLError:
+        pass
+    return all((j, _indent(lines[j])) in starts for j in at)
+
+
+def _odd_line_above(lines: list[str], pline: int) -> Explained | None:
+    """The line above the error, when it alone is misindented and its neighbours agree.
+
+    PyYAML notices a wrong indentation one line late: after a line indented one step too
+    far, it is the next, correct line that does not fit. If that next line's indentation
+    is shared by a neighbour (the line after it or the one before the line above), and
+    re-indenting the line above makes the file read past the error with every line still
+    starting its own node, the line above is the one to fix.
+    """
+    before = _content_lines_before(lines, pline)
+    if not before or not lines[pline].strip():
+        return None
+    p = before[0]
+    after = [j for j in range(pline + 1, len(lines)) if lines[j].strip() and not lines[j].lstrip().startswith("#")]
+    upto = after[0] if after else pline
+    neighbours = [_indent(lines[j]) for j in (*after[:1], *before[1:2])]
+    if _indent(lines[pline]) not in neighbours:
+        return None  # no second line agrees with the one where YAML noticed: no odd one out
+    targets = [_indent(lines[pline])] + ([_indent(lines[before[1]])] if len(before) > 1 else [])
+    for target in dict.fromkeys(targets):
+        if target == _indent(lines[p]):
+            continue
+        trial = list(lines)
+        trial[p] = " " * target + lines[p].lstrip(" ")
+        if _parses_past(trial, upto) and _starts_nodes(trial, [pline, *after[:1]]):
+            more = _indent(lines[p]) > target
+            like = pline if target == _indent(lines[pline]) else before[1]
+            return Explained(
+                p + 1,
+                _indent(lines[p]) + 1,
+                f"this line is indented by {_spaces(_indent(lines[p]))}, {'more' if more else 'less'} than the lines around it",
+                f"indent it by {_spaces(target)}, like line {like + 1}",
+            )
+    return None
+
+
 def _misindented(lines: list[str], pline: int) -> Explained:
     """A line whose indentation fits none of the structure above it."""
     src = _line(lines, pline)
@@ -241,16 +304,15 @@ def _misindented(lines: list[str], pline: int) -> Explained:
     if not before:
         return Explained(pline + 1, ind + 1, "this line is indented, but nothing above it holds it", "start top-level keys at column 1")
     prev = lines[before[0]]
-    levels: list[tuple[int, str]] = []  # (column of content, key) of the lines that enclose the previous one
+    levels: dict[int, int] = {}  # column -> line (0-based) of the lines that enclose the previous one
     limit = None
     for j in before:
         t = lines[j]
         if limit is None or _indent(t) < limit:
-            levels.append((_key_col(t), _key_of(t)))
-            if _indent(t) != _key_col(t):
-                levels.append((_indent(t), "-"))
+            levels.setdefault(_key_col(t), j)
+            levels.setdefault(_indent(t), j)
             limit = _indent(t)
-    cols = sorted({c for c, _ in levels})
+    cols = sorted(levels)
     is_item = src.lstrip().startswith("- ") or src.strip() == "-"
     if ind > _key_col(prev) or (ind > _indent(prev) and not is_item):
         prev_key = _key_of(prev)
@@ -261,13 +323,13 @@ def _misindented(lines: list[str], pline: int) -> Explained:
             f"indent it by {_spaces(_key_col(prev))}, like '{prev_key}', or put it under a key that ends with ':'",
         )
     if ind not in cols:
-        lower = max((c for c in cols if c < ind), default=0)
-        upper = min((c for c in cols if c > ind), default=_key_col(prev))
+        near = [c for c in (max((c for c in cols if c < ind), default=None), min((c for c in cols if c > ind), default=None)) if c is not None]
+        where = " or ".join(f"{_spaces(c)} as on line {levels[c] + 1}" for c in near)
         return Explained(
             pline + 1,
             ind + 1,
-            f"this line is indented by {_spaces(ind)}, which matches none of the lines above it ({lower} or {_spaces(upper)})",
-            "indent it exactly like the key it belongs beside",
+            f"this line is indented by {_spaces(ind)}, which matches none of the lines above it ({where})",
+            "indent it exactly like the line it belongs beside",
         )
     if is_item:
         return Explained(

@@ -15,7 +15,7 @@ from typing import Any
 
 import yaml
 
-from ejsgen._yaml_errors import explain
+from ejsgen._yaml_errors import Explained, explain
 from ejsgen.errors import Location, SpecError
 
 __all__ = ["Document", "TextOrigin", "load_yaml", "Path_"]
@@ -167,7 +167,11 @@ def load_yaml(path: str | Path, *, text: str | None = None, display_name: str | 
     try:
         nodes = list(yaml.compose_all(text, Loader=yaml.SafeLoader))
     except yaml.MarkedYAMLError as exc:
-        why = explain(exc, text)
+        try:
+            why = explain(exc, text)
+        except Exception:  # an explanation must never hide the error itself
+            mark = exc.problem_mark or exc.context_mark
+            why = Explained(mark.line + 1 if mark else 1, mark.column + 1 if mark else 1, f"invalid YAML: {exc.problem or exc}")
         raise SpecError(Location(name, why.line, why.col), why.message, why.hint) from None
     except yaml.YAMLError as exc:
         raise SpecError(Location(name, 1, 1), f"invalid YAML: {exc}") from None
