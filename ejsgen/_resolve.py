@@ -102,6 +102,9 @@ def parse_snippet(snippet: Snippet) -> ast.AST:
         elif snippet.mode == "eval" and lineno == 1:
             col = max(col - 1, 0)
         msg = exc.msg
+        opener = _unclosed_bracket(snippet.text) if snippet.mode == "eval" and "does not match" in msg else None
+        if opener is not None:  # the closing ')' Python saw is our wrapper's: the opener is the problem
+            (lineno, col), msg = opener[1:], f"'{opener[0]}' was never closed"
         if msg.startswith("unexpected indent") or msg.startswith("unindent"):
             msg += " (code in a YAML block starts at the block's indentation)"
         if msg == "unexpected EOF while parsing" or "was never closed" in msg:
@@ -121,6 +124,55 @@ _MATH_CONSTANTS = frozenset({"pi", "e", "inf"})
 _VALUE_BUILTINS = frozenset({"float", "int", "bool", "complex", "str", "list", "tuple", "dict", "set"})
 #: words that YAML 1.1 reads as booleans; in specs they are text, and in code they are names
 _YAML11_WORDS = ("yes", "no", "on", "off")
+
+
+def _unclosed_bracket(text: str) -> tuple[str, int, int] | None:
+    """The innermost bracket of ``text`` left open at its end: (char, 1-based line, 0-based col).
+
+    Strings and comments are skipped; None if every bracket is closed (or one is closed by
+    the wrong kind, which Python's own message explains).
+    """
+    pairs = {")": "(", "]": "[", "}": "{"}
+    stack: list[tuple[str, int, int]] = []
+    line, col, i, n = 1, 0, 0, len(text)
+    while i < n:
+        ch = text[i]
+        if ch in "\"'":
+            quote = text[i : i + 3] if text[i : i + 3] in ('"""', "'''") else ch
+            j = i + len(quote)
+            while j < n and not text.startswith(quote, j):
+                if text[j] == "\\":
+                    j += 1
+                elif text[j] == "\n" and len(quote) == 1:
+                    return None  # an unterminated string: Python reports it well
+                j += 1
+            if j >= n:
+                return None
+            end = j + len(quote)
+            skipped = text[i:end]
+            if "\n" in skipped:
+                line += skipped.count("\n")
+                col = len(skipped) - skipped.rfind("\n") - 1
+            else:
+                col += len(skipped)
+            i = end
+            continue
+        if ch == "#":
+            while i < n and text[i] != "\n":
+                i += 1
+            continue
+        if ch in "([{":
+            stack.append((ch, line, col))
+        elif ch in pairs:
+            if not stack or stack[-1][0] != pairs[ch]:
+                return None
+            stack.pop()
+        if ch == "\n":
+            line, col = line + 1, 0
+        else:
+            col += 1
+        i += 1
+    return stack[-1] if stack else None
 
 
 # -- scope analysis ---------------------------------------------------------------------------------
