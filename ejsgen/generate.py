@@ -25,7 +25,7 @@ from ejsgen.plan import AppPlan
 
 __all__ = ["render_app", "write_app", "REQUIREMENTS", "runtime_dir"]
 
-REQUIREMENTS = ["numpy>=1.26", "scipy>=1.11", "viser>=1.0", "trimesh>=4.0", "opencv-python-headless>=4.8"]
+REQUIREMENTS = ["numpy>=1.26", "scipy>=1.11", "viser>=1.1,<1.2", "trimesh>=4.0", "opencv-python-headless>=4.8"]
 _MARK = "  #@@ejsloc:"
 _MARK_RE = re.compile(r"  #@@ejsloc:(\d+)$")
 _MATH = "acos, asin, atan, atan2, ceil, cos, cosh, degrees, e, exp, floor, hypot, inf, log, log10,\n    pi, radians, sin, sinh, sqrt, tan, tanh"

@@ -248,3 +248,15 @@ def test_every_server_the_runtime_makes_is_guarded():
     finally:
         app.stop()
         server.stop()
+
+
+def test_the_viser_pin_matches_the_tested_versions():
+    import tomllib
+    from pathlib import Path
+
+    from ejsgen.generate import REQUIREMENTS
+
+    root = Path(__file__).resolve().parents[2]
+    deps = tomllib.loads((root / "pyproject.toml").read_text())["project"]["dependencies"]
+    pin = f"viser>={VISER_TESTED[0]},<{VISER_TESTED[-1].split('.')[0]}.{int(VISER_TESTED[-1].split('.')[1]) + 1}"
+    assert pin in deps and pin in REQUIREMENTS  # the package and every built app's requirements.txt
