@@ -79,7 +79,35 @@ def explain(exc: yaml.MarkedYAMLError, text: str) -> Explained:
             f"inside {'{...}' if close == '}' else '[...]'}, {got} cannot follow the value before it without a ','",
             "text with [ ] { } , : or # inside {...} or [...] must be quoted, e.g. bind: \"q[2]\"",
         )
+    special = _special_start(exc, lines)
+    if special is not None:
+        return special
     return Explained(pline + 1, pcol + 1, f"invalid YAML: {problem or 'cannot read this'}")
+
+
+_MEANING = {"&": "an anchor", "*": "an alias", "!": "a tag", "|": "a block of text", ">": "a folded block of text"}
+
+
+def _special_start(exc: yaml.MarkedYAMLError, lines: list[str]) -> Explained | None:
+    """Text starting with a character YAML gives a meaning (``* & ! | > @ ` %``) or stray."""
+    problem = exc.problem or ""
+    m = exc.problem_mark
+    if m is None:
+        return None
+    if "that cannot start any token" in problem or problem.startswith("expected the node content"):
+        ch = _line(lines, m.line)[m.column : m.column + 1]
+        return Explained(m.line + 1, m.column + 1, f"a value cannot start with '{ch}' in YAML", "put the text in quotes")
+    cm = exc.context_mark
+    if cm is not None and (problem.startswith("expected alphabetic or numeric character") or problem.startswith("expected URI") or "alias" in problem):
+        ch = _line(lines, cm.line)[cm.column : cm.column + 1]
+        return Explained(cm.line + 1, cm.column + 1, f"'{ch}' at the start of a value marks {_MEANING.get(ch, 'YAML syntax')}", f"put text that starts with '{ch}' in quotes")
+    if "undefined alias" in problem:
+        return Explained(m.line + 1, m.column + 1, "'*' at the start of a value marks an alias", "put text that starts with '*' in quotes")
+    if problem.startswith("expected a comment or a line break") or problem.startswith("expected chomping or indentation"):
+        return Explained(m.line + 1, m.column + 1, "after '|' or '>', the text starts on the next line, indented", "move this text to its own line below")
+    if problem == "sequence entries are not allowed here":
+        return Explained(m.line + 1, m.column + 1, "a '- ' item cannot stand here", "start a list item on its own line, indented under its key")
+    return None
 
 
 def _spaces(n: int) -> str:
