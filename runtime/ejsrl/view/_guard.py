@@ -240,21 +240,21 @@ def _unit_quaternion(x: Any) -> tuple[float, ...] | None:
 
 
 def _camera(msg: dict[str, Any]) -> dict[str, Any] | None:
+    """The viewer camera, rebuilt from its known fields, or None. Lenient (a hidden canvas
+    has size 0): a browser whose first camera message is dropped is never registered."""
     wxyz = _unit_quaternion(msg.get("wxyz"))
-    position = _vector(msg.get("position"), 3)
-    look_at = _vector(msg.get("look_at"), 3)
-    up = _vector(msg.get("up_direction"), 3)
+    position = _vector(msg.get("position"), 3, 1e9)
+    look_at = _vector(msg.get("look_at"), 3, 1e9)
+    up = _vector(msg.get("up_direction"), 3, 1e9)
     fov, near, far = msg.get("fov"), msg.get("near"), msg.get("far")
     height, width = msg.get("image_height"), msg.get("image_width")
     if None in (wxyz, position, look_at, up):
         return None
-    if not all(_finite_number(v) and v > 0 for v in (fov, near, far)) or fov >= math.pi:
-        return None
-    if not all(_finite_number(v) and 0 < v <= 100_000 for v in (height, width)):
+    if not all(_finite_number(v) and 0 <= v <= 1e12 for v in (fov, near, far, height, width)):
         return None
     return {"type": "ViewerCameraMessage", "wxyz": wxyz, "position": position, "fov": float(fov),
-            "near": float(near), "far": float(far), "image_height": max(1, int(round(height))),
-            "image_width": max(1, int(round(width))),
+            "near": float(near), "far": float(far), "image_height": int(round(height)),
+            "image_width": int(round(width)),
             "look_at": look_at, "up_direction": up}
 
 
