@@ -18,6 +18,10 @@ import viser
 
 from browser_helpers import wait_until
 from browser_lab import make_app
+from ejsrl.app import App, AppMeta, SimConfig
+from ejsrl.sim.model import ModelBase
+from ejsrl.view._validate import MAX_TEXT_LENGTH
+from ejsrl.view.elements import Text
 
 #: opens the lab's websocket like viser's client does (subprotocol, msgpack, the camera
 #: message that registers a client), then sets the control UUID to VALUE; resolves to
@@ -100,3 +104,48 @@ def test_a_page_on_another_site_cannot_drive_the_lab(served_app, evil_site, page
     page.goto(f"http://127.0.0.1:{port}/")
     assert page.evaluate(ATTACK, [*args, 1.9]) == "sent"
     wait_until(lambda: abs(app.model.L - 1.9) < 1e-12, what="L == 1.9 from the lab's own page")
+
+
+class _Notes(ModelBase):
+    SPEC = "notes.ejs.yaml"
+    VARIABLES = {"t": "float", "note": "str"}
+    INDEPENDENT = "t"
+
+    def _declare(self) -> None:
+        self.t = 0.0
+        self.note = "hello"
+
+    def _evolution(self) -> list:
+        return []
+
+
+@pytest.mark.browser
+def test_a_refused_value_is_explained_and_the_field_shows_the_lab_s_value(page):
+    """A text over the limit typed in the real UI: refused before viser stores or
+    broadcasts it, the notification says why, and the field shows the lab's text again."""
+    app = App(_Notes, [Text("note", lambda m: m.note, lambda m, v: setattr(m, "note", v), label="Note", vtype="str")],
+              sim=SimConfig(fps=30.0), meta=AppMeta(title="Notes"))
+    server = app.serve("127.0.0.1", 0, block=False)
+    broadcast: list = []  # what the server sent to every browser
+    queue = server._websock_server.queue_message
+    server._websock_server.queue_message = lambda m: (broadcast.append(m), queue(m))[1]
+    try:
+        page.goto(f"http://127.0.0.1:{server.get_port()}/")
+        field = page.get_by_role("textbox").first
+        field.wait_for(timeout=45_000)
+        wait_until(lambda: field.input_value() == "hello", what="the field to show the lab's text")
+        wait_until(lambda: len(server.get_clients()) == 1, what="the browser to be registered")
+        field.fill("short and fine")
+        wait_until(lambda: app.model.note == "short and fine", what="an ordinary text to reach the model")
+        field.fill("x" * (MAX_TEXT_LENGTH + 1))
+        note = page.locator(".mantine-Notification-title", has_text="Value refused")
+        note.wait_for(timeout=10_000)
+        assert f"at most {MAX_TEXT_LENGTH}" in page.locator(".mantine-Notification-root", has=note).inner_text()
+        wait_until(lambda: field.input_value() == "short and fine", what="the field to show the lab's text again")
+        assert app.model.note == "short and fine"
+        # and the other browsers were never sent it (viser used to broadcast it before ejsgen refused it)
+        sent = [m.updates.get("value") for m in broadcast if type(m).__name__ == "GuiUpdateMessage"]
+        assert "short and fine" in sent and not any(isinstance(v, str) and len(v) > MAX_TEXT_LENGTH for v in sent)
+    finally:
+        app.stop()
+        server.stop()
