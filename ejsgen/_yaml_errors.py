@@ -39,7 +39,7 @@ def explain(exc: yaml.MarkedYAMLError, text: str) -> Explained:
     if "found character '\\t'" in problem:
         return Explained(pline + 1, pcol + 1, "invalid YAML: a tab character cannot indent YAML; use spaces")
     if context == "while scanning a quoted scalar" and exc.context_mark is not None:
-        return _unclosed_quote(exc.context_mark.line, exc.context_mark.column, lines, pline)
+        return _unclosed_quote(exc.context_mark.line, exc.context_mark.column, lines)
     tokens = _tokens_before(text, mark.index if mark else len(text))
     quoted = _runaway_quote(tokens, pline)
     if quoted is not None:
@@ -62,7 +62,7 @@ def explain(exc: yaml.MarkedYAMLError, text: str) -> Explained:
         return Explained(
             cm.line + 1,
             cm.column + 1,
-            f"this line is not 'name: value' nor a '- ' item (no ':' after '{word}')",
+            f"this line is neither 'name: value' nor a '- ' item (no ':' after '{word}')",
             "add the ':', or indent the line to continue the text above it, or write long text in a '|' block",
         )
     if "did not find expected '-' indicator" in problem or "did not find expected key" in problem:
@@ -131,7 +131,7 @@ def _tokens_before(text: str, index: int) -> list[yaml.Token]:
     return out
 
 
-def _unclosed_quote(line: int, col: int, lines: list[str], end_line: int) -> Explained:
+def _unclosed_quote(line: int, col: int, lines: list[str]) -> Explained:
     quote = _line(lines, line)[col : col + 1] or '"'
     return Explained(
         line + 1,
