@@ -166,6 +166,7 @@ def test_messages_the_ui_never_sends_are_dropped_and_the_connection_keeps_workin
         {"type": "ViewerCameraMessage", "wxyz": [math.nan, 0, 0, 0]},
         {"type": "GuiUpdateMessage", "uuid": "not-a-control", "updates": {"value": 1}},
         b"\xc1 not msgpack",
+        b"\x91" * 60_000 + b"\x00",  # arrays nested 60,000 deep: the decoder's recursion limit
         "a text frame",
     ]
 

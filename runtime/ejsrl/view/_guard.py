@@ -348,7 +348,7 @@ class MessageGuard:
             return self._drop("not binary")
         try:
             msg = msgspec.msgpack.decode(raw)
-        except msgspec.DecodeError:
+        except (msgspec.DecodeError, RecursionError):  # garbage, or 64 kB of nested arrays
             return self._drop("not msgpack")
         if not isinstance(msg, dict) or not isinstance(msg.get("type"), str):
             return self._drop("no type")
@@ -475,7 +475,11 @@ class _Hook:
             async def checked_recv(decode: bool | None = None) -> Any:
                 while True:
                     raw = await recv(decode)
-                    out = guard.filter(connection, raw)
+                    try:
+                        out = guard.filter(connection, raw)
+                    except Exception:  # noqa: BLE001 - a bug here must drop the message, not the client
+                        log.exception("ejsrl: checking a client message failed; it was dropped")
+                        out = None
                     if out is not None:
                         return out
 
