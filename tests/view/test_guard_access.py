@@ -50,7 +50,7 @@ def _get(port: int, host: str) -> tuple[int, bytes]:
         conn.close()
 
 
-def test_a_page_on_another_site_cannot_open_the_websocket(served):
+def test_a_page_on_another_site_cannot_open_the_websocket(served, caplog):
     port = served.server.get_port()
     for origin in ("http://evil.example.com", "http://evil.example.com:%d" % port, "null",
                    "http://127.0.0.1:%d" % (port + 1),  # another local page (a dev server, a notebook)
@@ -58,6 +58,11 @@ def test_a_page_on_another_site_cannot_open_the_websocket(served):
                    "https://127.0.0.1:%d" % port):
         assert _refused(port, origin=origin) == 403, origin
     assert served.server.get_clients() == {}
+    # the terminal says what was refused and how to allow it, once per origin
+    said = [r.getMessage() for r in caplog.records if r.name == "ejsrl.serve"]
+    assert ("ejsrl: refused a connection: origin 'http://evil.example.com' is not this lab's page. If that page "
+            "should reach the lab, start the lab with --allow-origin http://evil.example.com") in said
+    assert len(said) == 6
 
 
 def test_a_refused_page_changes_nothing(served):

@@ -196,6 +196,15 @@ class Access:
         return f"origin {origin_header!r} is not this lab's page"
 
 
+def _suggestion(headers: Any) -> str:
+    """The ``--allow-origin`` value that would let a refused request through."""
+    origins = headers.get_all("Origin")
+    if len(origins) == 1:
+        return origins[0]
+    hosts = headers.get_all("Host")
+    return f"http://{hosts[0]}" if len(hosts) == 1 else "ORIGIN"
+
+
 # -- what a client may send ----------------------------------------------------------------------
 
 
@@ -464,8 +473,8 @@ class _Hook:
             if why is not None:
                 if why not in warned:
                     warned.add(why)
-                    log.warning("ejsrl: refused a connection: %s. If this is how the lab is reached, "
-                                "start it with --allow-origin (see its --help).", why)
+                    log.warning("ejsrl: refused a connection: %s. If that page should reach the lab, "
+                                "start the lab with --allow-origin %s", why, _suggestion(request.headers))
                 return connection.respond(http.HTTPStatus.FORBIDDEN, f"This lab refuses the request: {why}.\n")
             return inner(connection, request) if inner is not None else None
 
