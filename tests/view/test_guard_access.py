@@ -237,6 +237,17 @@ def test_a_viser_whose_internals_moved_is_refused_loudly(monkeypatch):
     monkeypatch.setattr(guard_module, "_VISER_HANDLER", "SomewhereElse.ws_handler")
     with pytest.raises(RuntimeError, match=r"ejsrl cannot guard viser .*viser>=1\.1,<1\.2"):
         start_server("127.0.0.1", 0)
+    monkeypatch.undo()
+
+    from viser.infra import _infra
+
+    async def streaming_consumer(websocket, handle_message, message_class):
+        async for raw in websocket.recv_streaming():
+            handle_message(message_class.deserialize(raw))
+
+    monkeypatch.setattr(_infra, "_message_consumer", streaming_consumer)
+    with pytest.raises(RuntimeError, match="message consumer does not read with connection.recv"):
+        start_server("127.0.0.1", 0)
 
 
 def test_every_server_the_runtime_makes_is_guarded():

@@ -547,7 +547,11 @@ def start_server(
 def _missing_internals(server: Any) -> str | None:
     """What this module needs from viser and does not find, or None."""
     from viser import _messages
+    from viser.infra import _infra
 
+    consumer = getattr(_infra, "_message_consumer", None)
+    if consumer is None or "recv" not in consumer.__code__.co_names:
+        return "its message consumer does not read with connection.recv()"
     needs = [
         (server, "_websock_server"),
         (server, "_connected_clients"),
