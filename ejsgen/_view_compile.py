@@ -83,7 +83,7 @@ class ViewCompiler:
 
     # -- properties --------------------------------------------------------------------------------
     def dynamic(self, path: Path_, base: str, what: str, text: str) -> Src | None:
-        name = self.c.expr_method(path, base, what, f"View: {what}.")
+        name = self.c.expr_method(path, base, what, f"View: {what}.", text=text)
         if name is None:
             return None
         return Src(f"E.Dynamic(Model.{name}, {text!r})")
