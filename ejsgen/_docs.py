@@ -286,15 +286,21 @@ def _reserved() -> str:
     import builtins
 
     from ejsgen._resolve import BUILTIN_NAMES
-    from ejsgen.validate import PRELUDE_NAMES
+    from ejsgen.validate import APP_NAMES, MODEL_NAMES, PRELUDE_NAMES
 
     hidden = sorted(n for n in dir(builtins) if not n.startswith("_") and n not in BUILTIN_NAMES)
     hidden.append("__import__")
     words = sorted(keyword.kwlist)
+    model = sorted(n for n in MODEL_NAMES if not n.startswith(("__", "_ejs")) and n not in PRELUDE_NAMES)
+    app = sorted(n for n in APP_NAMES if n not in PRELUDE_NAMES)
     return (
         "- The prelude's names (above): " + ", ".join(f"`{n}`" for n in PRELUDE_NAMES) + ".\n"
         "- Python's keywords: " + ", ".join(f"`{w}`" for w in words) + ".\n"
-        "- Names starting with `_ejs` (the runtime's own).\n"
+        "- The names the generated model's base class defines: " + ", ".join(f"`{n}`" for n in model) + ", and `self`.\n"
+        "- Names starting with `_ejs` (the runtime's own) or `__` (Python's own).\n"
+        "- A variable may not have the name of a method the generated model defines for the spec (`_ode0_rates`, ...).\n"
+        "\nAn import (`import m as NAME`, `from m import NAME`) may not bind a variable's or custom function's name, "
+        "a prelude name, or a name of the generated app's module or methods: " + ", ".join(f"`{n}`" for n in app) + ".\n"
         "\nNot available in spec code (an error says so): " + ", ".join(f"`{n}`" for n in sorted(hidden)) + ".\n"
     )
 

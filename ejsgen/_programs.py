@@ -14,13 +14,15 @@ from ejsgen._resolve import Names
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError
 from ejsgen.plan import Line, body_lines
+from ejsgen.validate import PROGRAM_COMMANDS
 
 if TYPE_CHECKING:
     from ejsgen.compiler import Compiler
 
 __all__ = ["compile_programs", "PROGRAM_NAMES", "RUNNER"]
 
-PROGRAM_NAMES = ("move_j", "move_l", "wait", "wait_until", "open_gripper", "close_gripper")
+#: the motion commands, read from the runtime (the methods of ``ejsrl.sim.programs.Program`` marked as commands)
+PROGRAM_NAMES = PROGRAM_COMMANDS
 #: the name of the generator method's parameter through which commands run
 RUNNER = "cmd"
 

@@ -22,6 +22,7 @@ from ejsgen._suggest import did_you_mean
 from ejsgen.errors import CodeSyntaxError, Location, SpecError, UnknownNameError
 from ejsgen.validate import MATH_NAMES
 from ejsgen.yamlload import TextOrigin
+from ejsrl.sim.names import MATH_CONSTANTS as _MATH_CONSTANTS
 
 __all__ = ["Names", "Snippet", "parse_snippet", "rewrite", "BUILTIN_NAMES"]
 
@@ -119,7 +120,6 @@ def parse_snippet(snippet: Snippet) -> ast.AST:
     return tree
 
 
-_MATH_CONSTANTS = frozenset({"pi", "e", "inf"})
 #: builtins that code uses without calling them (``dtype=float``)
 _VALUE_BUILTINS = frozenset({"float", "int", "bool", "complex", "str", "list", "tuple", "dict", "set"})
 #: words that YAML 1.1 reads as booleans; in specs they are text, and in code they are names
@@ -261,6 +261,9 @@ class _Rewriter(ast.NodeTransformer):
     def visit_Name(self, node: ast.Name) -> ast.AST:
         name = node.id
         store = isinstance(node.ctx, (ast.Store, ast.Del))
+        if name == "self" and store and name not in self.names.variables:
+            self._err(node, "'self' cannot be assigned in spec code: the generated code uses it for the model", "choose another name (e.g. 'self_')")
+            return node
         if name in self.names.functions:
             if store:
                 self._err(node, f"cannot assign to '{name}': it is a custom function")
@@ -327,6 +330,10 @@ class _Rewriter(ast.NodeTransformer):
 
     # nested scopes
     def _function(self, node: ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda) -> ast.AST:
+        a = node.args
+        for arg in a.posonlyargs + a.args + a.kwonlyargs + [x for x in (a.vararg, a.kwarg) if x is not None]:
+            if arg.arg == "self":
+                self._err(arg, "a parameter cannot be named 'self': the generated code uses it for the model", "choose another name (e.g. 'self_')")
         node.args = self.visit(node.args)
         if isinstance(node, ast.Lambda):
             self.scopes.append(_arg_names(node.args))

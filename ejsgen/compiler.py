@@ -18,12 +18,10 @@ from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError, SpecErrors
 from ejsgen.plan import AppPlan, Line, Method, body_lines, py
 from ejsgen.spec import Code, CodeEvolutionPage, OdePage
-from ejsgen.validate import CONTROL_NAMES, MATH_NAMES, Checked
+from ejsgen.validate import CONTROL_NAMES, MATH_NAMES, PRELUDE_NAMES, Checked, free_name, import_name_clash, model_name_clash
 from ejsgen.yamlload import Path_, TextOrigin
 
 __all__ = ["compile_spec", "Compiler"]
-
-from ejsgen._programs import PROGRAM_NAMES  # noqa: E402
 
 
 class Compiler:
@@ -149,7 +147,8 @@ class Compiler:
         lines = []
         for i, line in enumerate(self.spec.imports):
             path = ("imports", i)
-            tree = self.parse(self.snippet(path, "imports"))
+            snippet = self.snippet(path, "imports")
+            tree = self.parse(snippet)
             if tree is None:
                 continue
             assert isinstance(tree, ast.Module)
@@ -173,8 +172,9 @@ class Compiler:
                     self.errors.append(SpecError(self.loc(path), "'import *' hides which names exist; import names explicitly"))
                     continue
                 bound = (alias.asname or alias.name).split(".")[0]
-                if bound in self.var_decls:
-                    self.errors.append(SpecError(self.loc(path), f"the import binds '{bound}', which is also a variable"))
+                clash = import_name_clash(bound, self.var_decls)
+                if clash is not None:
+                    self.errors.append(SpecError(snippet.location(alias.lineno, alias.col_offset), clash, _rename_import(stmt, alias, bound, self.var_decls)))
                 self.names.globals.add(bound)
             lines.append(ast.unparse(stmt))
         return lines
@@ -231,8 +231,10 @@ class Compiler:
                 loc = snippet.location(stmt.lineno, stmt.col_offset)
                 if stmt.name in self.var_decls:
                     self.errors.append(SpecError(loc, f"the function '{stmt.name}' has the name of a variable"))
-                elif stmt.name in CONTROL_NAMES or stmt.name in self.names.globals or stmt.name in PROGRAM_NAMES:
-                    self.errors.append(SpecError(loc, f"the function '{stmt.name}' would hide the prelude name '{stmt.name}'"))
+                elif (clash := model_name_clash(stmt.name, "custom function")) is not None:
+                    self.errors.append(SpecError(loc, *clash))
+                elif stmt.name in self.names.globals:
+                    self.errors.append(SpecError(loc, f"the function '{stmt.name}' has the name of an import", f"rename the function (e.g. '{free_name(stmt.name, self.names.globals)}')"))
                 elif stmt.name.startswith("_"):
                     self.errors.append(SpecError(loc, f"custom function names cannot start with '_' ('{stmt.name}')"))
                 elif stmt.name in self.names.functions:
@@ -465,6 +467,10 @@ class Compiler:
 
             compile_programs(self)
             view_lines = view_lines[:-1] + self.program_labels + view_lines[-1:]
+        generated = {m.name for m in self.methods} - self.names.functions
+        for v in self.checked.variables:  # the generated methods' names are known only now
+            if v.name in generated:
+                self.errors.append(SpecError(self.doc.key_loc(v.path), f"'{v.name}' is the name of a method the generated app defines", f"rename the variable (e.g. '{free_name(v.name, generated | set(self.var_decls))}')"))
         if self.errors:
             raise SpecErrors(_dedupe(self.errors))
         independent = self.independents[0] if self.independents else ("t" if "t" in self.var_decls else None)
@@ -484,6 +490,16 @@ class Compiler:
             after_class=self.after_class,
             runtime_imports=self.runtime_imports,
         )
+
+
+def _rename_import(stmt: ast.Import | ast.ImportFrom, alias: ast.alias, bound: str, taken: Any) -> str:
+    """A hint: the same import binding a free name, e.g. ``write 'from math import e as E_'``."""
+    from_math = isinstance(stmt, ast.ImportFrom) and stmt.module == "math" and alias.name == bound
+    if bound in PRELUDE_NAMES and (from_math or (bound == "np" and alias.name == "numpy")):
+        return "the prelude already has it: remove this import"
+    fixed = ast.alias(name=alias.name, asname=free_name(bound, taken))
+    one = ast.ImportFrom(module=stmt.module, names=[fixed], level=0) if isinstance(stmt, ast.ImportFrom) else ast.Import(names=[fixed])
+    return f"import it under another name, e.g. '{ast.unparse(one)}'"
 
 
 def _dedupe(errors: list[SpecError]) -> list[SpecError]:

@@ -14,10 +14,12 @@ import os
 import re
 import shutil
 import tempfile
+import textwrap
 import zipapp
 from pathlib import Path
 
 import jinja2
+from ejsrl.sim.names import MATH_NAMES
 
 from ejsgen import __version__
 from ejsgen.errors import EjsError
@@ -28,7 +30,8 @@ __all__ = ["render_app", "write_app", "REQUIREMENTS", "runtime_dir"]
 REQUIREMENTS = ["numpy>=1.26", "scipy>=1.11", "viser>=1.1,<1.2", "trimesh>=4.0", "opencv-python-headless>=4.8"]
 _MARK = "  #@@ejsloc:"
 _MARK_RE = re.compile(r"  #@@ejsloc:(\d+)$")
-_MATH = "acos, asin, atan, atan2, ceil, cos, cosh, degrees, e, exp, floor, hypot, inf, log, log10,\n    pi, radians, sin, sinh, sqrt, tan, tanh"
+#: the prelude's math names, as the template imports them (from the runtime's list)
+_MATH = textwrap.fill(", ".join(sorted(MATH_NAMES)), width=90, subsequent_indent="    ")
 
 
 def runtime_dir() -> Path:

@@ -9,26 +9,98 @@ from __future__ import annotations
 
 import keyword
 from dataclasses import dataclass, field
+from collections.abc import Iterable
 from typing import Any
 
 from pydantic import BaseModel, ValidationError
+
+from ejsrl.sim import names as _names
 
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError, SpecErrors
 from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, Spec, Strict, Variable
 from ejsgen.yamlload import Document, Path_
 
-__all__ = ["Checked", "ViewItem", "VarDecl", "validate", "PRELUDE_NAMES", "CONTROL_NAMES", "MATH_NAMES"]
+__all__ = [
+    "Checked",
+    "ViewItem",
+    "VarDecl",
+    "validate",
+    "PRELUDE_NAMES",
+    "CONTROL_NAMES",
+    "MATH_NAMES",
+    "PROGRAM_COMMANDS",
+    "MODEL_NAMES",
+    "APP_NAMES",
+    "model_name_clash",
+    "import_name_clash",
+    "free_name",
+]
 
-MATH_NAMES = (
-    "sin cos tan asin acos atan atan2 sinh cosh tanh exp log log10 sqrt hypot floor ceil radians degrees pi e inf"
-).split()
-CONTROL_NAMES = (
-    "play pause step reset initialize is_playing capture alert start_program stop_program "
-    "object_pose move_object attach release collisions"
-).split()
-PROGRAM_COMMANDS = ("move_j", "move_l", "wait", "wait_until", "open_gripper", "close_gripper")
-PRELUDE_NAMES = ("np", *MATH_NAMES, *CONTROL_NAMES, *PROGRAM_COMMANDS)
+# Every name ejsgen knows about is read from the runtime (ejsrl.sim.names): the prelude from the
+# methods of ModelBase and Program marked as prelude names, the reserved names from ModelBase itself.
+MATH_NAMES: tuple[str, ...] = _names.MATH_NAMES
+CONTROL_NAMES: tuple[str, ...] = _names.control_names()
+PROGRAM_COMMANDS: tuple[str, ...] = _names.command_names()
+PRELUDE_NAMES: tuple[str, ...] = _names.prelude_names()
+#: every attribute of the generated model's base class (a variable or function would replace it)
+MODEL_NAMES: frozenset[str] = _names.model_attributes()
+#: module globals of the generated app.py, and names bound inside its generated methods
+APP_NAMES: frozenset[str] = _names.APP_GLOBALS | frozenset(MATH_NAMES) | _names.METHOD_LOCALS
+
+
+def free_name(name: str, taken: Iterable[str] = ()) -> str:
+    """A name like ``name`` that collides with nothing reserved (nor with ``taken``): ``name_``, ``name_2``..."""
+    used = set(taken)
+    base = name
+    if base.startswith(_names.RUNTIME_PREFIX):
+        base = base.removeprefix(_names.RUNTIME_PREFIX).lstrip("_")
+    if base.startswith("__"):
+        base = base.strip("_")
+    base = base or "x"
+
+    def bad(n: str) -> bool:
+        return n in used or n in PRELUDE_NAMES or n in MODEL_NAMES or n in APP_NAMES or keyword.iskeyword(n)
+
+    if base != name and not bad(base):
+        return base
+    candidate, i = base + "_", 2
+    while bad(candidate):
+        candidate, i = f"{base}_{i}", i + 1
+    return candidate
+
+
+def model_name_clash(name: str, what: str) -> tuple[str, str] | None:
+    """Why ``name`` cannot name a ``what`` (a variable, custom function or program), or None.
+
+    Variables and custom functions become attributes of the generated model, so none may take
+    a prelude name, a name the model's base class defines, ``self``, or a name the runtime
+    keeps for itself (``_ejs...``) or Python mangles (``__...``). Returns (message, hint).
+    """
+    if name in PRELUDE_NAMES:
+        return f"'{name}' is a prelude name and cannot name a {what}", "choose another name"
+    if name.startswith(_names.RUNTIME_PREFIX):
+        return f"names starting with '{_names.RUNTIME_PREFIX}' are reserved for the runtime ('{name}')", f"rename the {what} (e.g. '{free_name(name)}')"
+    if name.startswith("__"):
+        return f"names starting with '__' are Python's own or mangled in the generated class ('{name}')", f"rename the {what} (e.g. '{free_name(name)}')"
+    if name in MODEL_NAMES or name == "self":
+        return f"'{name}' is a name the generated app uses", f"rename the {what} (e.g. '{free_name(name)}')"
+    return None
+
+
+def import_name_clash(name: str, variables: Iterable[str], functions: Iterable[str] = ()) -> str | None:
+    """Why an import cannot bind ``name`` (it becomes a module global of app.py), or None."""
+    if name in set(variables):
+        return f"the import binds '{name}', which is also a variable"
+    if name in set(functions):
+        return f"the import binds '{name}', which is also a custom function"
+    if name in PRELUDE_NAMES:
+        return f"the import binds '{name}', which is a prelude name"
+    if name.startswith(_names.RUNTIME_PREFIX):
+        return f"the import binds '{name}'; names starting with '{_names.RUNTIME_PREFIX}' are reserved for the runtime"
+    if name in APP_NAMES or name.startswith("__"):
+        return f"the import binds '{name}', a name the generated app uses"
+    return None
 
 
 @dataclass
@@ -216,11 +288,9 @@ def _check_name(doc: Document, name: str, path: Path_, what: str, errors: list[S
     if keyword.iskeyword(name):
         errors.append(SpecError(loc, f"'{name}' is a Python keyword and cannot name a {what}"))
         return False
-    if name in PRELUDE_NAMES:
-        errors.append(SpecError(loc, f"'{name}' is a prelude name and cannot name a {what}", "choose another name"))
-        return False
-    if name.startswith("_ejs"):
-        errors.append(SpecError(loc, f"names starting with '_ejs' are reserved for the runtime ('{name}')"))
+    clash = model_name_clash(name, what)
+    if clash is not None:
+        errors.append(SpecError(loc, *clash))
         return False
     return True
 

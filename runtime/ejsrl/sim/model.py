@@ -19,6 +19,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ejsrl.sim.names import prelude
+
 __all__ = ["ModelBase", "CodePage", "OdePage", "UserCodeError", "SetValueError", "Controller", "locate_error"]
 
 
@@ -340,18 +342,22 @@ class ModelBase:
         return {name: getattr(self, name) for name in self.VARIABLES}
 
     # -- the prelude's simulation controls -------------------------------------------------
+    @prelude("control")
     def play(self) -> None:
         """Start (or go on with) the simulation."""
         self._ejs_ctl.play()
 
+    @prelude("control")
     def pause(self) -> None:
         """Pause the simulation."""
         self._ejs_ctl.pause()
 
+    @prelude("control")
     def step(self) -> None:
         """Run one simulation step."""
         self._ejs_ctl.step_once()
 
+    @prelude("control")
     def reset(self) -> None:
         """Return every variable to its initial value and run ``init`` (after the current action).
 
@@ -359,6 +365,7 @@ class ModelBase:
         """
         self._ejs_ctl.request_reset()
 
+    @prelude("control")
     def initialize(self) -> None:
         """Restart, keeping the user's settings (after the current action).
 
@@ -368,27 +375,33 @@ class ModelBase:
         """
         self._ejs_ctl.request_initialize()
 
+    @prelude("control")
     def is_playing(self) -> bool:
         """True while the simulation runs."""
         return bool(self._ejs_ctl.is_playing())
 
+    @prelude("control")
     def alert(self, text: Any) -> None:
         """Show a message in the UI (printed in headless runs)."""
         self._ejs_ctl.alert(str(text))
 
+    @prelude("control")
     def capture(self, name: str) -> np.ndarray:
         """The current RGB image (H, W, 3) uint8 seen by the virtual camera ``name``."""
         return self._ejs_ctl.capture(name)
 
     # -- the prelude's world functions (named scene objects) --------------------------------------
+    @prelude("world")
     def object_pose(self, name: str) -> np.ndarray:
         """The (4, 4) pose in the world of the scene object ``name``."""
         return self._ejs_ctl.world_functions().object_pose(name)
 
+    @prelude("world")
     def move_object(self, name: str, pose: Any) -> None:
         """Place the scene object ``name``: a (4, 4) world pose or an [x, y, z] position."""
         self._ejs_ctl.world_functions().move_object(name, pose)
 
+    @prelude("world")
     def attach(self, name: str, robot: str, link: int | None = None) -> None:
         """Attach the object ``name`` to a link of the robot element ``robot`` (default: its last link).
 
@@ -396,18 +409,22 @@ class ModelBase:
         """
         self._ejs_ctl.world_functions().attach(name, robot, link)
 
+    @prelude("world")
     def release(self, name: str) -> None:
         """Release an attached object where it is now."""
         self._ejs_ctl.world_functions().release(name)
 
+    @prelude("world")
     def collisions(self) -> list[tuple[str, str]]:
         """The pairs of named scene objects and robot links that touch now (sorted)."""
         return self._ejs_ctl.world_functions().collisions()
 
+    @prelude("program")
     def start_program(self, name: str) -> None:
         """Start the robot program ``name`` (from its first line)."""
         self._ejs_program_runner().start(name)
 
+    @prelude("program")
     def stop_program(self, name: str) -> None:
         """Stop the robot program ``name``."""
         self._ejs_program_runner().stop(name)

@@ -23,6 +23,8 @@ from typing import Any
 
 import numpy as np
 
+from ejsrl.sim.names import prelude
+
 __all__ = ["ProgramDef", "Program", "Programs", "ProgramError"]
 
 #: default joint speed (rad/s or m/s for prismatic joints) when a move gives neither time nor speed
@@ -159,6 +161,7 @@ class Program:
             yield
 
     # -- the commands ----------------------------------------------------------------------------
+    @prelude("command")
     def move_j(self, target: Any, time: float | None = None, speed: float | None = None, mode: str = "sync") -> Steps:
         """Move the joints to ``target`` (joint vector or 4x4 pose) in ``time`` s or at ``speed``."""
         from ejsrl.robotics import trajectory
@@ -190,6 +193,7 @@ class Program:
             traj = plan(q0, q1, vmax=vmax, amax=amax, num=2)
         yield from self._follow(lambda t: traj.sample(t)[0], float(traj.T))
 
+    @prelude("command")
     def move_l(self, pose: Any, time: float | None = None, speed: float | None = None) -> Steps:
         """Move the tool along a straight line to ``pose`` (4x4), orientation by SLERP."""
         from ejsrl.robotics import trajectory
@@ -213,12 +217,14 @@ class Program:
 
         yield from self._follow(sample, duration)
 
+    @prelude("command")
     def wait(self, seconds: float) -> Steps:
         """Let ``seconds`` of simulated time pass."""
         t0 = self._now()
         while self._now() - t0 < float(seconds) - 1e-12:
             yield
 
+    @prelude("command")
     def wait_until(self, condition: Callable[[], Any]) -> Steps:
         """Wait until ``condition()`` is true (checked once a step)."""
         while not condition():
@@ -238,6 +244,7 @@ class Program:
                 return
             yield
 
+    @prelude("command")
     def open_gripper(self) -> Steps:
         """Open the gripper, releasing what it holds."""
         if self.grasped is not None:
@@ -245,6 +252,7 @@ class Program:
             self.grasped = None
         yield from self._gripper_to(1.0)
 
+    @prelude("command")
     def close_gripper(self) -> Steps:
         """Close the gripper, grasping the graspable object within reach of the tool (if any)."""
         yield from self._gripper_to(0.0)
