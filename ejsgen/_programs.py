@@ -15,6 +15,7 @@ from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError
 from ejsgen.plan import Line, body_lines
 from ejsgen.validate import PROGRAM_COMMANDS
+from ejsrl.sim.names import PROGRAM_RUNNER
 
 if TYPE_CHECKING:
     from ejsgen.compiler import Compiler
@@ -24,7 +25,7 @@ __all__ = ["compile_programs", "PROGRAM_NAMES", "RUNNER"]
 #: the motion commands, read from the runtime (the methods of ``ejsrl.sim.programs.Program`` marked as commands)
 PROGRAM_NAMES = PROGRAM_COMMANDS
 #: the name of the generator method's parameter through which commands run
-RUNNER = "cmd"
+RUNNER = PROGRAM_RUNNER
 
 
 class _Commands(ast.NodeTransformer):

@@ -36,6 +36,7 @@ __all__ = [
     "model_attributes",
     "APP_GLOBALS",
     "METHOD_LOCALS",
+    "PROGRAM_RUNNER",
     "RUNTIME_PREFIX",
 ]
 
@@ -86,7 +87,9 @@ APP_GLOBALS: frozenset[str] = frozenset(
 #: are written (``self``; ``t, y`` of an ODE page's rates, events and load; ``value`` of a view
 #: setter; ``cmd`` of a program; ``pages``, ``layout``, ``out``, ``rates``): a module global of
 #: the same name (an import) would be hidden inside them.
-METHOD_LOCALS: frozenset[str] = frozenset({"self", "t", "y", "value", "cmd", "pages", "layout", "out", "rates"})
+#: the parameter of a program's generator method through which its motion commands run
+PROGRAM_RUNNER = "cmd"
+METHOD_LOCALS: frozenset[str] = frozenset({"self", "t", "y", "value", PROGRAM_RUNNER, "pages", "layout", "out", "rates"})
 
 
 def prelude(kind: str) -> Callable[[F], F]:
