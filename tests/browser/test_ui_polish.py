@@ -249,3 +249,48 @@ def test_the_camera_image_of_a_camera_lab_is_in_sight(built, page):
         shot(page, "camera_lab")
         png = Image.open(io.BytesIO(image.screenshot())).convert("RGB")
         assert np.asarray(png).std() > 10  # a picture, not a blank box
+
+
+TICKS_SPEC = """\
+ejs: 1
+title: Ticks
+model:
+  variables:
+    t: 123450.0
+    dt: 0.5
+    y: 0.0
+  evolution:
+    - code: t = t + dt
+  fixed_relations: |
+    y = -123456.0 + 0.5*sin(t)
+view:
+  - plot: {title: small values at large times, series: [{y: y, label: y}], window: 10}
+"""
+
+
+@pytest.mark.browser
+def test_plot_tick_labels_are_not_cut_at_the_edges(tmp_path, page):
+    spec = tmp_path / "ticks.ejs.yaml"
+    spec.write_text(TICKS_SPEC)
+    with serving(build(spec, tmp_path / "out")) as (app, url):
+        open_lab(page, url)
+        page.get_by_role("button", name="Play").first.click()
+        wait_until(lambda: app.model.t > 123466, what="a window of points in the plot")
+        app.pause()
+        page.wait_for_timeout(800)
+        canvas = page.locator(".uplot canvas").first
+        png = np.asarray(Image.open(io.BytesIO(canvas.screenshot())).convert("RGB")).astype(int)
+        ink = png.sum(axis=2) < 500  # text and lines, not the white background
+        # no tick label touches the chart's left or right edge (it would be cut there)
+        assert not ink[:, :2].any(), "a y tick label is cut at the left edge"
+        assert not ink[:, -2:].any(), "an x tick label is cut at the right edge"
+        # and the x tick labels (123,450 ...) do not run into each other: gaps between them
+        rows = ink[-60:]  # the bottom strip: tick labels and the axis title
+        label_rows = [r for r in rows if r.sum() > 20]
+        assert label_rows, "no x tick labels"
+        widest = max(label_rows, key=lambda r: r.sum())
+        cols = np.flatnonzero(widest)
+        groups = np.split(cols, np.flatnonzero(np.diff(cols) > 8) + 1)
+        widths = [int(g[-1] - g[0]) for g in groups]
+        assert len(groups) >= 2 and max(widths) < 75, f"the x tick labels run into each other: {widths}"
+        shot(page, "ticks")

@@ -493,7 +493,7 @@ class Panel:
         value = getattr(getattr(self.app, "model", None), self._time_name, None)
         if value is None or not _finite(value):
             return
-        text = f"**{self._time_name}** = {float(value):.4g}"
+        text = f"**{self._time_name}** = {float(value):.6g}"
         if text != self._readout_shown:
             self.readout.content = text
             self._readout_shown = text

@@ -93,7 +93,39 @@ class PlotBuffer:
 
 
 def _value_text(v: float) -> str:
-    return f"{v:.4g}".replace("-", "\u2212")
+    return f"{v:.6g}".replace("-", "\u2212")
+
+
+#: pixels per character of uPlot's tick labels, and for the tick, the gap and the axis title
+_TICK_CHAR_PX = 7.0
+_Y_AXIS_EXTRA_PX = 22
+_Y_AXIS_MIN_PX = 50
+
+
+def _tick_chars(lo: float, hi: float) -> int:
+    """Characters of the widest of about five uPlot tick labels over ``[lo, hi]``."""
+    span = abs(hi - lo) or abs(hi) or 1.0
+    decimals = max(0, int(-np.floor(np.log10(span / 5.0))))
+    return max(len(f"{v:,.{decimals}f}") for v in (lo, hi))
+
+
+def x_tick_space(lo: float, hi: float) -> int:
+    """The least pixels between x ticks so that their labels do not run into each other."""
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return 50
+    return int(max(50, np.ceil((_TICK_CHAR_PX * _tick_chars(lo, hi) + 12) / 10.0) * 10))
+
+
+def y_axis_size(lo: float, hi: float) -> int:
+    """Pixels for the y axis so that uPlot's tick labels over ``[lo, hi]`` are not cut.
+
+    uPlot labels about five ticks with the decimals their spacing needs and thousands
+    separators ("-123,455.75"); the width grows with that text, in steps of 10 px.
+    """
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return _Y_AXIS_MIN_PX
+    px = _TICK_CHAR_PX * _tick_chars(lo, hi) + _Y_AXIS_EXTRA_PX
+    return int(max(_Y_AXIS_MIN_PX, np.ceil(px / 10.0) * 10))
 
 
 class PlotBinding:
@@ -137,6 +169,9 @@ class PlotBinding:
             scales["y"] = {"auto": True}
         x_axis = getattr(plot, "x_label", "") or self.x_name
         y_axis = getattr(plot, "y_label", "") or None
+        self._y_title = y_axis
+        self._y_size = y_axis_size(*plot.y_range) if plot.y_range is not None else _Y_AXIS_MIN_PX + 10
+        self._x_axis = {"label": x_axis, "size": 40, "labelSize": 18, "space": 50}
         empty = np.zeros(0)
         self.handle = gui.add_uplot(
             data=(empty, *(empty for _ in plot.series)),
@@ -144,12 +179,38 @@ class PlotBinding:
             title=self.title or None,
             scales=scales,
             # room for tick labels such as "-0.0025" on the left and a last x tick on the right
-            axes=({"label": x_axis, "size": 40, "labelSize": 18}, {"label": y_axis, "size": 58, "labelSize": 18 if y_axis else 0}),
+            axes=self._axes(),
             legend={"show": False},
             padding=(8, 28, 0, 4),
             aspect=1.6,
         )
         self.values = gui.add_markdown(self._values_text())
+
+    def _axes(self) -> tuple[dict[str, Any], dict[str, Any]]:
+        y = {"label": self._y_title, "size": self._y_size + (18 if self._y_title else 0), "labelSize": 18 if self._y_title else 0}
+        return (self._x_axis, y)
+
+    def _fit_axes(self, data: tuple[np.ndarray, ...]) -> None:
+        """Resize the axes when the tick labels the data needs change width.
+
+        The y axis grows to fit its widest label; x ticks are spaced so their labels do
+        not run into each other. Sent only when a size changes (it redraws the chart).
+        """
+        if len(data[0]) == 0:
+            return
+        changed = False
+        space = x_tick_space(float(data[0][0]), float(data[0][-1]))
+        if space != self._x_axis["space"]:
+            self._x_axis = dict(self._x_axis, space=space)
+            changed = True
+        ys = np.concatenate(data[1:]) if len(data) > 1 else np.zeros(0)
+        if self.plot.y_range is None and len(ys):
+            size = y_axis_size(float(ys.min()), float(ys.max()))
+            if size != self._y_size:
+                self._y_size = size
+                changed = True
+        if changed:
+            self.handle.axes = self._axes()
 
     def _values_text(self) -> str:
         """The legend: colour, label and latest value of each series, then x's value."""
@@ -192,7 +253,9 @@ class PlotBinding:
         now = time.monotonic()
         if not force and now - self._last_push < 1.0 / self.max_rate:
             return False
-        self.handle.data = self.buffer.data()
+        data = self.buffer.data()
+        self._fit_axes(data)
+        self.handle.data = data
         text = self._values_text()
         if text != self.values.content:
             self.values.content = text
