@@ -27,6 +27,16 @@ model:
 view:
   - text: {bind: who, label: Name}
   - label: {text: "**Last visitor:** {who}"}
+  - folder:
+      label: "Folder of {who}"
+      children:
+        - slider: {bind: t, min: 0, max: 1000, label: "slider of {who}"}
+        - button: {label: "button of {who}", action: "who = 'nobody'"}
+  - tabs:
+      tabs:
+        "tab of {who}":
+          - image: {source: "np.zeros((4, 4), dtype=np.uint8)", label: "image of {who}"}
+  - plot: {title: "plot of {who}", series: [{y: t, label: "series of {who}"}]}
 """
 
 PAYLOADS = [
@@ -34,6 +44,7 @@ PAYLOADS = [
     "<style>body{display:none}</style>",
     '<iframe srcdoc="<script>parent.__pwned=2</script>"></iframe>',
     "![x](/etc/hostname)  **not bold**    <b>not bold</b>",
+    '<svg onload="window.__pwned=3"></svg>',
 ]
 
 
@@ -78,6 +89,10 @@ def test_typed_html_is_shown_as_text_in_another_browser(guest_book, browser_cont
             assert page_b.evaluate("window.__pwned") is None
             assert page_b.evaluate("getComputedStyle(document.body).display") != "none"
             assert page_b.get_by_role("button", name="Reset").is_visible()
+            # every other label that shows the value shows it as text too
+            for kind in ("Folder", "slider", "button", "tab", "image", "plot", "series"):
+                wait_until(lambda: page_b.get_by_text(f"{kind} of {payload}", exact=False).count() > 0, timeout=20,
+                           what=f"the {kind}'s label to show {payload!r} as text")
         ARTIFACTS.mkdir(exist_ok=True)
         page_b.screenshot(path=str(ARTIFACTS / "ui_polish_injection_page_b.png"))
     finally:
