@@ -95,7 +95,7 @@ def test_plots_have_axis_titles_and_a_line_of_current_values(served) -> None:
         app.model.x = -0.125
         served.view.on_frame()
     text = plot.values.content
-    assert "&nbsp;x = \u22120.125" in text and "&nbsp;L = 1.5" in text and "at t = 0.25" in text
+    assert "&nbsp;x = \u22120.1250" in text and "&nbsp;L = 1.500" in text and "at t = 0.2500" in text
     assert "color:rgb(255, 0, 0)" in text  # the series' own colour
 
 

@@ -93,7 +93,13 @@ class PlotBuffer:
 
 
 def _value_text(v: float) -> str:
-    return f"{v:.6g}".replace("-", "\u2212")
+    """A value to four significant digits, without an exponent between 0.001 and 10^6."""
+    mag = abs(v)
+    if 1e-3 <= mag < 1e6:
+        text = f"{v:.{max(0, 3 - int(np.floor(np.log10(mag))))}f}"
+    else:
+        text = f"{v:.4g}"
+    return text.replace("-", "\u2212")
 
 
 #: pixels per character of uPlot's tick labels, and for the tick, the gap and the axis title
