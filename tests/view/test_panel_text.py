@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ejsrl.view._gui import PANEL_WIDTH, panel_width_for
-from ejsrl.view._scene_mirror import VIEW_ASPECT, VIEW_FOV, framing_view, scene_bounds
+from ejsrl.view._framing import VIEW_ASPECT, VIEW_FOV, framing_view, scene_bounds
 from ejsrl.view.elements import Dynamic, Label
 from ejsrl.world.scene import Box, Grid, Line, Sphere, World
 
@@ -68,9 +68,9 @@ def test_the_spec_s_panel_width_is_applied(recorded) -> None:
 
 
 def test_a_long_title_widens_the_panel() -> None:
-    assert panel_width_for("Pendulum", []) == PANEL_WIDTH
+    assert panel_width_for("Pendulum") == PANEL_WIDTH
     long = "Multi-robot system with an eye-in-hand camera and a very long name"
-    assert panel_width_for(long, []) > PANEL_WIDTH + 100
+    assert panel_width_for(long) > PANEL_WIDTH + 100
 
 
 def test_label_spaces_and_indents_survive_the_markdown_renderer(served) -> None:

@@ -82,9 +82,8 @@ CLIENT_TWEAKS = (
 )
 
 
-def panel_width_for(title: str, elements: list[Any]) -> int:
+def panel_width_for(title: str) -> int:
     """The panel width (pixels) that shows ``title`` whole, and plots and images at a readable size."""
-    del elements  # every lab gets the same width, unless its title needs more
     return int(min(640, max(PANEL_WIDTH, _HEADER_PX + _TITLE_PX_PER_CHAR * len(title))))
 
 
@@ -221,7 +220,7 @@ class Panel:
         meta = getattr(app, "meta", None)
         title = getattr(meta, "title", "") or "ejsgen simulation"
         gui.set_panel_label(title)
-        width = getattr(getattr(app, "sim", None), "panel_width", None) or panel_width_for(title, list(getattr(app, "view", []) or []))
+        width = getattr(getattr(app, "sim", None), "panel_width", None) or panel_width_for(title)
         # docked at the right edge: the panel never covers the 3D view, and it gets the
         # window's full height for plots and camera images
         gui.main_panel.dock_right()
