@@ -43,6 +43,7 @@ class SimConfig:
     autoplay: bool = False
     realtime: bool = False
     controls: bool = True
+    panel_width: float | None = None
 
 
 @dataclass

@@ -28,7 +28,8 @@ import numpy as np
 
 from ejsrl.view._guard import Verdict, guard_of, start_server
 from ejsrl.view._gui import ControlBinding, Panel
-from ejsrl.view._scene_mirror import SceneMirror, frame_camera
+from ejsrl.view._framing import frame_camera
+from ejsrl.view._scene_mirror import SceneMirror
 from ejsrl.view._validate import validate_control
 
 __all__ = ["ViserView", "make_server", "control_check"]
