@@ -209,7 +209,7 @@ class _Bound(Strict):
     bind: str
     """The model variable (or array element, 'q[2]') this control shows and edits."""
     label: str | None = None
-    """Text beside the control (default: the bind target)."""
+    """Text beside the control (default: the bind target); {expr} and {expr:fmt} are interpolated."""
     on_change: Code | None = None
     """Code run after the user changes the value (then the fixed relations)."""
 
@@ -218,7 +218,7 @@ class FolderEl(Strict):
     """A collapsible group of elements."""
 
     label: str = ""
-    """The folder's title."""
+    """The folder's title; {expr} and {expr:fmt} are interpolated."""
     expanded: bool = True
     """Open at start."""
     children: list[Any] = Field(default_factory=list)
@@ -229,7 +229,7 @@ class TabsEl(Strict):
     """Tabs, each a list of elements."""
 
     tabs: dict[str, list[Any]]
-    """Tab label: list of elements."""
+    """Tab label (with {expr} interpolated): list of elements."""
 
 
 class MarkdownEl(Strict):
@@ -243,7 +243,7 @@ class LabelEl(Strict):
     """A line of text with {expr} / {expr:fmt} interpolated every frame."""
 
     text: str
-    """The text."""
+    """The text: Markdown written in the spec, with each {expr} / {expr:fmt} value shown as plain text."""
 
 
 class SliderEl(_Bound):
@@ -287,7 +287,7 @@ class ButtonEl(Strict):
     """A button that runs code."""
 
     label: str
-    """The button's text."""
+    """The button's text; {expr} and {expr:fmt} are interpolated."""
     action: Code
     """Code run when pressed (then the fixed relations)."""
 
@@ -298,7 +298,7 @@ class SeriesEl(Strict):
     y: NumOrExpr
     """Expression giving the y value."""
     label: str | None = None
-    """Legend text (default: the expression)."""
+    """Legend text (default: the expression); {expr} and {expr:fmt} are interpolated."""
     color: str | None = None
     """CSS colour of the line."""
 
@@ -307,7 +307,7 @@ class PlotEl(Strict):
     """A line plot against a numeric x, one point per frame."""
 
     title: str = ""
-    """The plot's title."""
+    """The plot's title; {expr} and {expr:fmt} are interpolated."""
     x: NumOrExpr = "t"
     """Expression giving the x value (default t)."""
     series: list[SeriesEl]
@@ -330,7 +330,7 @@ class ImageEl(Strict):
     source: Expr
     """Expression giving an HxW or HxWx3 uint8 array, e.g. capture("eih")."""
     label: str | None = None
-    """Caption."""
+    """Caption; {expr} and {expr:fmt} are interpolated."""
     points: Expr | None = None
     """Expression giving Nx2 pixel coordinates (x, y) = (column, row)."""
 
