@@ -130,7 +130,6 @@ def test_panel_about_title_labels_matrix_and_plot(polish_lab, page):
 def test_arrow_keys_on_a_slider_leave_the_3d_view_alone(polish_lab, page):
     app, url = polish_lab
     open_lab(page, url)
-    wait_until(lambda: len(app._server.get_clients()) > 0 if hasattr(app, "_server") else True, what="a client")
     clients = lambda: list(server_of(app).get_clients().values())  # noqa: E731
     wait_until(lambda: len(clients()) == 1, what="the page to connect")
     camera = clients()[0].camera
