@@ -8,6 +8,7 @@ a hostile script might: any Origin or Host header, any message, any size.
 from __future__ import annotations
 
 import asyncio
+import threading
 import time
 from typing import Any
 
@@ -24,6 +25,28 @@ CAMERA = {
     "near": 0.01, "far": 1000.0, "image_height": 800, "image_width": 1280, "look_at": [0.0, 0.0, 0.0],
     "up_direction": [0.0, 0.0, 1.0],
 }
+
+
+def run_async(coro: Any, timeout: float = 60.0) -> Any:
+    """Run ``coro`` to completion on a fresh event loop in its own thread.
+
+    The browser tests' sync playwright leaves an event loop running in the main thread of
+    the xdist worker they share with these tests, where ``asyncio.run`` is refused.
+    """
+    out: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            out["value"] = asyncio.run(asyncio.wait_for(coro, timeout))
+        except BaseException as exc:  # noqa: BLE001 - re-raised in the caller
+            out["error"] = exc
+
+    thread = threading.Thread(target=target, name="guard-client")
+    thread.start()
+    thread.join()
+    if "error" in out:
+        raise out["error"]
+    return out.get("value")
 
 
 def encode(message: dict[str, Any]) -> bytes:

@@ -6,7 +6,6 @@ a lab is served to the network."""
 
 from __future__ import annotations
 
-import asyncio
 import http.client
 import math
 
@@ -18,12 +17,12 @@ import ejsrl.view._guard as guard_module
 from ejsrl.app import main
 from ejsrl.view._guard import MAX_MESSAGE_BYTES, VISER_TESTED, guard_of, parse_origin, start_server
 from ejsrl.view.viser_view import ViserView, make_server
-from guard_client import Client, gui_update
+from guard_client import Client, gui_update, run_async
 from view_lab import LabModel, make_app, make_view
 
 
 def _run(coro):
-    return asyncio.run(asyncio.wait_for(coro, 60))
+    return run_async(coro)
 
 
 def _refused(port: int, **kw) -> int:

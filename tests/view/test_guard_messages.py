@@ -5,12 +5,11 @@ other clients are sent, the refusal shown to the sender."""
 
 from __future__ import annotations
 
-import asyncio
 import math
 
 import pytest
 
-from guard_client import CAMERA, Client, gui_update
+from guard_client import CAMERA, Client, gui_update, run_async
 
 
 def _uuid(served, label: str) -> str:
@@ -18,7 +17,7 @@ def _uuid(served, label: str) -> str:
 
 
 def _run(coro) -> None:
-    asyncio.run(asyncio.wait_for(coro, 60))
+    run_async(coro)
 
 
 async def _pair(served) -> tuple[Client, Client]:

@@ -98,3 +98,12 @@ def test_a_text_field_bound_to_a_number_takes_numerals_only():
     t = Text("x", _get, _set, vtype="float")
     assert validate_control(t, "2.5").value == 2.5
     assert not validate_control(t, "two").ok
+
+
+def test_a_refusal_names_a_control_whose_label_changes_by_its_variable():
+    from ejsrl.view.elements import Dynamic
+
+    s = Slider("q[2]", _get, _set, label=Dynamic(lambda m: "q3 = 0.5", "q3 = {q[2]}"), min=0.0, max=1.0)
+    message = validate_control(s, "abc").message
+    assert message.startswith("q[2]: ") and "Dynamic" not in message
+    assert validate_control(slider(), "abc").message.startswith("Length: ")

@@ -36,7 +36,7 @@ class Checked:
 
 
 def _refuse(control: Control, why: str) -> Checked:
-    name = control.label or control.bind
+    name = control.title
     return Checked(False, None, f"{name}: {why}; the value was not applied.")
 
 

@@ -212,6 +212,11 @@ class Control(Element):
     on_change: Callable[[Any], None] | None = None
     vtype: str = "float"
 
+    @property
+    def title(self) -> str:
+        """What messages call the control: its label when that is constant text, else its ``bind``."""
+        return self.label if isinstance(self.label, str) and self.label else self.bind
+
 
 @dataclass
 class Slider(Control):

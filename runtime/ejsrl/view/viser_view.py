@@ -61,7 +61,7 @@ def make_server(
 def control_check(b: ControlBinding) -> Any:
     """The check of a value sent for ``b``'s control: ejsgen's validation (typing,
     clamping, options), then the form the control's handle shows."""
-    name = b.control.label or b.control.bind
+    name = b.control.title
 
     def check(raw: Any) -> Verdict:
         checked = validate_control(b.control, raw)
