@@ -9,15 +9,15 @@ from __future__ import annotations
 
 import ast
 import re
-import string
 from typing import TYPE_CHECKING, Any
 
+from ejsgen._interpolate import BraceError, split_fields
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError
 from ejsgen.plan import Line, Src, py
 from ejsgen.validate import ViewItem
-from ejsgen.yamlload import Path_
+from ejsgen.yamlload import Path_, TextOrigin
 
 if TYPE_CHECKING:
     from ejsgen.compiler import Compiler
@@ -97,39 +97,28 @@ class ViewCompiler:
         text stays Markdown. ``origin``: where the text starts, when it is not the scalar at
         ``path`` (a mapping key).
         """
-        try:
-            parsed = list(string.Formatter().parse(text))
-        except ValueError as exc:
-            self.c.errors.append(SpecError(self.c.loc(path), f"bad braces in {what}: {exc}", "write {{ and }} for literal braces"))
-            return text
-        if all(f is None for _, f, _, _ in parsed):
-            return text.replace("{{", "{").replace("}}", "}")
         if origin is None:
             origin = self.c.doc.origins.get(path)
+        try:
+            parts = split_fields(text)
+        except BraceError as err:
+            self.c.errors.append(SpecError(self._text_loc(path, origin, text, err.offset), f"{err.message} in {what}{err.detail}", err.hint))
+            return text
+        if all(isinstance(p, str) for p in parts):
+            return "".join(parts)  # type: ignore[arg-type]
         values: list[ast.expr] = []
-        pos = 0
-        for literal, field, spec, conv in parsed:
-            if literal:
-                values.append(ast.Constant(literal))
-            if field is None:
+        for part in parts:
+            if isinstance(part, str):
+                values.append(ast.Constant(part))
                 continue
+            field, spec, conv = part.expr, part.spec, part.conversion
             if not field.strip():
-                self.c.errors.append(SpecError(self.c.loc(path), f"empty {{}} in {what}", "put an expression inside, e.g. {t:.2f}"))
+                self.c.errors.append(SpecError(self._text_loc(path, origin, text, part.offset - 1), f"empty {{}} in {what}", "put an expression inside, e.g. {t:.2f}"))
                 continue
-            at = text.find("{" + field, pos)
-            pos = max(at, pos) + 1
             sub_origin = None
             if origin is not None:
-                from ejsgen.yamlload import TextOrigin
-
-                before = text[: max(at, 0) + 1]
-                line = origin.line + before.count("\n")
-                col = (origin.col + len(before)) if "\n" not in before else len(before.rsplit("\n", 1)[1]) + (origin.col if origin.block else 1)
-                sub_origin = TextOrigin(line, col, False)
-            if spec and ("{" in spec or "}" in spec):
-                loc = Location(self.c.doc.file, sub_origin.line, sub_origin.col) if sub_origin else self.c.loc(path)
-                self.c.errors.append(SpecError(loc, f"a format inside a format is not supported in {what}: '{{{field}:{spec}}}'", "write the format out, e.g. {x:8.3f}"))
-                continue
+                loc = self._text_loc(path, origin, text, part.offset)
+                sub_origin = TextOrigin(loc.line, loc.col, False)
             res = self._expr_with_origin(field, sub_origin, path, f"{{{field}}} in {what}")
             if res is None:
                 continue
@@ -146,6 +135,15 @@ class ViewCompiler:
         name = self.c.method_name(base)
         self.c.add_method(name, "self", f"View: {what}.", [Line(f"return {ast.unparse(joined)}", self.c.loc(path))])
         return Src(f"E.Dynamic(Model.{name}, {text!r})")
+
+    def _text_loc(self, path: Path_, origin: Any, text: str, offset: int) -> Location:
+        """The spec location of character ``offset`` of the text at ``path`` starting at ``origin``."""
+        if origin is None:
+            return self.c.loc(path)
+        before = text[:offset]
+        if "\n" not in before:
+            return Location(self.c.doc.file, origin.line, origin.col + len(before))
+        return Location(self.c.doc.file, origin.line + before.count("\n"), len(before.rsplit("\n", 1)[1]) + (origin.col if origin.block else 1))
 
     def _unit_of(self, expr: Any) -> str | None:
         """The declared unit of a plain variable (or element of an array variable) expression."""

@@ -166,3 +166,54 @@ def test_matrix_values_are_formatted_as_aligned_rows() -> None:
     assert format_value("ab", ">4") == "  ab"
     shown = escaped(T, "+.3f")
     assert shown.count("<br>") == 3 and "monospace" in shown
+
+
+@pytest.mark.parametrize(
+    "text",
+    ["Energy: {E:.3f} J", "{a!r:>8}|{b}", "{{x}} {y} }}", "t = {t:.2f} s   E = {E:.4f} J", "{q[2]:+.3f}", "plain"],
+)
+def test_fields_split_as_python_s_formatter_splits_them(text: str) -> None:
+    """Where the formatter can read a text, the scanner reads it the same way."""
+    import string
+
+    from ejsgen._interpolate import Field, split_fields
+
+    ours = [(p.expr, p.spec, p.conversion) for p in split_fields(text) if isinstance(p, Field)]
+    theirs = [(f, s, c) for _, f, s, c in string.Formatter().parse(text) if f is not None]
+    assert ours == theirs
+    literal = "".join(p for p in split_fields(text) if isinstance(p, str))
+    assert literal == "".join(lit for lit, *_ in string.Formatter().parse(text))
+
+
+@pytest.mark.parametrize(
+    ("text", "offset", "says"),
+    [
+        ("s = {np.array([a, b):.2f}", 14, "'[' is closed by ')'"),
+        ("s = {f(a:.2f}", 6, "'(' is never closed"),
+        ("n = {'abc}", 5, "quote ' is never closed"),
+        ("x = {a:.2f", 4, "'{' is never closed"),
+        ("x = a}", 5, "'}' closes no '{'"),
+        ("x = {a!z}", 6, "'!z' is not a conversion"),
+    ],
+)
+def test_a_malformed_text_is_reported_at_the_character_to_fix(text: str, offset: int, says: str) -> None:
+    from ejsgen._interpolate import BraceError, split_fields
+
+    with pytest.raises(BraceError) as err:
+        split_fields(text)
+    assert err.value.offset == offset and says in err.value.message
+
+
+def test_expressions_with_brackets_strings_and_not_equal_interpolate(tmp_path) -> None:
+    """'!=' and a '}' inside a string or brackets belong to the expression, as in an f-string."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+
+    spec = tmp_path / "s.ejs.yaml"
+    spec.write_text(
+        "ejs: 1\ntitle: S\nmodel:\n  variables:\n    a: 2\n    q: [1.5, 2.5]\n"
+        "view:\n  - label: {text: \"{a != 0} {'}'} {[a, 7][1]} {q[1]:+.1f} {{a}}\"}\n"
+    )
+    app = load_app(build(spec, tmp_path / "out"))
+    label = app.view[0].text
+    assert html.unescape(label(app.model)) == "True } 7 +2.5 {a}"
