@@ -425,7 +425,11 @@ class ViewCompiler:
         var = p.bind.split("[")[0].strip()
         declared = c.var_types.get(var)
         if want and declared not in ("auto", None) and "[" not in p.bind and vtype not in want:
-            c.errors.append(SpecError(c.loc(path + ("bind",)), f"a {kind} needs a {' or '.join(want)} variable, but '{var}' is {vtype}"))
+            decl_value = getattr(c.var_decls[var].decl, "value", None) if var in c.var_decls else None
+            hint = ""
+            if kind == "checkbox" and isinstance(decl_value, str) and decl_value.lower() in ("yes", "no", "on", "off", "y", "n"):
+                hint = f"'{decl_value}' is text in ejsgen's YAML (1.2); declare '{var}' as true or false"
+            c.errors.append(SpecError(c.loc(path + ("bind",)), f"a {kind} needs a {' or '.join(want)} variable, but '{var}' is {vtype}", hint))
             return []
         if declared == "auto" and want and "[" not in p.bind:
             vtype = want[0]
