@@ -21,7 +21,7 @@ import numpy as np
 
 from ejsrl.robotics import models
 from ejsrl.view.elements import Dynamic, Node3D
-from ejsrl.view.scene_sync import SceneSync
+from ejsrl.world.binding import SceneSync
 from ejsrl.world.functions import WorldFunctions
 
 TARGET_MS = 2.0

@@ -29,7 +29,7 @@ import numpy as np
 
 from ejsrl.sim.model import Controller, ModelBase, SetValueError, UserCodeError, describe_error
 from ejsrl.view.elements import Button, Control, Dynamic
-from ejsrl.view.scene_sync import SceneSync, scene_elements
+from ejsrl.world.binding import SceneSync, scene_elements
 
 __all__ = ["App", "SimConfig", "AppMeta", "main", "parse_set", "csv_columns", "load_app"]
 

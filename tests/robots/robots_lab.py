@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ejsrl.view.elements import Dynamic, Node3D
-from ejsrl.view.scene_sync import SceneSync
+from ejsrl.world.binding import SceneSync
 from ejsrl.world.functions import WorldFunctions
 
 

@@ -16,7 +16,7 @@ from ejsrl.robotics import models
 from ejsrl.robotics.transforms import rpy2tr, transl, trotz
 from ejsrl.view._scene_mirror import SceneMirror
 from ejsrl.view.elements import Dynamic, Node3D
-from ejsrl.view.scene_sync import SceneSync
+from ejsrl.world.binding import SceneSync
 from ejsrl.world.robot_node import LinkNode, RobotNode
 
 from robots_lab import Model, random_q, robot, scene
