@@ -3,6 +3,7 @@
 from ejsrl.sim._layout import StateLayout
 from ejsrl.sim.model import CodePage, Controller, ModelBase, OdePage, UserCodeError
 from ejsrl.sim.ode import METHODS, EventDef, OdeIntegrator, ZenoError
+from ejsrl.sim.world_access import WorldAccess, WorldFunctionsAccess
 
 __all__ = [
     "ModelBase",
@@ -15,4 +16,6 @@ __all__ = [
     "OdeIntegrator",
     "ZenoError",
     "METHODS",
+    "WorldAccess",
+    "WorldFunctionsAccess",
 ]

@@ -20,6 +20,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ejsrl.sim.names import prelude
+from ejsrl.sim.world_access import WorldAccess, WorldFunctionsAccess
 
 __all__ = ["ModelBase", "CodePage", "OdePage", "UserCodeError", "SetValueError", "Controller", "locate_error"]
 
@@ -46,6 +47,9 @@ class Controller:
 
     This default is used when a model runs on its own (in tests): play/pause only set a
     flag, alerts are collected, reset and initialize run at once.
+
+    It is also the model's :class:`~ejsrl.sim.world_access.WorldAccess`; this default has
+    no scene, so its world functions and ``capture`` raise.
 
     ``user_values`` are the values the user set from the view (by bind target, in the
     order set), which ``initialize()`` keeps and ``reset()`` forgets.
@@ -92,10 +96,11 @@ class Controller:
     def alert(self, text: str) -> None:
         self.alerts.append(text)
 
+    # -- the world (``WorldAccess``): the app has one; a model on its own has none ---------------
     def capture(self, name: str) -> np.ndarray:
         raise RuntimeError("capture() needs a scene; this model runs without one")
 
-    def world_functions(self) -> Any:
+    def world_functions(self) -> WorldFunctionsAccess:
         raise RuntimeError("this model runs without a scene")
 
     @property
@@ -385,21 +390,26 @@ class ModelBase:
         """Show a message in the UI (printed in headless runs)."""
         self._ejs_ctl.alert(str(text))
 
+    @property
+    def _ejs_world(self) -> WorldAccess:
+        """The world as this model's code reaches it: its controller (the app)."""
+        return self._ejs_ctl
+
     @prelude("control")
     def capture(self, name: str) -> np.ndarray:
         """The current RGB image (H, W, 3) uint8 seen by the virtual camera ``name``."""
-        return self._ejs_ctl.capture(name)
+        return self._ejs_world.capture(name)
 
     # -- the prelude's world functions (named scene objects) --------------------------------------
     @prelude("world")
     def object_pose(self, name: str) -> np.ndarray:
         """The (4, 4) pose in the world of the scene object ``name``."""
-        return self._ejs_ctl.world_functions().object_pose(name)
+        return self._ejs_world.world_functions().object_pose(name)
 
     @prelude("world")
     def move_object(self, name: str, pose: Any) -> None:
         """Place the scene object ``name``: a (4, 4) world pose or an [x, y, z] position."""
-        self._ejs_ctl.world_functions().move_object(name, pose)
+        self._ejs_world.world_functions().move_object(name, pose)
 
     @prelude("world")
     def attach(self, name: str, robot: str, link: int | None = None) -> None:
@@ -407,17 +417,17 @@ class ModelBase:
 
         The object keeps its pose relative to the link from now on (as when grasped).
         """
-        self._ejs_ctl.world_functions().attach(name, robot, link)
+        self._ejs_world.world_functions().attach(name, robot, link)
 
     @prelude("world")
     def release(self, name: str) -> None:
         """Release an attached object where it is now."""
-        self._ejs_ctl.world_functions().release(name)
+        self._ejs_world.world_functions().release(name)
 
     @prelude("world")
     def collisions(self) -> list[tuple[str, str]]:
         """The pairs of named scene objects and robot links that touch now (sorted)."""
-        return self._ejs_ctl.world_functions().collisions()
+        return self._ejs_world.world_functions().collisions()
 
     @prelude("program")
     def start_program(self, name: str) -> None:

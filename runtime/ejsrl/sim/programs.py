@@ -256,26 +256,13 @@ class Program:
     def close_gripper(self) -> Steps:
         """Close the gripper, grasping the graspable object within reach of the tool (if any)."""
         yield from self._gripper_to(0.0)
-        functions = self.model._ejs_ctl.world_functions()
-        functions.refresh()  # robots and bound poses as the model has them now
-        from ejsrl.world.robot_node import LinkNode, RobotNode
-
         robot = self._robot()
-        world = functions.world
-        element = next((n.name for n in world.walk() if isinstance(n, RobotNode) and n.model is robot), None)
-        if element is None:
-            return  # the arm is not drawn: nothing to grasp with
         tool = robot.fkine(self._q())[:3, 3]
-        best, best_d = None, GRASP_REACH
-        for node in world.walk():
-            if not node.graspable or isinstance(node, (RobotNode, LinkNode)) or not world.is_visible(node):
-                continue
-            d = float(np.linalg.norm(node.T_world()[:3, 3] - tool))
-            if d <= best_d:
-                best, best_d = node.name, d
-        if best is not None:
-            self.model.attach(best, element)
-            self.grasped = best
+        found = self.model._ejs_world.world_functions().graspable_near(robot, tool, GRASP_REACH)
+        if found is not None:  # else nothing within reach, or the arm is not drawn
+            obj, element = found
+            self.model.attach(obj, element)
+            self.grasped = obj
 
 
 class Programs:

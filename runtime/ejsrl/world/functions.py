@@ -184,6 +184,26 @@ class WorldFunctions:
         self.refresh()
         return self.collider.pairs(self.world)
 
+    def graspable_near(self, robot: Any, point: ArrayLike, reach: float) -> tuple[str, str] | None:
+        """``(object, element)``: the nearest visible graspable object (not a robot or a link)
+        within ``reach`` of ``point`` in the world, and the element that draws ``robot`` (a
+        ``Robot``); None if there is none, or if no element draws ``robot``. At equal
+        distances the object last in the scene wins."""
+        self.refresh()  # robots and bound poses as the model has them now
+        world = self.world
+        element = next((n.name for n in world.walk() if isinstance(n, RobotNode) and n.model is robot), None)
+        if element is None:
+            return None
+        tool = np.asarray(point, dtype=float).reshape(3)
+        best, best_d = None, float(reach)
+        for node in world.walk():
+            if not node.graspable or isinstance(node, (RobotNode, LinkNode)) or not world.is_visible(node):
+                continue
+            d = float(np.linalg.norm(node.T_world()[:3, 3] - tool))
+            if d <= best_d:
+                best, best_d = node.name, d
+        return (best, element) if best is not None else None
+
 
 # -- collisions ----------------------------------------------------------------------------------------
 def _link_shape(s: LinkShape) -> CollisionShape:
