@@ -162,7 +162,7 @@ def test_the_app_serves_on_loopback_by_default(checks_module) -> None:
     text = (out / "app.py").read_text()
     r = run_app(out, "--help", timeout=60)
     assert "127.0.0.1" in r.stdout
-    import ejsrl.app as app_module
+    import ejsrl.app.cli as app_module
 
     assert app_module._parser("x").parse_args([]).host == "127.0.0.1"
     assert "eval(" not in text and "exec(" not in text

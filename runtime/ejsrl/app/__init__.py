@@ -1,0 +1,18 @@
+"""Running a generated app: in the browser (viser) or headless.
+
+- ``ejsrl.app._loop``: ``App`` (the model, one lock, one loop: stepping, realtime pacing,
+  changes from the view, serving), ``SimConfig``, ``AppMeta``, ``load_app``;
+- ``ejsrl.app.headless``: ``run_headless`` and the CSV columns;
+- ``ejsrl.app.cli``: ``main(Model, VIEW, ...)``, what a generated ``app.py`` calls: the
+  command line of the language's last section (``--host``, ``--port``, ``--headless
+  --duration T [--csv FILE] [--vars a,b,q] [--every N] [--set NAME=VALUE ...]``), and
+  stopping cleanly on SIGINT/SIGTERM.
+"""
+
+from __future__ import annotations
+
+from ejsrl.app._loop import App, AppMeta, SimConfig, load_app
+from ejsrl.app.cli import main, parse_set
+from ejsrl.app.headless import csv_columns
+
+__all__ = ["App", "SimConfig", "AppMeta", "main", "parse_set", "csv_columns", "load_app"]

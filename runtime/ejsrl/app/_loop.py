@@ -1,0 +1,386 @@
+"""The app's model, its lock and its loop: stepping, realtime pacing, changes from the view, serving.
+
+``App`` owns the model, one lock and one loop: the simulation runs in the loop's thread;
+UI callbacks take the lock, apply their change, run ``on_change`` and the fixed
+relations, and return. Errors in user code pause the simulation and are kept in
+``app.error`` (message and spec location) for the UI to show; the server keeps serving.
+An ``App`` holds no state shared with other apps of the process.
+"""
+
+from __future__ import annotations
+
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+
+from ejsrl.sim.model import Controller, ModelBase, SetValueError, UserCodeError, describe_error
+from ejsrl.sim.world_access import WorldFunctionsAccess
+from ejsrl.view.elements import Button, Control, Dynamic
+from ejsrl.world.binding import SceneSync, scene_elements
+
+__all__ = ["App", "SimConfig", "AppMeta", "load_app"]
+
+
+@dataclass
+class SimConfig:
+    """The spec's ``simulation`` section."""
+
+    fps: float = 30.0
+    steps_per_display: int = 1
+    autoplay: bool = False
+    realtime: bool = False
+    controls: bool = True
+    panel_width: float | None = None
+
+
+@dataclass
+class AppMeta:
+    """What the About panel shows: title, Markdown description, author, spec file name."""
+
+    title: str
+    description: str = ""
+    author: str = ""
+    spec: str = ""
+
+
+class App(Controller):
+    """A model, its world and its simulation loop; the view and headless runs drive it.
+
+    ``model_cls``: the generated ``Model``; ``view``: its list of elements; ``base_dir``:
+    where the app's assets are; ``overrides``: initial values replaced before ``init``.
+    """
+
+    def __init__(
+        self,
+        model_cls: type[ModelBase],
+        view: list[Any],
+        *,
+        sim: SimConfig | None = None,
+        meta: AppMeta | None = None,
+        base_dir: Path | str = ".",
+        overrides: dict[str, Any] | None = None,
+    ) -> None:
+        super().__init__()
+        self.model_cls = model_cls
+        self.view = view
+        self.sim = sim or SimConfig()
+        self.meta = meta or AppMeta(title=model_cls.__name__)
+        self.base_dir = Path(base_dir)
+        self.lock = threading.RLock()
+        self.error: UserCodeError | None = None
+        self.error_rev = 0
+        self.frame_count = 0
+        self.views: list[Any] = []
+        self._pending: str | None = None
+        self._wall0: float | None = None
+        self._t0: float = 0.0
+        self._stopped = threading.Event()
+        self._world_functions: Any = None
+        self._loop_thread: threading.Thread | None = None
+        self.interrupted: int | None = None
+        """A signal's number once SIGINT/SIGTERM asked a headless run to stop (set by ``main``)."""
+        self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
+        self.model = model_cls(self, overrides, start=False)
+        try:
+            self.model._ejs_reset()
+        except SetValueError:
+            raise  # a --set value that does not fit its variable: the command line's error
+        except Exception as exc:  # noqa: BLE001 - user code may raise anything
+            self.fail(exc)
+        if self.error is None:
+            self.scene.update(self.model, self.safe_value, first=True)
+        self.playing = bool(self.sim.autoplay) and self.error is None
+
+    # -- errors ------------------------------------------------------------------------------
+    def fail(self, exc: BaseException, where: str = "") -> None:
+        """Record an error from user code and pause."""
+        err = describe_error(exc, self.model_cls)
+        if where and not err.where:
+            err = UserCodeError(err.message, where)
+        self.error = err
+        self.error_rev += 1
+        self.playing = False
+
+    def guard(self, fn: Callable[[], Any], where: str = "") -> Any:
+        """Run ``fn`` under the error guard: on an exception, record it, pause, return None."""
+        try:
+            return fn()
+        except Exception as exc:  # noqa: BLE001 - user code may raise anything
+            self.fail(exc, where)
+            return None
+
+    def safe_value(self, prop: Any, where: str = "") -> Any:
+        """A constant or dynamic property's value, or None after an error (recorded)."""
+        if not isinstance(prop, Dynamic):
+            return prop
+        if self.error is not None:
+            return None
+        return self.guard(lambda: prop(self.model), where)
+
+    def pop_alerts(self) -> list[str]:
+        """The messages from ``alert()`` since the last call."""
+        out, self.alerts = self.alerts, []
+        return out
+
+    # -- controls (thread-safe) ---------------------------------------------------------------
+    def play(self) -> None:
+        with self.lock:
+            if self.error is None:
+                self.playing = True
+                self._wall0 = None
+
+    def pause(self) -> None:
+        with self.lock:
+            self.playing = False
+
+    def is_playing(self) -> bool:
+        return self.playing
+
+    def step_once(self) -> None:
+        """Run one step (from the UI's Step button, or ``step()`` in user code)."""
+        with self.lock:
+            if self.error is None:
+                self._run_steps(1)
+                self._after_change()
+
+    def request_reset(self) -> None:
+        self._pending = "reset"
+
+    def request_initialize(self) -> None:
+        self._pending = self._pending or "initialize"
+
+    def reset(self) -> None:
+        """Back to the initial state (the UI's Reset button): clears errors too."""
+        with self.lock:
+            self._pending = "reset"
+            self._apply_pending()
+            self._refresh_views()
+
+    def _apply_pending(self) -> None:
+        """A reset (paused, the user's settings forgotten) or an initialize (the user's
+        settings kept, playing on if it was) requested during the last change or step."""
+        while self._pending is not None:
+            what, self._pending = self._pending, None
+            if what == "reset":
+                self.playing = False
+                self.user_values.clear()
+            self.error = None
+            self.error_rev += 1
+            self.scene.reset()
+            self.guard(self.model._ejs_reset if what == "reset" else self.model._ejs_initialize)
+            self._wall0 = None  # realtime pacing starts again from the new time
+            for v in self.views:
+                if hasattr(v, "on_reset"):
+                    v.on_reset()
+
+    def apply_control(self, control: Control, value: Any) -> None:
+        """Write an already validated value from the UI, then ``on_change`` and the fixed relations."""
+        with self.lock:
+            if self.guard(lambda: control.set(self.model, value), control.where) is None and self.error is not None:
+                return
+            self.remember_user_value(control.bind, control.set, value)
+            if control.on_change is not None:
+                self.guard(lambda: control.on_change(self.model), control.where)  # type: ignore[misc]
+            self._after_change()
+
+    def run_action(self, button: Button) -> None:
+        """Run a button's action, then the fixed relations."""
+        with self.lock:
+            self.guard(lambda: button.action(self.model), button.where)
+            self._after_change()
+
+    def apply_gizmo(self, name: str, T_world: Any) -> None:
+        """A gizmo was dragged: write its bound pose, run ``on_change`` and the fixed relations."""
+        T = np.asarray(T_world, dtype=float)
+        if T.shape != (4, 4) or not np.all(np.isfinite(T)):
+            return
+        for b in self.scene.bindings:
+            if b.element.name == name and b.element.kind == "gizmo" and b.element.set is not None:
+                with self.lock:
+                    element = b.element
+                    self.guard(lambda: element.set(self.model, T), element.where)  # type: ignore[misc]
+                    self.remember_user_value(f"gizmo {name}", element.set, T)  # type: ignore[arg-type]
+                    if element.on_change is not None:
+                        self.guard(lambda: element.on_change(self.model), element.where)  # type: ignore[misc]
+                    self._after_change()
+                return
+
+    def _after_change(self) -> None:
+        if self.error is None:
+            self.guard(self.model._fixed_relations)
+            self.model._ejs_restart_solvers()
+        self._apply_pending()
+        self._wall0 = None
+        self._refresh_views()
+
+    def _refresh_views(self) -> None:
+        if self.error is None:
+            self.scene.update(self.model, self.safe_value)
+
+    # -- the world, for model code ---------------------------------------------------------------
+    @property
+    def world(self) -> Any:  # type: ignore[override]
+        return self.scene.world
+
+    def world_functions(self) -> WorldFunctionsAccess:
+        """The implementation of the prelude's world functions (made on first use)."""
+        if self._world_functions is None:
+            from ejsrl.world.functions import WorldFunctions
+
+            self._world_functions = WorldFunctions(self.scene, lambda: self.model)
+        return self._world_functions
+
+    def capture(self, name: str) -> np.ndarray:
+        """Render what camera ``name`` sees now (the scene is brought up to date first)."""
+        from ejsrl.world import render
+
+        self.scene.update(self.model, None)
+        rgb, _depth = render(self.scene.world, name)
+        return rgb
+
+    # -- stepping ---------------------------------------------------------------------------------
+    def _run_steps(self, n: int) -> int:
+        done = 0
+        for _ in range(n):
+            try:
+                stop = self.model._ejs_step()
+            except Exception as exc:  # noqa: BLE001
+                self.fail(exc)
+                break
+            done += 1
+            if self._pending is not None:
+                self._apply_pending()
+            if stop:
+                self.playing = False
+                break
+            if not self.playing and n > 1:
+                break
+        return done
+
+    def frame(self) -> None:
+        """One display frame: the steps (when playing), then the world and the views."""
+        with self.lock:
+            if self.playing and self.error is None:
+                if self.sim.realtime and self.model.INDEPENDENT is not None:
+                    self._realtime_steps()
+                else:
+                    self._run_steps(int(self.sim.steps_per_display))
+            self._apply_pending()
+            self._refresh_views()
+            self.frame_count += 1
+            for v in self.views:
+                v.on_frame()
+
+    def _realtime_steps(self) -> None:
+        now = time.perf_counter()
+        t = self.model._ejs_time() or 0.0
+        if self._wall0 is None:
+            self._wall0, self._t0 = now, t
+            self._run_steps(1)
+            return
+        target = self._t0 + (now - self._wall0)
+        deadline = now + 0.8 / max(self.sim.fps, 1.0)
+        while self.playing and self.error is None and (self.model._ejs_time() or 0.0) < target:
+            if self._run_steps(1) == 0 or time.perf_counter() > deadline:
+                self._wall0 = None  # cannot keep up: pace from here
+                break
+
+    def run_loop(self, stop: threading.Event | None = None) -> None:
+        """Run frames at ``sim.fps`` until ``stop`` is set."""
+        stop = stop or self._stopped
+        period = 1.0 / max(float(self.sim.fps), 1.0)
+        next_time = time.perf_counter()
+        while not stop.is_set():
+            self.frame()
+            next_time += period
+            delay = next_time - time.perf_counter()
+            if delay > 0:
+                stop.wait(delay)
+            else:
+                next_time = time.perf_counter()
+
+    def stop(self) -> None:
+        """Stop the loop; when it runs in its own thread (``serve(block=False)``), wait for it."""
+        self._stopped.set()
+        thread = self._loop_thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout=5.0)
+
+    # -- serving ----------------------------------------------------------------------------------
+    def serve(
+        self, host: str = "127.0.0.1", port: int = 8080, *, block: bool = True, allow_origins: Sequence[str] = ()
+    ) -> Any:
+        """Start the viser server and the loop; returns the server (its real port: ``get_port()``).
+
+        Only pages served by the app itself may open its websocket (and ``allow_origins``;
+        ``"*"``: any); a ``host`` other than this machine's loopback prints a warning.
+        """
+        from ejsrl.view._guard import is_loopback
+        from ejsrl.view.viser_view import ViserView, make_server
+
+        server, _url = make_server(host, port, allow_origins=allow_origins, label=self.meta.title)
+        view = ViserView(self, server)
+        self.views.append(view)
+        url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
+        print(f"{self.meta.title}: serving on http://{url_host}:{server.get_port()} (Ctrl+C to stop)", flush=True)
+        if not is_loopback(host):
+            where = "every network this machine is on" if host in ("0.0.0.0", "", "::") else f"the network at {host}"
+            print(
+                f"warning: --host {host or '0.0.0.0'} opens this lab to {where}: anyone who can reach this "
+                f"machine on port {server.get_port()} can open it, watch it and change the simulation. "
+                "Leave --host out (127.0.0.1) to keep the lab on this machine.",
+                file=sys.stderr,
+                flush=True,
+            )
+        if not block:
+            self._loop_thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)
+            self._loop_thread.start()
+            return server
+        try:
+            self.run_loop()
+        except KeyboardInterrupt:
+            pass
+        finally:
+            server.stop()
+        return server
+
+    # -- headless -----------------------------------------------------------------------------------
+    def run_headless(
+        self,
+        duration: float,
+        *,
+        csv_file: TextIO | None = None,
+        variables: Sequence[str] | None = None,
+        every: int = 1,
+        log: TextIO | None = None,
+    ) -> int:
+        """Run for ``duration`` units of the independent variable; returns the exit status
+        (see :func:`ejsrl.app.headless.run_headless`; ``log`` defaults to standard error)."""
+        from ejsrl.app.headless import run_headless
+
+        return run_headless(self, duration, csv_file=csv_file, variables=variables, every=every, log=log)
+
+
+def load_app(app_dir: Path | str, *, overrides: dict[str, Any] | None = None) -> App:
+    """Import a built app folder's ``app.py`` and make its ``App`` (not serving, not playing).
+
+    For scripting a lab from Python (notebooks, tests, benchmarks): ``app.model`` is the
+    model, ``app.step_once()`` steps it, ``app.serve(block=False)`` serves it.
+    """
+    import importlib.util
+
+    folder = Path(app_dir).resolve()
+    name = f"ejs_app_{abs(hash(str(folder)))}"
+    spec = importlib.util.spec_from_file_location(name, folder / "app.py")
+    if spec is None or spec.loader is None:
+        raise FileNotFoundError(f"no app.py in {folder}")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # so tracebacks and SPEC_LINES find the module
+    spec.loader.exec_module(module)
+    return App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides)

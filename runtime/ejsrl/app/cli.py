@@ -1,0 +1,283 @@
+"""The generated app's command line: ``main(Model, VIEW, ...)``, ``--set``, and stopping on signals.
+
+``main`` parses the command line of the language's last section (``--host``, ``--port``,
+``--headless --duration T [--csv FILE] [--vars a,b,q] [--every N] [--set NAME=VALUE ...]``)
+and serves the app in the browser or runs it headless.
+"""
+
+from __future__ import annotations
+
+import argparse
+import ast
+import math
+import signal
+import sys
+import threading
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ejsrl.app._loop import App, AppMeta, SimConfig
+from ejsrl.app.headless import csv_columns
+from ejsrl.sim.model import ModelBase, SetValueError, UserCodeError
+
+__all__ = ["main", "parse_set"]
+
+
+def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
+    """Parse ``NAME=VALUE`` for ``--set``: the value is a literal of the variable's type.
+
+    Raises ``ValueError`` with a message for the user. Nothing is evaluated: numbers,
+    booleans, strings and (nested) lists of numbers only. For an ``expr:`` variable (type
+    ``"auto"``) the value is a function of the declared value, which parses the literal
+    for the type the expression gave when the model declares it (``SetValueError`` if it
+    does not fit).
+    """
+    if "=" not in text:
+        raise ValueError(f"--set takes NAME=VALUE, got {text!r}")
+    name, raw = (s.strip() for s in text.split("=", 1))
+    if name not in types:
+        import difflib
+
+        close = difflib.get_close_matches(name, list(types), n=1)
+        hint = f"; did you mean '{close[0]}'?" if close else ""
+        raise ValueError(f"--set: unknown variable '{name}'{hint}")
+    kind = types[name]
+    if kind == "auto":
+        return name, _DeclaredSet(name, raw)
+    return name, _parse_value(name, raw, kind)
+
+
+class _DeclaredSet:
+    """A ``--set`` value for an ``expr:`` variable, parsed for the type of its declared value."""
+
+    def __init__(self, name: str, raw: str) -> None:
+        self.name, self.raw = name, raw
+
+    def __call__(self, declared: Any) -> Any:
+        if isinstance(declared, (bool, np.bool_)):
+            kind = "bool"
+        elif isinstance(declared, (int, np.integer)):
+            kind = "int"
+        elif isinstance(declared, (float, np.floating)):
+            kind = "float"
+        elif isinstance(declared, str):
+            kind = "str"
+        elif isinstance(declared, np.ndarray) and declared.dtype.kind in "iuf":
+            kind = "array"
+        else:
+            raise SetValueError(
+                f"--set {self.name}: its expression gives a {type(declared).__name__}, which cannot be set "
+                "from the command line (numbers, booleans, text and arrays of numbers can)"
+            )
+        try:
+            return _parse_value(self.name, self.raw, kind)
+        except ValueError as exc:
+            raise SetValueError(str(exc)) from None
+
+    def __repr__(self) -> str:
+        return f"<--set {self.name}={self.raw} (for an expr: variable)>"
+
+
+def _parse_value(name: str, raw: str, kind: str) -> Any:
+    """The literal ``raw`` as a value of type ``kind`` (``ValueError`` if it is not one)."""
+    if kind == "str":
+        try:
+            value = ast.literal_eval(raw)
+            if not isinstance(value, str):
+                value = raw
+        except (ValueError, SyntaxError):
+            value = raw
+        return value
+    if kind == "bool":
+        low = raw.lower()
+        if low in ("true", "1", "yes", "on"):
+            return True
+        if low in ("false", "0", "no", "off"):
+            return False
+        raise ValueError(f"--set {name}: expected true or false, got {raw!r}")
+    try:
+        value = ast.literal_eval(raw)
+    except (ValueError, SyntaxError):
+        raise ValueError(f"--set {name}: {raw!r} is not a number or a list of numbers") from None
+    if kind == "int":
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise ValueError(f"--set {name}: expected an integer, got {raw!r}")
+        return value
+    if kind == "float":
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ValueError(f"--set {name}: expected a finite number, got {raw!r}")
+        return float(value)
+    if kind == "array":
+        try:
+            arr = np.array(value, dtype=float)
+        except (ValueError, TypeError):
+            raise ValueError(f"--set {name}: expected a list of numbers, got {raw!r}") from None
+        if arr.ndim == 0 or not np.all(np.isfinite(arr)):
+            raise ValueError(f"--set {name}: expected a list of finite numbers, got {raw!r}")
+        return arr
+    raise ValueError(f"--set {name}: this variable's type cannot be set from the command line")
+
+
+def _parser(title: str) -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(description=f"{title} (an ejsgen app). Serves the UI in the browser, or runs headless.")
+    p.add_argument("--host", default="127.0.0.1", help="address to serve on (default 127.0.0.1: this machine only)")
+    p.add_argument("--port", type=int, default=8080, help="port (default 8080; the next free one if taken)")
+    p.add_argument(
+        "--allow-origin", action="append", default=[], metavar="ORIGIN",
+        help="also accept the lab's websocket from pages at ORIGIN, e.g. https://labs.example.org behind a proxy "
+        "(repeatable; '*' accepts any page and any Host: only behind a proxy you trust). By default only the "
+        "lab's own page may connect",
+    )
+    p.add_argument("--headless", action="store_true", help="run without a server")
+    p.add_argument("--duration", type=float, help="headless: how long to run, in units of the independent variable")
+    p.add_argument("--csv", metavar="FILE", help="headless: write variables to this CSV file ('-' for standard output)")
+    p.add_argument("--vars", metavar="a,b,q", help="headless: the variables to write (default: every numeric variable)")
+    p.add_argument("--every", type=int, default=1, metavar="N", help="headless: write a row every N steps (default 1)")
+    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="replace a variable's initial value (repeatable)")
+    return p
+
+
+class _Interrupted(KeyboardInterrupt):
+    """Raised in the main thread by SIGINT/SIGTERM (a ``KeyboardInterrupt``, so a served app stops as on Ctrl+C)."""
+
+
+class _StopSignals:
+    """SIGINT and SIGTERM as a clean stop, while ``main`` runs (in the main thread only).
+
+    The first signal raises :class:`_Interrupted` (serving stops its server), or, once a
+    headless ``App`` is given to :meth:`defer_to`, sets its ``interrupted`` so that the run
+    ends between two steps with its rows written; a second signal then raises, in case a
+    step never ends. Further signals while stopping are ignored.
+    """
+
+    def __init__(self) -> None:
+        self.signum: int | None = None
+        self._app: App | None = None
+        self._raised = False
+        self._old: dict[int, Any] = {}
+
+    def __enter__(self) -> _StopSignals:
+        if threading.current_thread() is threading.main_thread():
+            for sig in (signal.SIGINT, signal.SIGTERM):
+                self._old[sig] = signal.signal(sig, self._handle)
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for sig, old in self._old.items():
+            signal.signal(sig, old)
+
+    def defer_to(self, app: App) -> None:
+        self._app = app
+        if self.signum is not None:
+            app.interrupted = self.signum
+
+    def _handle(self, signum: int, frame: object) -> None:
+        first = self.signum is None
+        if first:
+            self.signum = signum
+        if first and self._app is not None:
+            self._app.interrupted = signum
+            return
+        if not self._raised:
+            self._raised = True
+            raise _Interrupted(signum)
+
+
+def main(
+    model_cls: type[ModelBase],
+    view: list[Any],
+    *,
+    sim: SimConfig,
+    meta: AppMeta,
+    base_dir: Path | str,
+    argv: Sequence[str] | None = None,
+) -> int:
+    """The generated app's entry point; returns the process exit status.
+
+    SIGINT (Ctrl+C) and SIGTERM stop the app cleanly, with a one-line message and no
+    traceback: a served app stops its server, a headless run keeps the rows written so
+    far. The status is then 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
+    """
+    stop = _StopSignals()
+    status = 1
+    with stop:
+        try:
+            status = _main(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, argv=argv, stop=stop)
+        except SetValueError as exc:
+            print(f"error: {exc}", file=sys.stderr)
+            return 2
+        except KeyboardInterrupt:  # _Interrupted, or Ctrl+C before the handlers were installed
+            if stop.signum is None:
+                stop.signum = signal.SIGINT
+    if stop.signum is not None:
+        if status != 128 + stop.signum:  # a headless run reports its own stop
+            print(f"{meta.title}: stopped by {signal.Signals(stop.signum).name}", file=sys.stderr, flush=True)
+        return 128 + int(stop.signum)
+    return status
+
+
+def _main(
+    model_cls: type[ModelBase],
+    view: list[Any],
+    *,
+    sim: SimConfig,
+    meta: AppMeta,
+    base_dir: Path | str,
+    argv: Sequence[str] | None,
+    stop: _StopSignals,
+) -> int:
+    args = _parser(meta.title).parse_args(argv)
+    # NumPy's overflow/invalid warnings would point at app.py; a state that becomes
+    # non-finite is reported instead, with the spec location of its equations.
+    np.seterr(all="ignore")
+    overrides: dict[str, Any] = {}
+    try:
+        for item in args.set:
+            name, value = parse_set(item, model_cls.VARIABLES)
+            overrides[name] = value
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    if args.headless:
+        if args.duration is None or not math.isfinite(args.duration) or args.duration < 0:
+            print("error: --headless needs --duration T (a number >= 0)", file=sys.stderr)
+            return 2
+        if args.every < 1:
+            print("error: --every must be at least 1", file=sys.stderr)
+            return 2
+        app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
+        stop.defer_to(app)
+        names = [n.strip() for n in args.vars.split(",") if n.strip()] if args.vars else None
+        try:
+            if app.error is None:
+                csv_columns(app.model, names)  # refuse bad --vars before any file is written
+            if args.csv is None:
+                return app.run_headless(args.duration, variables=names, every=args.every)
+            if args.csv == "-":
+                return app.run_headless(args.duration, csv_file=sys.stdout, variables=names, every=args.every)
+            try:
+                fh = open(args.csv, "w", newline="")  # noqa: SIM115 - closed below
+            except OSError as exc:
+                print(f"error: cannot write {args.csv}: {exc.strerror or exc}", file=sys.stderr)
+                return 2
+            with fh:
+                return app.run_headless(args.duration, csv_file=fh, variables=names, every=args.every)
+        except UserCodeError as exc:
+            print(f"error: {exc.message}", file=sys.stderr)
+            return 2
+    if any(v is not None for v in (args.duration, args.csv, args.vars)):
+        print("error: --duration, --csv and --vars go with --headless", file=sys.stderr)
+        return 2
+    try:
+        from ejsrl.view._guard import parse_origin
+
+        origins = [parse_origin(o) for o in args.allow_origin]
+    except ValueError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
+    app.serve(args.host, args.port, allow_origins=origins)
+    return 0
