@@ -101,7 +101,7 @@ def main() -> None:
     import os
 
     from ejsrl.world import _gl
-    from ejsrl.world.render import _pick_backend, available_backends
+    from ejsrl.world.rendering import _pick_backend, available_backends
 
     backends = available_backends()  # "numpy", and "gl" where moderngl + EGL work
     print(f"load average before: {os.getloadavg()[0]:.2f} (the machine is shared: medians move with load, bests less)")
@@ -137,7 +137,7 @@ def main() -> None:
 
     # where the NumPy back end's time goes, large scene at 640x480
     from ejsrl.world._raster import face_normals, front_faces, zbuffer
-    from ejsrl.world.render import AMBIENT, _bg_uint8, _shade, _to_camera
+    from ejsrl.world.rendering import AMBIENT, _bg_uint8, _shade, _to_camera
 
     w = scenes[1][1]
     cam = CameraModel(640, 480, fov_deg=50)

@@ -66,7 +66,7 @@ def test_the_joints_follow_their_sliders_without_the_demo(lab):
 
 def test_the_camera_view_changes_as_the_arms_move(lab):
     from ejsrl.app import load_app
-    from ejsrl.world.render import BACKGROUND
+    from ejsrl.world.rendering import BACKGROUND
 
     app = load_app(lab)
     first = app.capture("eih")

@@ -67,7 +67,7 @@ def test_gl_draws_what_numpy_draws_except_along_edges(cam: CameraModel):
     assert same.mean() >= 0.99, f"only {100 * same.mean():.2f} % of pixels agree"
     # every pixel that differs lies on an edge of the NumPy picture (triangle or silhouette)
     from ejsrl.world._raster import rasterize
-    from ejsrl.world.render import _to_camera
+    from ejsrl.world.rendering import _to_camera
 
     tris, _ = w.triangles()
     face, _ = rasterize(_to_camera(tris, T).transpose(2, 0, 1), cam.K, cam.width, cam.height, near=cam.near, far=cam.far)
@@ -144,7 +144,7 @@ def test_gl_empty_scene_and_background():
 
 def test_auto_picks_gl_when_it_works():
     require_gl()
-    from ejsrl.world.render import _pick_backend, available_backends
+    from ejsrl.world.rendering import _pick_backend, available_backends
 
     assert available_backends() == ["numpy", "gl"]
     assert _pick_backend("auto") == "gl" or os.environ.get("EJSRL_RENDER_BACKEND", "auto") != "auto"

@@ -20,7 +20,7 @@ from ejsrl.vision import CameraModel
 from ejsrl.world import BACKGROUND, World, render
 from ejsrl.world import _gl
 from ejsrl.world._raster import clip_near, rasterize
-from ejsrl.world.render import _pick_backend
+from ejsrl.world.rendering import _pick_backend
 from ejsrl.world.scene import Box, CameraNode, MeshNode, Part, Sphere
 from test_render_gl import require_gl
 

@@ -2,7 +2,7 @@
 
 from ejsrl.world.collision import CollisionShape, CollisionWorld, collisions, shape_from_node
 from ejsrl.world.mesh import MeshFormatError, MeshPart, load_mesh
-from ejsrl.world.render import BACKGROUND, render
+from ejsrl.world.rendering import BACKGROUND, render
 from ejsrl.world.scene import NODE_KINDS, Node, Part, World
 
 __all__ = ["World", "Node", "Part", "NODE_KINDS", "render", "BACKGROUND",
