@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import sys
 import threading
-import time
 from math import sqrt
 from pathlib import Path
 
@@ -15,6 +14,7 @@ import pytest
 from ejsrl.app import App, SimConfig, load_app, parse_set
 from ejsrl.view.elements import Button, Slider, Text
 from tests.conftest import run_app
+from tests.fake_clock import FakeClock
 
 SPECS = Path(__file__).parent / "specs"
 
@@ -27,9 +27,10 @@ def checks_module(tmp_path_factory):
     return sys.modules[load_app(out).model_cls.__module__], out
 
 
-def make_app(module, out, **sim) -> App:
+def make_app(module, out, clock=None, **sim) -> App:
     cfg = SimConfig(**{**vars(module.SIMULATION), **sim})
-    return App(module.Model, module.VIEW, sim=cfg, meta=module.META, base_dir=out)
+    extra = {} if clock is None else {"clock": clock}
+    return App(module.Model, module.VIEW, sim=cfg, meta=module.META, base_dir=out, **extra)
 
 
 def control(module, cls, bind):
@@ -98,20 +99,52 @@ def test_reset_from_an_action_restores_initial_values(checks_module) -> None:
     assert app.model.t == 0.0 and app.model.y == 10.0
 
 
+class _Ticker:
+    """A view whose every frame takes one frame period on the clock; stops the loop after ``n``."""
+
+    def __init__(self, clock: FakeClock, stop: threading.Event, n: int, period: float) -> None:
+        self.clock, self.stop, self.n, self.period, self.frames = clock, stop, n, period, 0
+
+    def on_frame(self) -> None:
+        self.clock.advance(self.period)
+        self.frames += 1
+        if self.frames >= self.n:
+            self.stop.set()
+
+
 def test_realtime_paces_time_to_the_wall_clock(checks_module) -> None:
     module, out = checks_module
-    app = make_app(module, out, realtime=True, fps=30)
+    clock = FakeClock()
+    app = make_app(module, out, clock=clock, realtime=True, fps=30)
     app.model.g = 0.0  # no event: keep falling at rest
     app.play()
     stop = threading.Event()
+    ticker = _Ticker(clock, stop, n=30, period=1.0 / 30)  # one second of frames at 30 a second
+    app.views.append(ticker)
     thread = threading.Thread(target=app.run_loop, args=(stop,))
-    start = time.perf_counter()
+    start = clock()
     thread.start()
-    time.sleep(1.0)
-    stop.set()
-    thread.join()
-    wall = time.perf_counter() - start
+    thread.join(timeout=60)
+    assert not thread.is_alive() and ticker.frames == 30
+    wall = clock() - start
     assert app.model.t == pytest.approx(wall, abs=0.25)
+    # each frame catches up with the clock as it was when the frame began
+    assert app.model.t == pytest.approx(29 / 30, abs=0.011)
+
+
+def test_realtime_pacing_follows_the_clock_not_the_frames(checks_module) -> None:
+    """Frames that come late (the clock moved 0.1 s between them) still give simulated
+    time equal to the time on the clock."""
+    module, out = checks_module
+    clock = FakeClock()
+    app = make_app(module, out, clock=clock, realtime=True, fps=30)
+    app.model.g = 0.0
+    app.play()
+    app.frame()
+    for _ in range(5):
+        clock.advance(0.1)
+        app.frame()
+    assert app.model.t == pytest.approx(0.5, abs=0.011)
 
 
 def test_steps_per_display_runs_that_many_steps_a_frame(checks_module) -> None:

@@ -3,13 +3,16 @@ from __future__ import annotations
 import pytest
 
 from ejsrl.view.viser_view import ViserView, make_server
+from tests.fake_clock import FakeClock
 from view_lab import make_app
 
 
 class Served:
-    """An app, its viser server and view, driven frame by frame by the test (no loop thread)."""
+    """An app, its viser server and view, driven frame by frame by the test (no loop thread),
+    on a clock that moves only when the test advances it (``served.clock.advance(dt)``)."""
 
-    def __init__(self, app, server, view) -> None:
+    def __init__(self, app, server, view, clock: FakeClock) -> None:
+        self.clock = clock
         self.app = app
         self.server = server
         self.view = view
@@ -29,9 +32,10 @@ class Served:
 @pytest.fixture
 def served(request):
     kw = getattr(request, "param", {}) or {}
-    app = make_app(**kw)
+    clock = FakeClock()
+    app = make_app(clock=clock, **kw)
     server, _url = make_server("127.0.0.1", 0)
     view = ViserView(app, server)
     app.views.append(view)
-    yield Served(app, server, view)
+    yield Served(app, server, view, clock)
     server.stop()

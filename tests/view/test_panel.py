@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 
@@ -96,7 +94,10 @@ def test_a_control_the_user_just_moved_is_not_overwritten(served):
     served.app.model.L = 0.3  # the simulation changes it right away
     served.app.frame()
     assert b.handle.value == pytest.approx(1.5)
-    b.user_time = time.monotonic() - _gui.USER_HOLD_SECONDS - 0.01
+    served.clock.advance(_gui.USER_HOLD_SECONDS - 0.01)
+    served.app.frame()
+    assert b.handle.value == pytest.approx(1.5)  # still held
+    served.clock.advance(0.02)  # the hold is over
     served.app.frame()
     assert b.handle.value == pytest.approx(0.3)
 
@@ -168,11 +169,11 @@ def test_images_are_sent_only_when_they_change(served):
     assert im.pushes == 1
     assert im.handle.image.shape == (24, 32, 3)
     assert tuple(im.handle.image[6, 5 + 2]) != (60, 60, 60)  # the marker is drawn over it
-    time.sleep(0.06)
+    served.clock.advance(0.06)  # past the images' rate limit (20 a second)
     served.app.frame()
     assert im.pushes == 1
     served.app.model.n = 5
-    time.sleep(0.06)
+    served.clock.advance(0.06)
     served.app.frame()
     assert im.pushes == 2
 
@@ -227,7 +228,7 @@ def test_text_being_typed_is_not_overwritten_while_the_model_keeps_its_value(ser
     b = binding(served, "L")
     served.app.frame()
     b.handle._impl.value = 0.3  # the browser's in-progress text, not applied to the model
-    b.user_time = time.monotonic() - _gui.USER_HOLD_SECONDS - 1.0  # long after the last keystroke
+    b.user_time = served.clock() - _gui.USER_HOLD_SECONDS - 1.0  # long after the last keystroke
     served.app.frame()
     assert b.handle.value == pytest.approx(0.3)
     served.app.model.L = 0.7  # now the model itself changes

@@ -111,6 +111,8 @@ def make_view(*, failing_label: bool = False) -> list:
 
 def make_app(**kw) -> App:
     failing = kw.pop("failing_label", False)
-    return App(LabModel, make_view(failing_label=failing),
+    clock = kw.pop("clock", None)
+    extra = {} if clock is None else {"clock": clock}
+    return App(LabModel, make_view(failing_label=failing), **extra,
                sim=SimConfig(fps=30.0, **kw),
                meta=AppMeta(title="Test lab", description="A **test** lab.", author="Tester", spec=SPEC))

@@ -53,7 +53,9 @@ class App(Controller):
     """A model, its world and its simulation loop; the view and headless runs drive it.
 
     ``model_cls``: the generated ``Model``; ``view``: its list of elements; ``base_dir``:
-    where the app's assets are; ``overrides``: initial values replaced before ``init``.
+    where the app's assets are; ``overrides``: initial values replaced before ``init``;
+    ``clock()``: monotonic seconds (default ``time.perf_counter``), the time of realtime
+    pacing, of the loop's frame rate and of the view's timers (tests pass a fake one).
     """
 
     def __init__(
@@ -65,8 +67,10 @@ class App(Controller):
         meta: AppMeta | None = None,
         base_dir: Path | str = ".",
         overrides: dict[str, Any] | None = None,
+        clock: Callable[[], float] = time.perf_counter,
     ) -> None:
         super().__init__()
+        self.clock = clock
         self.model_cls = model_cls
         self.view = view
         self.sim = sim or SimConfig()
@@ -278,7 +282,7 @@ class App(Controller):
                 v.on_frame()
 
     def _realtime_steps(self) -> None:
-        now = time.perf_counter()
+        now = self.clock()
         t = self.model._ejs_time() or 0.0
         if self._wall0 is None:
             self._wall0, self._t0 = now, t
@@ -287,7 +291,7 @@ class App(Controller):
         target = self._t0 + (now - self._wall0)
         deadline = now + 0.8 / max(self.sim.fps, 1.0)
         while self.playing and self.error is None and (self.model._ejs_time() or 0.0) < target:
-            if self._run_steps(1) == 0 or time.perf_counter() > deadline:
+            if self._run_steps(1) == 0 or self.clock() > deadline:
                 self._wall0 = None  # cannot keep up: pace from here
                 break
 
@@ -295,15 +299,15 @@ class App(Controller):
         """Run frames at ``sim.fps`` until ``stop`` is set."""
         stop = stop or self._stopped
         period = 1.0 / max(float(self.sim.fps), 1.0)
-        next_time = time.perf_counter()
+        next_time = self.clock()
         while not stop.is_set():
             self.frame()
             next_time += period
-            delay = next_time - time.perf_counter()
+            delay = next_time - self.clock()
             if delay > 0:
                 stop.wait(delay)
             else:
-                next_time = time.perf_counter()
+                next_time = self.clock()
 
     def stop(self) -> None:
         """Stop the loop; when it runs in its own thread (``serve(block=False)``), wait for it."""
@@ -367,7 +371,9 @@ class App(Controller):
         return run_headless(self, duration, csv_file=csv_file, variables=variables, every=every, log=log)
 
 
-def load_app(app_dir: Path | str, *, overrides: dict[str, Any] | None = None) -> App:
+def load_app(
+    app_dir: Path | str, *, overrides: dict[str, Any] | None = None, clock: Callable[[], float] = time.perf_counter
+) -> App:
     """Import a built app folder's ``app.py`` and make its ``App`` (not serving, not playing).
 
     For scripting a lab from Python (notebooks, tests, benchmarks): ``app.model`` is the
@@ -383,4 +389,6 @@ def load_app(app_dir: Path | str, *, overrides: dict[str, Any] | None = None) ->
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # so tracebacks and SPEC_LINES find the module
     spec.loader.exec_module(module)
-    return App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides)
+    return App(
+        module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides, clock=clock
+    )

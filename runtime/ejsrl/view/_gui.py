@@ -105,7 +105,7 @@ class ControlBinding:
     """One control and its viser handle.
 
     ``display(value)`` turns a model value into what the handle shows (or None to leave it);
-    ``user_time`` is when the user last changed it (monotonic seconds).
+    ``user_time`` is when the user last changed it (seconds on the panel's clock).
     """
 
     def __init__(self, control: Control, handle: Any, display: Callable[[Any], Any]) -> None:
@@ -186,13 +186,16 @@ class Panel:
     """The GUI of one app: control bar, error box, about, and the view's elements.
 
     ``app``: the running app (see :mod:`ejsrl.view.viser_view`); ``gui``: ``server.gui``;
-    ``notify(client or None, title, body, color)`` shows a notification (None: everyone).
+    ``notify(client or None, title, body, color)`` shows a notification (None: everyone);
+    ``clock()``: seconds on a monotonic clock, for the hold after a user's change and the
+    plots' and images' rates (the real one by default; tests pass their own).
     """
 
-    def __init__(self, app: Any, gui: Any, notify: Notify) -> None:
+    def __init__(self, app: Any, gui: Any, notify: Notify, *, clock: Callable[[], float] = time.monotonic) -> None:
         self.app = app
         self.gui = gui
         self.notify = notify
+        self.clock = clock
         self.controls: list[ControlBinding] = []
         self.labels: list[tuple[Label, Any]] = []
         #: the labels of controls, buttons, folders, tabs, plots and images that hold {expr}
@@ -298,7 +301,7 @@ class Panel:
                 elif isinstance(el, Plot):
                     x_label = getattr(el.x, "source", "") or self._time_name or "x"
                     labels = [self._text(s.label, s.where or el.where) for s in el.series]
-                    binding = PlotBinding(gui, el, x_label=x_label, title=self._text(el.title, el.where), labels=labels)
+                    binding = PlotBinding(gui, el, x_label=x_label, title=self._text(el.title, el.where), labels=labels, clock=self.clock)
                     self.plots.append(binding)
                     if is_dynamic(el.title):
                         self.texts.append(TextBinding(el.title, el.where, binding.set_title, binding.title))
@@ -306,7 +309,7 @@ class Panel:
                         if is_dynamic(s.label):
                             self.texts.append(TextBinding(s.label, s.where or el.where, lambda t, b=binding, i=i: b.set_label(i, t), labels[i]))
                 elif isinstance(el, Image):
-                    binding = ImageBinding(gui, el, label=self._text(el.label, el.where))
+                    binding = ImageBinding(gui, el, label=self._text(el.label, el.where), clock=self.clock)
                     self.images.append(binding)
                     self._track(el.label, el.where, binding.handle, "label")
                 elif isinstance(el, Scene):
@@ -397,7 +400,7 @@ class Panel:
         if getattr(event, "client", None) is None:
             return  # our own refresh assigned the handle
         with b.lock:
-            b.user_time = time.monotonic()
+            b.user_time = self.clock()
             raw = b.handle.value
             checked = validate_control(b.control, raw)
             if not checked.ok:
@@ -432,7 +435,7 @@ class Panel:
         app = self.app
         self._show_playing()
         self._show_readout()
-        now = time.monotonic()
+        now = self.clock()
         for label, handle in self.labels:
             if not is_dynamic(label.text):
                 continue

@@ -8,7 +8,9 @@ image only when its pixels or its overlay points changed.
 
 from __future__ import annotations
 
+import math
 import time
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -154,12 +156,14 @@ class PlotBinding:
         title: str | None = None,
         labels: list[str] | None = None,
         max_rate: float = 15.0,
+        clock: Callable[[], float] = time.monotonic,
     ) -> None:
         self.plot = plot
         self.buffer = PlotBuffer(len(plot.series), window=plot.window, max_points=plot.max_points)
         self.max_rate = max_rate
+        self.clock = clock
         self._sent_rev = -1
-        self._last_push = 0.0
+        self._last_push = -math.inf
         self.title = str(plot.title) if title is None else title
         self.labels = [str(s.label) for s in plot.series] if labels is None else list(labels)
         self.x_name = x_label or "x"
@@ -256,7 +260,7 @@ class PlotBinding:
         """Send the data if it changed and the rate allows; returns True if sent."""
         if self.buffer.rev == self._sent_rev:
             return False
-        now = time.monotonic()
+        now = self.clock()
         if not force and now - self._last_push < 1.0 / self.max_rate:
             return False
         data = self.buffer.data()
@@ -316,12 +320,15 @@ def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
 class ImageBinding:
     """One ``Image`` element: sends the picture only when the source or the points changed."""
 
-    def __init__(self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = 20.0) -> None:
+    def __init__(
+        self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = 20.0, clock: Callable[[], float] = time.monotonic
+    ) -> None:
         self.image = image
         self.max_rate = max_rate
+        self.clock = clock
         self._last_src: np.ndarray | None = None
         self._last_pts: np.ndarray | None = None
-        self._last_push = 0.0
+        self._last_push = -math.inf
         self.pushes = 0
         placeholder = np.full((2, 2, 3), 40, dtype=np.uint8)
         label = str(image.label or "") if label is None else label
@@ -331,7 +338,7 @@ class ImageBinding:
         """Send the image if it changed (at most ``max_rate`` a second); True if sent."""
         if src is None:
             return False
-        now = time.monotonic()
+        now = self.clock()
         if now - self._last_push < 1.0 / self.max_rate:
             return False
         a = np.asarray(src)

@@ -93,13 +93,17 @@ class SceneMirror:
     """Keeps a viser scene in step with a world.
 
     ``scene``: ``server.scene``; ``on_gizmo(name, T_world)``: called (from a viser thread)
-    when the user drags a gizmo. ``counters`` counts the updates sent, by kind, for tests
+    when the user drags a gizmo; ``clock()``: monotonic seconds, for how long a dragged
+    gizmo is left to the user (the real clock by default). ``counters`` counts the updates sent, by kind, for tests
     and benchmarks.
     """
 
-    def __init__(self, scene: Any, *, on_gizmo: GizmoCallback | None = None) -> None:
+    def __init__(
+        self, scene: Any, *, on_gizmo: GizmoCallback | None = None, clock: Callable[[], float] = time.monotonic
+    ) -> None:
         self.scene = scene
         self.on_gizmo = on_gizmo
+        self.clock = clock
         self._nodes: dict[str, _Mirror] = {}
         self._dragging: dict[str, float] = {}
         self._gizmo_lock = threading.Lock()
@@ -399,7 +403,7 @@ class SceneMirror:
                 # while the user drags (and briefly after, for frames already in flight) the
                 # server's poses must not snap the gizmo back; a drag whose end never comes
                 # (a closed tab) stops counting a second after its last move
-                self._dragging[name] = time.monotonic() + (0.3 if phase == "end" else 1.0)
+                self._dragging[name] = self.clock() + (0.3 if phase == "end" else 1.0)
             T = np.eye(4)
             T[:3, :3] = q2r(np.asarray(handle.wxyz, dtype=float))
             T[:3, 3] = np.asarray(handle.position, dtype=float)
@@ -411,7 +415,7 @@ class SceneMirror:
             until = self._dragging.get(name)
             if until is None:
                 return False
-            if time.monotonic() < until:
+            if self.clock() < until:
                 return True
             del self._dragging[name]
             return False

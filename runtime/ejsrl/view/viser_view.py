@@ -11,7 +11,9 @@ What the view needs from the app (``ejsrl.app.App`` provides it):
 - ``apply_control(control, value)`` (value already validated), ``run_action(button)``,
   ``apply_gizmo(name, T_world)``;
 - ``safe_value(prop, where)`` (None on a user-code error), ``error`` / ``error_rev``,
-  ``pop_alerts()``.
+  ``pop_alerts()``;
+- optionally ``clock()`` (monotonic seconds; default ``time.monotonic``): the time of the
+  view's own timers (a user's hold on a control, the plots' and images' rates, gizmo drags).
 
 On a server made by :func:`make_server` every value a browser sends for a control is
 checked by :func:`ejsrl.view._validate.validate_control` before viser stores or broadcasts
@@ -21,6 +23,7 @@ it (see :mod:`ejsrl.view._guard`); the panel checks it again before applying it.
 from __future__ import annotations
 
 import logging
+import time
 from collections.abc import Sequence
 from typing import Any
 
@@ -89,8 +92,9 @@ class ViserView:
         self._broken: set[str] = set()
         server.scene.set_up_direction("+z")
         with server.atomic():
-            self.panel = Panel(app, server.gui, self.notify)
-            self.scene = SceneMirror(server.scene, on_gizmo=self._on_gizmo)
+            clock = getattr(app, "clock", time.monotonic)
+            self.panel = Panel(app, server.gui, self.notify, clock=clock)
+            self.scene = SceneMirror(server.scene, on_gizmo=self._on_gizmo, clock=clock)
             world = self._world()
             if world is not None:
                 with app.lock:
