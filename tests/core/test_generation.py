@@ -1,6 +1,8 @@
 """Generated apps: golden app.py files, every file compiles, atomic builds, bundles, CLI.
 
-Regenerate the golden files after an intended change with ``EJSGEN_REGEN_GOLDEN=1``.
+Regenerate the golden files after an intended change (or write the one of a new example)
+with ``EJSGEN_REGEN_GOLDEN=1 python3 -m pytest tests/core/test_generation.py -k golden``;
+a missing golden file fails the test, it is never written silently.
 """
 
 from __future__ import annotations
@@ -20,16 +22,46 @@ from tests.conftest import EXAMPLES, ROOT, run_app
 
 GOLDEN = Path(__file__).parent / "golden"
 CORE_EXAMPLES = ["pendulum", "bouncing_ball", "lorenz", "van_der_pol", "mass_spring_chain"]
+PAPER_LABS = sorted(f"paper/{p.name.removesuffix('.ejs.yaml')}" for p in (EXAMPLES / "paper").glob("*.ejs.yaml"))
 REGEN = os.environ.get("EJSGEN_REGEN_GOLDEN") == "1"
+REGEN_HOW = "EJSGEN_REGEN_GOLDEN=1 python3 -m pytest tests/core/test_generation.py -k golden"
 
 
-@pytest.mark.parametrize("name", CORE_EXAMPLES)
+def golden_path(name: str) -> Path:
+    return GOLDEN / f"test_generated_app_matches_golden-{name.replace('/', '-')}.app.py.golden"
+
+
+def check_golden(text: str, golden: Path, *, regen: bool = False) -> None:
+    """``text`` must equal the golden file; ``regen`` (re)writes it first. A missing
+    golden file fails, with the command that writes it."""
+    if regen:
+        golden.write_text(text)
+    if not golden.exists():
+        pytest.fail(f"no golden file {golden.name} in {golden.parent}; write it with {REGEN_HOW}", pytrace=False)
+    assert text == golden.read_text(), f"{golden.name} differs; if intended, rerun with {REGEN_HOW}"
+
+
+@pytest.mark.parametrize("name", CORE_EXAMPLES + PAPER_LABS)
 def test_generated_app_matches_golden(name: str) -> None:
     text = render_app(load_plan(EXAMPLES / f"{name}.ejs.yaml"))
-    golden = GOLDEN / f"test_generated_app_matches_golden-{name}.app.py.golden"
-    if REGEN or not golden.exists():
-        golden.write_text(text)
-    assert text == golden.read_text(), f"{golden.name} differs; if intended, rerun with EJSGEN_REGEN_GOLDEN=1"
+    check_golden(text, golden_path(name), regen=REGEN)
+
+
+def test_every_paper_lab_is_checked_against_a_golden_file() -> None:
+    assert len(PAPER_LABS) == 7
+    missing = [name for name in PAPER_LABS if not golden_path(name).exists()]
+    assert missing == [], f"no golden file for {missing}; write them with {REGEN_HOW}"
+
+
+def test_a_missing_golden_file_fails_and_is_not_written(tmp_path: Path) -> None:
+    golden = tmp_path / "test_generated_app_matches_golden-new_lab.app.py.golden"
+    with pytest.raises(pytest.fail.Exception, match="EJSGEN_REGEN_GOLDEN=1"):
+        check_golden("print('hi')\n", golden)
+    assert not golden.exists()
+    check_golden("print('hi')\n", golden, regen=True)  # the regeneration writes it
+    assert golden.read_text() == "print('hi')\n"
+    with pytest.raises(AssertionError, match="differs"):
+        check_golden("print('bye')\n", golden)
 
 
 @pytest.mark.parametrize("name", CORE_EXAMPLES)
