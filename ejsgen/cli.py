@@ -15,10 +15,10 @@ import tempfile
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 from ejsgen import __version__
 from ejsgen.errors import EjsError
+from ejsrl._signals import SignalScope
 
 __all__ = ["main", "load_plan", "build"]
 
@@ -141,7 +141,7 @@ class _Stopped(Exception):
         self.signum = signum
 
 
-class _AppRunner:
+class _AppRunner(SignalScope):
     """Runs the built app as a child process and stops it on SIGINT/SIGTERM.
 
     The child has its own process group, so a Ctrl+C in the terminal reaches only this
@@ -155,19 +155,10 @@ class _AppRunner:
     """
 
     def __init__(self, grace: float = 10.0) -> None:
+        super().__init__()
         self.grace = grace
         self.proc: subprocess.Popen[bytes] | None = None
         self.signum: int | None = None
-        self._old: dict[int, Any] = {}
-
-    def __enter__(self) -> _AppRunner:
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            self._old[sig] = signal.signal(sig, self._handle)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
 
     def _handle(self, signum: int, frame: object) -> None:
         proc = self.proc

@@ -188,3 +188,21 @@ def test_ctrl_c_while_the_app_is_starting_up_prints_no_traceback(tmp_path) -> No
     assert status == 130 and "Traceback" not in err and "ejsgen run: stopped by SIGINT" in err, err
     assert "serving on" not in (tmp_path / "o").read_text()
     assert gone(app_pid) and list(tmp.iterdir()) == []
+
+
+def test_csv_to_standard_output_stops_quietly_when_the_reader_closes_the_pipe(built) -> None:
+    """`app.py --headless --csv - | head -3`: three lines, then a quiet stop with SIGPIPE's status."""
+    app = built("pendulum")
+    proc = subprocess.Popen(
+        [sys.executable, str(app / "app.py"), "--headless", "--duration", "1000", "--csv", "-"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    assert proc.stdout is not None and proc.stderr is not None
+    head = [proc.stdout.readline() for _ in range(3)]
+    proc.stdout.close()  # what head does after its lines
+    status = proc.wait(timeout=60)
+    err = proc.stderr.read().decode()
+    assert head[0].startswith(b"t,") and all(line.endswith(b"\n") for line in head)
+    assert status == 128 + signal.SIGPIPE
+    assert "Traceback" not in err and "Exception ignored" not in err and "BrokenPipe" not in err

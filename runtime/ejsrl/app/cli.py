@@ -10,15 +10,16 @@ from __future__ import annotations
 import argparse
 import ast
 import math
+import os
 import signal
 import sys
-import threading
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ejsrl._signals import SignalScope
 from ejsrl.app._loop import App, AppMeta, SimConfig
 from ejsrl.app.headless import csv_columns
 from ejsrl.sim.model import ModelBase, SetValueError, UserCodeError
@@ -144,7 +145,7 @@ class _Interrupted(KeyboardInterrupt):
     """Raised in the main thread by SIGINT/SIGTERM (a ``KeyboardInterrupt``, so a served app stops as on Ctrl+C)."""
 
 
-class _StopSignals:
+class _StopSignals(SignalScope):
     """SIGINT and SIGTERM as a clean stop, while ``main`` runs (in the main thread only).
 
     The first signal raises :class:`_Interrupted` (serving stops its server), or, once a
@@ -154,20 +155,10 @@ class _StopSignals:
     """
 
     def __init__(self) -> None:
+        super().__init__()
         self.signum: int | None = None
         self._app: App | None = None
         self._raised = False
-        self._old: dict[int, Any] = {}
-
-    def __enter__(self) -> _StopSignals:
-        if threading.current_thread() is threading.main_thread():
-            for sig in (signal.SIGINT, signal.SIGTERM):
-                self._old[sig] = signal.signal(sig, self._handle)
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        for sig, old in self._old.items():
-            signal.signal(sig, old)
 
     def defer_to(self, app: App) -> None:
         self._app = app
@@ -257,7 +248,13 @@ def _main(
             if args.csv is None:
                 return app.run_headless(args.duration, variables=names, every=args.every)
             if args.csv == "-":
-                return app.run_headless(args.duration, csv_file=sys.stdout, variables=names, every=args.every)
+                try:
+                    return app.run_headless(args.duration, csv_file=sys.stdout, variables=names, every=args.every)
+                except BrokenPipeError:
+                    # the reader (head, a pager) stopped reading: stop quietly, as command-line
+                    # tools do, with the status of a SIGPIPE; later flushes go nowhere
+                    os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+                    return 128 + signal.SIGPIPE
             try:
                 fh = open(args.csv, "w", newline="")  # noqa: SIM115 - closed below
             except OSError as exc:
