@@ -14,6 +14,19 @@ EXAMPLES = ROOT / "examples"
 ARTIFACTS = ROOT / "test-artifacts"
 
 
+def imported_modules(path: Path) -> set[str]:
+    """Every module a Python file imports by absolute name, at its top or inside functions."""
+    import ast
+
+    out: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+        if isinstance(node, ast.Import):
+            out.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            out.add(node.module)
+    return out
+
+
 def pytest_configure(config: pytest.Config) -> None:
     ARTIFACTS.mkdir(exist_ok=True)
 

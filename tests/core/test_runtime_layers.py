@@ -3,7 +3,6 @@
 
 from __future__ import annotations
 
-import ast
 import importlib
 import importlib.util
 import io
@@ -14,19 +13,11 @@ import pytest
 
 import ejsrl.app
 import ejsrl.world
+from tests.conftest import imported_modules
 
 RUNTIME = Path(ejsrl.world.__file__).resolve().parents[1]
 SPECS = Path(__file__).parent / "specs"
 
-
-def _top_imports(path: Path) -> set[str]:
-    out: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            out.add(node.module)
-    return out
 
 
 def test_the_public_names_of_ejsrl_app_stay_where_generated_apps_and_scripts_find_them() -> None:
@@ -42,9 +33,9 @@ def test_the_public_names_of_ejsrl_app_stay_where_generated_apps_and_scripts_fin
 def test_the_loop_and_headless_runs_do_not_parse_command_lines_or_handle_signals() -> None:
     folder = RUNTIME / "app"
     for name in ("_loop.py", "headless.py"):
-        imports = _top_imports(folder / name)
+        imports = imported_modules(folder / name)
         assert "argparse" not in imports and "ejsrl.app.cli" not in imports, name
-    assert "signal" not in _top_imports(folder / "_loop.py")
+    assert "signal" not in imported_modules(folder / "_loop.py")
 
 
 def test_a_headless_run_is_a_function_of_the_app(tmp_path) -> None:

@@ -6,7 +6,6 @@ its world binding, and no module of ``ejsrl.sim`` imports the view, the app or t
 
 from __future__ import annotations
 
-import ast
 from pathlib import Path
 from typing import Any
 
@@ -16,25 +15,16 @@ import pytest
 import ejsrl.sim
 from ejsrl.sim.model import Controller
 from ejsrl.sim.world_access import WorldAccess, WorldFunctionsAccess
+from tests.conftest import imported_modules
 
 ROOT = Path(__file__).resolve().parents[2]
 SIM = Path(ejsrl.sim.__file__).parent
 
 
-def _imported_modules(path: Path) -> set[str]:
-    """Every module a file imports, at its top or inside functions."""
-    out: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            out.add(node.module)
-    return out
-
 
 @pytest.mark.parametrize("path", sorted(SIM.glob("*.py")), ids=lambda p: p.name)
 def test_sim_imports_neither_view_nor_app_nor_world(path: Path) -> None:
-    bad = sorted(m for m in _imported_modules(path) if m.split(".")[:2] in (["ejsrl", "view"], ["ejsrl", "app"], ["ejsrl", "world"]))
+    bad = sorted(m for m in imported_modules(path) if m.split(".")[:2] in (["ejsrl", "view"], ["ejsrl", "app"], ["ejsrl", "world"]))
     assert bad == [], f"{path.name} imports {bad}: reach the world through ejsrl.sim.world_access.WorldAccess"
 
 
