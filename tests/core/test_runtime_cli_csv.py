@@ -33,6 +33,7 @@ model:
     big: false
     mask: {expr: "xs > 2"}
     total: 0.0
+    img: {expr: "np.full((2, 3, 3), 7, dtype=np.uint8)", doc: a tiny camera image}
   evolution:
     - code: |
         t = t + dt
@@ -105,3 +106,23 @@ def test_parse_set_defers_expr_variables_to_their_declared_type() -> None:
     assert value(7) == 2 and isinstance(value(7), int)
     np.testing.assert_array_equal(parse_set("q=[1, 2]", {"q": "auto"})[1](np.zeros(3)), [1.0, 2.0])
     assert parse_set("s=2", {"s": "auto"})[1]("text") == "2"
+
+
+def test_images_are_left_out_of_the_default_csv_and_written_when_named(app_dir) -> None:
+    """A camera image would be hundreds of thousands of columns; named, it is written."""
+    header, _ = headless(app_dir)
+    assert not any(h.startswith("img") for h in header)
+    header, rows = headless(app_dir, "--vars", "t,img")
+    assert header[1:] == [f"img[{i}][{j}][{k}]" for i in range(2) for j in range(3) for k in range(3)]
+    assert rows[0][1:] == ["7"] * 18
+
+
+def test_a_model_without_time_writes_no_csv_file(tmp_path) -> None:
+    from ejsgen.cli import build
+
+    spec = tmp_path / "still.ejs.yaml"
+    spec.write_text("ejs: 1\ntitle: Still\nmodel:\n  variables:\n    a: 1.0\nview:\n  - label: {text: '{a}'}\n")
+    out = tmp_path / "out.csv"
+    r = run_app(build(spec, tmp_path / "app"), "--headless", "--duration", "1", "--csv", str(out), timeout=60)
+    assert r.returncode == 2 and "no independent variable" in r.stderr
+    assert not out.exists()

@@ -243,8 +243,9 @@ def _main(
         stop.defer_to(app)
         names = [n.strip() for n in args.vars.split(",") if n.strip()] if args.vars else None
         try:
-            if app.error is None:
-                csv_columns(app.model, names)  # refuse bad --vars before any file is written
+            if app.error is not None or app.model.INDEPENDENT is None:
+                return app.run_headless(args.duration)  # says what is wrong; no file is written
+            csv_columns(app.model, names)  # refuse bad --vars before any file is written
             if args.csv is None:
                 return app.run_headless(args.duration, variables=names, every=args.every)
             if args.csv == "-":

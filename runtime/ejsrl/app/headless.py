@@ -112,13 +112,17 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
     """The CSV columns: (header, getter). Arrays are spread as ``q[0]``, ``q[1]``, ...
 
     With no ``names``, every numeric variable (numbers and arrays of numbers, ``expr:``
-    variables included; not booleans or text) in declaration order. Named variables may
+    variables included; not booleans, text or images) in declaration order. Named variables may
     also be booleans (written 0/1), arrays of booleans and text; naming any other kind of
     value (a robot, say) raises ``UserCodeError``.
     """
     types = model.VARIABLES
     if names is None:
-        names = [n for n, kind in types.items() if kind in ("float", "int", "array", "auto") and _is_numeric(getattr(model, n))]
+        names = [
+            n
+            for n, kind in types.items()
+            if kind in ("float", "int", "array", "auto") and _is_numeric(getattr(model, n)) and not is_image(getattr(model, n))
+        ]
     else:
         for n in names:
             if n not in types:
@@ -142,6 +146,12 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
                 f"--vars: '{n}' holds {what}; the CSV takes numbers, booleans, text and arrays of numbers"
             )
     return columns
+
+
+def is_image(value: Any) -> bool:
+    """An H×W or H×W×C array of bytes: a camera image, left out of the default CSV (one
+    640×480 RGB frame would be 921,600 columns); named in ``--vars`` it is written."""
+    return isinstance(value, np.ndarray) and value.dtype == np.uint8 and value.ndim in (2, 3)
 
 
 def _is_numeric(value: Any) -> bool:

@@ -265,6 +265,10 @@ class ModelBase:
         """The evolution pages (``CodePage`` / ``OdePage``), freshly built."""
         return []
 
+    def _ejs_evolves(self) -> bool:
+        """Whether a step can change anything: the model has evolution pages or robot programs."""
+        return bool(self._ejs_pages) or bool(self.PROGRAMS)
+
     # -- lifecycle ------------------------------------------------------------------------
     def _ejs_reset(self, keep: Callable[[], None] | None = None) -> None:
         """Initial values, ``--set`` overrides, fresh solvers, ``init``, fixed relations.

@@ -249,25 +249,30 @@ class Panel:
         self._build_elements(list(getattr(app, "view", []) or []))
 
     def _build_controls_bar(self) -> None:
+        """Play/Pause, Step, Reset and the time readout; a model with nothing to step (no
+        evolution, no programs) gets Reset alone, since Play would change nothing."""
         gui, app = self.gui, self.app
-        playing = bool(app.is_playing())
-        self.play_button = gui.add_button("Pause" if playing else "Play", icon=None, color="green")
-        self.step_button = gui.add_button("Step")
+        evolves = getattr(getattr(app, "model", None), "_ejs_evolves", lambda: True)()
+        if evolves:
+            playing = bool(app.is_playing())
+            self.play_button = gui.add_button("Pause" if playing else "Play", icon=None, color="green")
+            self.step_button = gui.add_button("Step")
+            self._playing_shown = playing
+
+            @self.play_button.on_click
+            def _(_e: Any) -> None:
+                if app.is_playing():
+                    app.pause()
+                else:
+                    app.play()
+                self._show_playing()
+
+            @self.step_button.on_click
+            def _(_e: Any) -> None:
+                app.step_once()
+
         self.reset_button = gui.add_button("Reset")
-        self._playing_shown = playing
-        self.readout = gui.add_markdown("")
-
-        @self.play_button.on_click
-        def _(_e: Any) -> None:
-            if app.is_playing():
-                app.pause()
-            else:
-                app.play()
-            self._show_playing()
-
-        @self.step_button.on_click
-        def _(_e: Any) -> None:
-            app.step_once()
+        self.readout = gui.add_markdown("") if evolves else None
 
         @self.reset_button.on_click
         def _(_e: Any) -> None:
