@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import shlex
 import signal
 import subprocess
 import sys
@@ -106,8 +107,9 @@ def _cmd_new(args: argparse.Namespace) -> int:
         raise EjsError(f"{file} already exists (use --force to overwrite)")
     title = file.name.split(".")[0].replace("_", " ").replace("-", " ").strip().capitalize() or "New simulation"
     file.parent.mkdir(parents=True, exist_ok=True)
-    file.write_text(STARTER.format(title=title, file=file), encoding="utf-8")
-    print(f"wrote {file}; try: ejsgen run {file}")
+    shown = shlex.quote(str(file))  # a name with spaces still pastes into a shell
+    file.write_text(STARTER.format(title=title, file=shown), encoding="utf-8")
+    print(f"wrote {file}; try: ejsgen run {shown}")
     return 0
 
 

@@ -134,6 +134,18 @@ def test_new_writes_a_starter_that_builds_and_runs(tmp_path: Path, monkeypatch: 
     assert energies[-1] < energies[0]  # damped
 
 
+def test_new_says_a_command_that_pastes_into_a_shell_for_a_name_with_spaces(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import shlex
+
+    monkeypatch.chdir(tmp_path)
+    assert main(["new", "my lab"]) == 0
+    command = capsys.readouterr().out.split("try: ", 1)[1].strip()
+    assert shlex.split(command) == ["ejsgen", "run", "my lab.ejs.yaml"]
+    assert "#   ejsgen run 'my lab.ejs.yaml'" in (tmp_path / "my lab.ejs.yaml").read_text()
+
+
 def test_run_passes_options_to_the_app(tmp_path: Path) -> None:
     r = subprocess.run(
         [sys.executable, "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--headless", "--duration", "0.1", "--csv", "-", "--vars", "t"],

@@ -6,6 +6,8 @@ a lab is served to the network."""
 
 from __future__ import annotations
 
+import urllib.request
+
 import http.client
 import math
 
@@ -198,10 +200,21 @@ def test_serving_on_every_interface_prints_a_warning(capsys):
     app = make_app()
     server = app.serve("0.0.0.0", 0, block=False)
     try:
-        err = capsys.readouterr().err
+        out, err = capsys.readouterr()
         assert "warning: --host 0.0.0.0 opens this lab to every network this machine is on" in err
         assert "Leave --host out (127.0.0.1)" in err
         port = server.get_port()
+        # the addresses students type are printed, and the lab answers on each of them
+        import socket
+
+        hostname = socket.gethostname()
+        addresses = {i[4][0] for i in socket.getaddrinfo(hostname, None, socket.AF_INET)} - {"127.0.0.1"}
+        for name in [hostname, *addresses]:
+            if name != "localhost" and not name.startswith("127."):
+                assert f"http://{name}:{port}" in out
+        for address in addresses:
+            with urllib.request.urlopen(f"http://{address}:{port}/", timeout=10) as page:
+                assert page.status == 200
 
         async def own_page():  # reached through the loopback address, the lab still works
             c = await Client.open(port, origin=f"http://127.0.0.1:{port}", server=server)

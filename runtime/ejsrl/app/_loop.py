@@ -331,13 +331,18 @@ class App(Controller):
         server, _url = make_server(host, port, allow_origins=allow_origins, label=self.meta.title)
         view = ViserView(self, server)
         self.views.append(view)
-        url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "::") else host
-        print(f"{self.meta.title}: serving on http://{url_host}:{server.get_port()} (Ctrl+C to stop)", flush=True)
+        port = server.get_port()
+        url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "", "::") else host
+        print(f"{self.meta.title}: serving on http://{url_host}:{port} (Ctrl+C to stop)", flush=True)
+        if host in ("0.0.0.0", "", "::"):
+            others = ", ".join(f"http://{name}:{port}" for name in network_names())
+            if others:
+                print(f"  from other machines on the network: {others}", flush=True)
         if not is_loopback(host):
             where = "every network this machine is on" if host in ("0.0.0.0", "", "::") else f"the network at {host}"
             print(
                 f"warning: --host {host or '0.0.0.0'} opens this lab to {where}: anyone who can reach this "
-                f"machine on port {server.get_port()} can open it, watch it and change the simulation. "
+                f"machine on port {port} can open it, watch it and change the simulation. "
                 "Leave --host out (127.0.0.1) to keep the lab on this machine.",
                 file=sys.stderr,
                 flush=True,
@@ -392,3 +397,17 @@ def load_app(
     return App(
         module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides, clock=clock
     )
+
+
+def network_names() -> list[str]:
+    """This machine's name and its non-loopback IPv4 addresses: what other machines on the
+    network type to reach a lab served on every interface (from the resolver, no traffic)."""
+    import socket
+
+    try:
+        hostname = socket.gethostname()
+        infos = socket.getaddrinfo(hostname, None, socket.AF_INET)
+    except OSError:
+        return []
+    addresses = sorted({info[4][0] for info in infos if not info[4][0].startswith("127.")})
+    return ([hostname] if hostname and hostname != "localhost" else []) + addresses
