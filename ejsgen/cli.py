@@ -58,8 +58,8 @@ view:
   - label: {{text: "t = {{t:.2f}} s   E = {{E:.4f}} J"}}
   - plot: {{title: Displacement, x: t, series: [{{y: x, label: x}}], window: 10}}
   - scene:
-      - box: {{position: [x, 0, 0], size: [0.2, 0.2, 0.2], color: steelblue}}
-      - line: {{points: "[[-1.5, 0, 0], [x, 0, 0]]", width: 3}}
+      - box: {{position: [x, 0, 0.1], size: [0.2, 0.2, 0.2], color: steelblue}}
+      - line: {{points: "[[-1.5, 0, 0.1], [x, 0, 0.1]]", width: 3, color: darkorange}}
       - grid: {{size: 4, cell: 0.5}}
 
 simulation:
