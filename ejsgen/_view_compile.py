@@ -18,29 +18,18 @@ from ejsgen.errors import Location, SpecError
 from ejsgen.plan import Line, Src, py
 from ejsgen.validate import ViewItem
 from ejsgen.yamlload import Path_, TextOrigin
+from ejsrl.world.kinds import KINDS
 
 if TYPE_CHECKING:
     from ejsgen.compiler import Compiler
 
 __all__ = ["ViewCompiler"]
 
-# kind -> {property: type}; types: num, vec3, vec, mat, mat4, mat3, text, file, int, bool, files, expr, ints2
+#: kind -> {property: property type} of the values the compiler turns into a node's props
+#: (declared in ejsrl.world.kinds; a gizmo's bind and on_change and a group's children are
+#: compiled by the element itself)
 _OWN_PROPS: dict[str, dict[str, str]] = {
-    "box": {"size": "vec3"},
-    "sphere": {"radius": "num"},
-    "cylinder": {"radius": "num", "height": "num"},
-    "arrow": {"start": "vec3", "vector": "vec3", "width": "num"},
-    "line": {"points": "mat", "width": "num"},
-    "trail": {"point": "vec3", "max_points": "int", "width": "num"},
-    "points": {"points": "mat", "size": "num"},
-    "frame": {"size": "num"},
-    "grid": {"size": "num", "cell": "num"},
-    "text3d": {"text": "text"},
-    "mesh": {"file": "file", "scale": "num"},
-    "group": {},
-    "robot": {"model": "expr", "q": "vec", "base": "mat4", "meshes": "files", "show_frames": "bool"},
-    "camera": {"fov": "num", "intrinsics": "mat3", "resolution": "ints2"},
-    "gizmo": {"scale": "num"},
+    name: {p.name: p.type for p in kind.props if p.is_value} for name, kind in KINDS.items()
 }
 _MAX_LEN = 100
 
@@ -483,8 +472,8 @@ class ViewCompiler:
         kw: dict[str, Any] = {"kind": kind, "name": name}
         props: dict[str, Any] = {}
         for prop, ptype in _OWN_PROPS[kind].items():
-            if prop not in p.model_fields_set and not (kind == "box" and prop == "size"):
-                if prop in ("radius", "height", "size", "cell", "width", "fov", "scale", "max_points", "start", "resolution", "show_frames"):
+            if prop not in p.model_fields_set:
+                if not KINDS[kind].prop(prop).required and KINDS[kind].prop(prop).default is not None:  # the spec's default
                     value = getattr(p, prop)
                     if isinstance(value, list):
                         value = tuple(value)

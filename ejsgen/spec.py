@@ -10,9 +10,10 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, Union
 
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, create_model, model_validator
 
 from ejsrl.sim.ode import METHODS
+from ejsrl.world.kinds import COMMON, KINDS, Prop
 
 __all__ = [
     "Spec",
@@ -355,183 +356,57 @@ GUI_ELEMENT_MODELS: dict[str, type[Strict]] = {
 }
 
 # -- view: 3D elements ------------------------------------------------------------------------
+# Derived from the kinds' declarations (ejsrl.world.kinds): one model per kind, named
+# ``<Kind>El``, with the common properties first.
 
-
-class _Node(Strict):
-    name: str | None = None
-    """Name by which code refers to the object (unique in the scene)."""
-    visible: BoolOrExpr = True
-    """Shown or hidden."""
-    color: ColorValue | None = None
-    """CSS name, '#rrggbb', or an expression giving an RGB triple (0-1 floats)."""
-    opacity: NumOrExpr = 1.0
-    """0 transparent to 1 opaque."""
-    graspable: bool = False
-    """A robot gripper may pick it up."""
-    position: VecOrExpr | None = None
-    """[x, y, z] in metres (in the parent group's frame)."""
-    rotation: VecOrExpr | None = None
-    """[roll, pitch, yaw] in radians (ZYX: Rz(yaw) Ry(pitch) Rx(roll))."""
-    transform: MatOrExpr | None = None
-    """A 4x4 homogeneous pose (instead of position/rotation)."""
-
-
-class BoxEl(_Node):
-    """A box centred on its pose."""
-
-    size: VecOrExpr = Field(default_factory=lambda: [1.0, 1.0, 1.0])
-    """Edge lengths [x, y, z]."""
-
-
-class SphereEl(_Node):
-    """A sphere."""
-
-    radius: NumOrExpr = 0.5
-    """Radius in metres."""
-
-
-class CylinderEl(_Node):
-    """A cylinder along its local z axis, centred on its pose."""
-
-    radius: NumOrExpr = 0.5
-    """Radius in metres."""
-    height: NumOrExpr = 1.0
-    """Length along local z."""
-
-
-class ArrowEl(_Node):
-    """An arrow."""
-
-    start: VecOrExpr = Field(default_factory=lambda: [0.0, 0.0, 0.0])
-    """Tail point [x, y, z]."""
-    vector: VecOrExpr
-    """The arrow, tail to head."""
-    width: NumOrExpr = 0.02
-    """Shaft diameter in metres."""
-
-
-class LineEl(_Node):
-    """A polyline."""
-
-    points: MatOrExpr
-    """N x 3 points."""
-    width: NumOrExpr = 2.0
-    """Line width in pixels."""
-
-
-class TrailEl(_Node):
-    """A trace of a moving point."""
-
-    point: VecOrExpr
-    """The 3-vector traced over time."""
-    max_points: int = Field(default=1000, ge=2, le=1_000_000)
-    """Most points kept."""
-    width: NumOrExpr = 2.0
-    """Line width in pixels."""
-
-
-class PointsEl(_Node):
-    """A point cloud."""
-
-    points: MatOrExpr
-    """N x 3 points."""
-    size: NumOrExpr = 0.02
-    """Point size in metres."""
-
-
-class FrameEl(_Node):
-    """Coordinate axes."""
-
-    size: NumOrExpr = 0.2
-    """Axis length."""
-
-
-class GridEl(_Node):
-    """A grid on the xy plane."""
-
-    size: NumOrExpr = 2.0
-    """Width of the grid."""
-    cell: NumOrExpr = 0.1
-    """Cell size."""
-
-
-class Text3dEl(_Node):
-    """A text label in the scene."""
-
-    text: str
-    """The text ({expr} interpolated)."""
-
-
-class MeshEl(_Node):
-    """A mesh from a file (OBJ, STL, PLY, GLB/glTF, OFF or VRML97 .wrl)."""
-
-    file: str
-    """Path relative to the spec."""
-    scale: NumOrExpr = 1.0
-    """Uniform scale."""
-
-
-class GroupEl(_Node):
-    """A group whose pose applies to its children."""
-
-    children: list[Any] = Field(default_factory=list)
-    """3D elements inside."""
-
-
-class RobotEl(_Node):
-    """An arm drawn from its kinematic model."""
-
-    model: Expr
-    """Expression giving a runtime Robot."""
-    q: VecOrExpr
-    """Joint vector."""
-    base: MatOrExpr | None = None
-    """Optional 4x4 base pose (e.g. a link frame of another arm)."""
-    meshes: list[str] | None = None
-    """One mesh file per link, each in that link's frame."""
-    show_frames: bool = False
-    """Draw each link's frame."""
-
-
-class CameraEl(_Node):
-    """A virtual camera (z forward, x right, y down)."""
-
-    fov: NumOrExpr = 60.0
-    """Vertical field of view in degrees."""
-    intrinsics: MatOrExpr | None = None
-    """3x3 intrinsic matrix (instead of fov)."""
-    resolution: list[int] = Field(default_factory=lambda: [320, 240])
-    """Image size [width, height] in pixels."""
-
-
-class GizmoEl(_Node):
-    """A draggable transform handle bound to a 4x4 pose variable."""
-
-    bind: str
-    """The 4x4 pose variable."""
-    scale: NumOrExpr = 0.3
-    """Handle size."""
-    on_change: Code | None = None
-    """Code run after a drag (then the fixed relations)."""
-
-
-SCENE_ELEMENT_MODELS: dict[str, type[Strict]] = {
-    "box": BoxEl,
-    "sphere": SphereEl,
-    "cylinder": CylinderEl,
-    "arrow": ArrowEl,
-    "line": LineEl,
-    "trail": TrailEl,
-    "points": PointsEl,
-    "frame": FrameEl,
-    "grid": GridEl,
-    "text3d": Text3dEl,
-    "mesh": MeshEl,
-    "group": GroupEl,
-    "robot": RobotEl,
-    "camera": CameraEl,
-    "gizmo": GizmoEl,
+#: property type (ejsrl.world.kinds) -> the values the spec may give, written as in a class body
+#: (postponed annotations, resolved in this module; the docs tables read them as written)
+_ANNOTATIONS: dict[str, str] = {
+    "num": "NumOrExpr",
+    "vec3": "VecOrExpr",
+    "vec": "VecOrExpr",
+    "mat": "MatOrExpr",
+    "mat4": "MatOrExpr",
+    "mat3": "MatOrExpr",
+    "text": "str",
+    "file": "str",
+    "expr": "Expr",
+    "name": "str",
+    "bind": "str",
+    "int": "int",
+    "bool": "bool",
+    "flag": "BoolOrExpr",
+    "color": "ColorValue",
+    "files": "list[str]",
+    "ints2": "list[int]",
+    "code": "Code",
+    "children": "list[Any]",
 }
+
+
+def _field(prop: Prop) -> tuple[str, Any]:
+    """The pydantic field (annotation, FieldInfo) of a declared property."""
+    annotation = _ANNOTATIONS[prop.type]
+    bounds = {k: v for k, v in (("ge", prop.ge), ("le", prop.le)) if v is not None}
+    if prop.required:
+        return annotation, Field(description=prop.doc, **bounds)
+    if prop.default is None:
+        return f"{annotation} | None", Field(default=None, description=prop.doc, **bounds)
+    if isinstance(prop.default, tuple):
+        items = prop.default
+        return annotation, Field(default_factory=lambda: list(items), description=prop.doc, **bounds)
+    return annotation, Field(default=prop.default, description=prop.doc, **bounds)
+
+
+def _scene_models() -> dict[str, type[Strict]]:
+    base = create_model("_Node", __base__=Strict, **{p.name: _field(p) for p in COMMON})  # type: ignore[call-overload]
+    return {
+        name: create_model(f"{name.capitalize()}El", __base__=base, __doc__=kind.doc, **{p.name: _field(p) for p in kind.props})  # type: ignore[call-overload]
+        for name, kind in KINDS.items()
+    }
+
+
+SCENE_ELEMENT_MODELS: dict[str, type[Strict]] = _scene_models()
 
 VIEW_KINDS = tuple(GUI_ELEMENT_MODELS) + ("scene",)
 

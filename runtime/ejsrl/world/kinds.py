@@ -1,0 +1,211 @@
+"""The 3D element kinds of the language, each declared once.
+
+Every 3D element kind (``box``, ``sphere``, ..., ``gizmo``) is one :class:`Kind`: its
+documentation, its own typed properties (:class:`Prop`: name, property type, default,
+doc), how the browser view draws it, and what its world node holds besides. Everything
+else is derived from :data:`KINDS`:
+
+- the pydantic models of the spec language (``ejsgen.spec.SCENE_ELEMENT_MODELS``), and so
+  the JSON Schema and the reference tables of specs/language.md;
+- the property types the generator compiles (``ejsgen._view_compile``);
+- the default properties of the world's nodes (``ejsrl.world.scene``: ``Node.DEFAULTS``,
+  and a plain node class for a kind without geometry of its own);
+- the drawing style the browser mirror dispatches on (``ejsrl.view._scene_mirror``).
+
+A new 3D element kind is one more entry here (plus a ``Node`` subclass in
+``ejsrl.world.scene`` if it has solid geometry of its own, drawn in the ``mesh`` style).
+
+Property types (``Prop.type``): ``num`` a number or expression; ``vec3`` three of them
+(or an expression); ``vec`` any number of them; ``mat`` an N x 3 matrix of points;
+``mat4`` / ``mat3`` a 4x4 / 3x3 matrix; ``text`` text with ``{expr}`` interpolated;
+``file`` a file relative to the spec, ``files`` a list of them; ``expr`` an expression;
+``int`` an integer; ``bool`` true or false; ``flag`` true, false or an expression;
+``color`` a colour; ``ints2`` two positive integers; ``name`` an object name; ``bind`` a
+bound variable; ``code`` Python code; ``children`` nested 3D elements.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+__all__ = ["REQUIRED", "Prop", "Kind", "COMMON", "KINDS", "PROP_TYPES", "DRAW_STYLES"]
+
+
+class _Required:
+    """The default of a property the spec must give."""
+
+    def __repr__(self) -> str:
+        return "REQUIRED"
+
+
+REQUIRED: Any = _Required()
+
+#: every property type (see the module's docstring)
+PROP_TYPES = frozenset(
+    {"num", "vec3", "vec", "mat", "mat4", "mat3", "text", "file", "files", "expr", "int", "bool", "flag", "color", "ints2", "name", "bind", "code", "children"}
+)
+#: the property types that are not values of the element's props (handled by the element itself)
+_NOT_VALUE_TYPES = frozenset({"bind", "code", "children"})
+
+#: how the browser view draws a kind: a viser primitive, or ``mesh`` (the node's ``parts()``),
+#: ``gizmo`` (transform controls), ``none`` (nothing but its frame)
+DRAW_STYLES = ("box", "sphere", "polyline", "points", "frame", "grid", "label", "camera", "mesh", "gizmo", "none")
+
+
+@dataclass(frozen=True)
+class Prop:
+    """One property of a 3D element kind.
+
+    ``type``: a property type (see the module's docstring); ``default``: its value when the
+    spec leaves it out (``REQUIRED``: the spec must give it; ``None``: absent);
+    ``node_default``: the world node's value before the model gives one, when it differs
+    from ``default`` (a required property); ``node``: False if the world node does not
+    hold it (a trail's ``point`` is pushed, not held); ``ge``/``le``: bounds of an ``int``.
+    """
+
+    name: str
+    type: str
+    default: Any
+    doc: str
+    node_default: Any = REQUIRED
+    node: bool = True
+    ge: int | None = None
+    le: int | None = None
+
+    @property
+    def required(self) -> bool:
+        """The spec must give this property."""
+        return self.default is REQUIRED
+
+    @property
+    def is_value(self) -> bool:
+        """A value of the element's ``props`` in the generated app (not a bind, code or children)."""
+        return self.type not in _NOT_VALUE_TYPES
+
+    @property
+    def in_node(self) -> bool:
+        """The world node holds this property."""
+        return self.node and self.is_value
+
+    def initial(self) -> Any:
+        """The world node's value before the model gives one."""
+        return self.default if self.node_default is REQUIRED else self.node_default
+
+
+@dataclass(frozen=True)
+class Kind:
+    """One 3D element kind.
+
+    ``doc``: what it is (first line in the reference); ``props``: its own properties, in
+    order; ``draw``: how the browser view draws it (one of ``DRAW_STYLES``); ``flat``: a
+    ``mesh``-drawn kind shaded flat; ``node_extra``: properties its world node holds that
+    the spec does not give (state, or values set from code).
+    """
+
+    name: str
+    doc: str
+    props: tuple[Prop, ...]
+    draw: str = "mesh"
+    flat: bool = False
+    node_extra: dict[str, Any] = field(default_factory=dict)
+
+    def prop(self, name: str) -> Prop:
+        """The own property called ``name``."""
+        for p in self.props:
+            if p.name == name:
+                return p
+        raise KeyError(f"{self.name} has no property {name!r}")
+
+    def node_defaults(self) -> dict[str, Any]:
+        """The world node's properties and their values before the model gives any."""
+        out = {p.name: p.initial() for p in self.props if p.in_node}
+        out.update(self.node_extra)
+        return out
+
+
+def _no_points() -> Any:
+    return np.zeros((0, 3))
+
+
+#: the properties every 3D element has, in order
+COMMON: tuple[Prop, ...] = (
+    Prop("name", "name", None, "Name by which code refers to the object (unique in the scene)."),
+    Prop("visible", "flag", True, "Shown or hidden."),
+    Prop("color", "color", None, "CSS name, '#rrggbb', or an expression giving an RGB triple (0-1 floats)."),
+    Prop("opacity", "num", 1.0, "0 transparent to 1 opaque."),
+    Prop("graspable", "bool", False, "A robot gripper may pick it up."),
+    Prop("position", "vec3", None, "[x, y, z] in metres (in the parent group's frame)."),
+    Prop("rotation", "vec3", None, "[roll, pitch, yaw] in radians (ZYX: Rz(yaw) Ry(pitch) Rx(roll))."),
+    Prop("transform", "mat4", None, "A 4x4 homogeneous pose (instead of position/rotation)."),
+)
+
+_KINDS: tuple[Kind, ...] = (
+    Kind("box", "A box centred on its pose.", (
+        Prop("size", "vec3", (1.0, 1.0, 1.0), "Edge lengths [x, y, z]."),
+    ), draw="box", flat=True),
+    Kind("sphere", "A sphere.", (
+        Prop("radius", "num", 0.5, "Radius in metres."),
+    ), draw="sphere"),
+    Kind("cylinder", "A cylinder along its local z axis, centred on its pose.", (
+        Prop("radius", "num", 0.5, "Radius in metres."),
+        Prop("height", "num", 1.0, "Length along local z."),
+    ), flat=True),
+    Kind("arrow", "An arrow.", (
+        Prop("start", "vec3", (0.0, 0.0, 0.0), "Tail point [x, y, z]."),
+        Prop("vector", "vec3", REQUIRED, "The arrow, tail to head.", node_default=(1.0, 0.0, 0.0)),
+        Prop("width", "num", 0.02, "Shaft diameter in metres."),
+    ), flat=True),
+    Kind("line", "A polyline.", (
+        Prop("points", "mat", REQUIRED, "N x 3 points.", node_default=_no_points()),
+        Prop("width", "num", 2.0, "Line width in pixels."),
+    ), draw="polyline"),
+    Kind("trail", "A trace of a moving point.", (
+        Prop("point", "vec3", REQUIRED, "The 3-vector traced over time.", node=False),
+        Prop("max_points", "int", 1000, "Most points kept.", ge=2, le=1_000_000),
+        Prop("width", "num", 2.0, "Line width in pixels."),
+    ), draw="polyline", node_extra={"points": _no_points()}),
+    Kind("points", "A point cloud.", (
+        Prop("points", "mat", REQUIRED, "N x 3 points.", node_default=_no_points()),
+        Prop("size", "num", 0.02, "Point size in metres."),
+    ), draw="points"),
+    Kind("frame", "Coordinate axes.", (
+        Prop("size", "num", 0.2, "Axis length."),
+    ), draw="frame"),
+    Kind("grid", "A grid on the xy plane.", (
+        Prop("size", "num", 2.0, "Width of the grid."),
+        Prop("cell", "num", 0.1, "Cell size."),
+    ), draw="grid"),
+    Kind("text3d", "A text label in the scene.", (
+        Prop("text", "text", REQUIRED, "The text ({expr} interpolated).", node_default=""),
+    ), draw="label"),
+    Kind("mesh", "A mesh from a file (OBJ, STL, PLY, GLB/glTF, OFF or VRML97 .wrl).", (
+        Prop("file", "file", REQUIRED, "Path relative to the spec.", node_default=""),
+        Prop("scale", "num", 1.0, "Uniform scale."),
+    ), node_extra={"mesh_parts": ()}),
+    Kind("group", "A group whose pose applies to its children.", (
+        Prop("children", "children", (), "3D elements inside."),
+    ), draw="none"),
+    Kind("robot", "An arm drawn from its kinematic model.", (
+        Prop("model", "expr", REQUIRED, "Expression giving a runtime Robot."),
+        Prop("q", "vec", REQUIRED, "Joint vector."),
+        Prop("base", "mat4", None, "Optional 4x4 base pose (e.g. a link frame of another arm)."),
+        Prop("meshes", "files", None, "One mesh file per link, each in that link's frame."),
+        Prop("show_frames", "bool", False, "Draw each link's frame."),
+    )),
+    Kind("camera", "A virtual camera (z forward, x right, y down).", (
+        Prop("fov", "num", 60.0, "Vertical field of view in degrees."),
+        Prop("intrinsics", "mat3", None, "3x3 intrinsic matrix (instead of fov)."),
+        Prop("resolution", "ints2", (320, 240), "Image size [width, height] in pixels."),
+    ), draw="camera", node_extra={"near": 0.01, "far": 100.0}),
+    Kind("gizmo", "A draggable transform handle bound to a 4x4 pose variable.", (
+        Prop("bind", "bind", REQUIRED, "The 4x4 pose variable."),
+        Prop("scale", "num", 0.3, "Handle size."),
+        Prop("on_change", "code", None, "Code run after a drag (then the fixed relations)."),
+    ), draw="gizmo"),
+)
+
+#: every 3D element kind by name, in the order of the reference
+KINDS: dict[str, Kind] = {k.name: k for k in _KINDS}
