@@ -16,6 +16,7 @@ import numpy as np
 
 from ejsrl.robotics.transforms import rpy2r
 from ejsrl.view.elements import Dynamic, Folder, Node3D, Scene, Tabs, is_dynamic
+from ejsrl.world.kinds import KINDS
 from ejsrl.world.scene import NODE_KINDS, Node, Trail, World
 
 __all__ = ["SceneSync", "pose_from", "scene_elements"]
@@ -109,40 +110,20 @@ class SceneSync:
             self._build(child, node)
 
     def _make_node(self, element: Node3D) -> Node:
-        kind = element.kind
         common: dict[str, Any] = {"graspable": bool(element.graspable)}
         for key in ("visible", "color", "opacity"):
             value = getattr(element, key)
             if value is not None and not is_dynamic(value):
                 common[key] = value
-        if kind == "robot":
-            from ejsrl.world.mesh import load_mesh
-            from ejsrl.world.robot_node import RobotNode
-
-            props = element.props
-            meshes = [str(f) for f in (props.get("meshes") or ())]
-            const = {k: props[k] for k in ("q", "base") if props.get(k) is not None and not is_dynamic(props[k])}
-            return RobotNode(
-                element.name,
-                mesh_parts=[load_mesh(self.base_dir / f) for f in meshes] or None,
-                meshes=tuple(meshes),
-                show_frames=bool(props.get("show_frames", False)),
-                **const,
-                **common,
-            )
-        if kind == "mesh":
-            from ejsrl.world.mesh import load_mesh
-
-            file = element.props.get("file", "")
-            parts = load_mesh(self.base_dir / str(file))
-            scale = element.props.get("scale", 1.0)
-            return NODE_KINDS["mesh"](element.name, mesh_parts=tuple(parts), scale=1.0 if is_dynamic(scale) else scale, file=str(file), **common)
-        cls = NODE_KINDS.get(kind)
+        factory = _FACTORIES.get(element.kind)
+        if factory is not None:
+            return factory(self, element, common)
+        cls = NODE_KINDS.get(element.kind)
         if cls is None:
-            raise ValueError(f"unknown 3D element kind {kind!r}")
-        own = {k: v for k, v in element.props.items() if k in cls.DEFAULTS and not is_dynamic(v)}
-        if kind == "trail":
-            own.pop("points", None)
+            raise ValueError(f"unknown 3D element kind {element.kind!r}")
+        decl = KINDS.get(element.kind)
+        state = decl.node_extra if decl is not None else {}  # what the node keeps itself (a trail's points)
+        own = {k: v for k, v in element.props.items() if k in cls.DEFAULTS and k not in state and not is_dynamic(v)}
         return cls(element.name, **own, **common)
 
     # -- every frame ----------------------------------------------------------------------------
@@ -221,6 +202,37 @@ class SceneSync:
                 values["T_parent_local"] = pose_from(*(p(model) if is_dynamic(p) else p for p in (e.position, e.rotation, e.transform)))
             if values:
                 b.node.set(**values)
+
+
+def _robot_node(sync: SceneSync, element: Node3D, common: dict[str, Any]) -> Node:
+    from ejsrl.world.mesh import load_mesh
+    from ejsrl.world.robot_node import RobotNode
+
+    props = element.props
+    meshes = [str(f) for f in (props.get("meshes") or ())]
+    const = {k: props[k] for k in ("q", "base") if props.get(k) is not None and not is_dynamic(props[k])}
+    return RobotNode(
+        element.name,
+        mesh_parts=[load_mesh(sync.base_dir / f) for f in meshes] or None,
+        meshes=tuple(meshes),
+        show_frames=bool(props.get("show_frames", False)),
+        **const,
+        **common,
+    )
+
+
+def _mesh_node(sync: SceneSync, element: Node3D, common: dict[str, Any]) -> Node:
+    from ejsrl.world.mesh import load_mesh
+
+    file = element.props.get("file", "")
+    parts = load_mesh(sync.base_dir / str(file))
+    scale = element.props.get("scale", 1.0)
+    return NODE_KINDS["mesh"](element.name, mesh_parts=tuple(parts), scale=1.0 if is_dynamic(scale) else scale, file=str(file), **common)
+
+
+#: kinds whose nodes need more than their constant properties (files to load); every other
+#: kind's node is its ``NODE_KINDS`` class made from the element's constant properties
+_FACTORIES: dict[str, Callable[[SceneSync, Node3D, dict[str, Any]], Node]] = {"robot": _robot_node, "mesh": _mesh_node}
 
 
 def _raiser(exc: Exception) -> Callable[[Any], Any]:

@@ -102,7 +102,8 @@ class Kind:
     ``doc``: what it is (first line in the reference); ``props``: its own properties, in
     order; ``draw``: how the browser view draws it (one of ``DRAW_STYLES``); ``flat``: a
     ``mesh``-drawn kind shaded flat; ``node_extra``: properties its world node holds that
-    the spec does not give (state, or values set from code).
+    the spec does not give (state, or values set from code); ``node_module``: the module
+    that defines its node class, when not ``ejsrl.world.scene``.
     """
 
     name: str
@@ -111,6 +112,7 @@ class Kind:
     draw: str = "mesh"
     flat: bool = False
     node_extra: dict[str, Any] = field(default_factory=dict)
+    node_module: str | None = None
 
     def prop(self, name: str) -> Prop:
         """The own property called ``name``."""
@@ -194,7 +196,7 @@ _KINDS: tuple[Kind, ...] = (
         Prop("base", "mat4", None, "Optional 4x4 base pose (e.g. a link frame of another arm)."),
         Prop("meshes", "files", None, "One mesh file per link, each in that link's frame."),
         Prop("show_frames", "bool", False, "Draw each link's frame."),
-    )),
+    ), node_module="ejsrl.world.robot_node"),
     Kind("camera", "A virtual camera (z forward, x right, y down).", (
         Prop("fov", "num", 60.0, "Vertical field of view in degrees."),
         Prop("intrinsics", "mat3", None, "3x3 intrinsic matrix (instead of fov)."),

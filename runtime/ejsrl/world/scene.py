@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ejsrl.robotics.transforms import trinv
 from ejsrl.world.colors import to_rgb
+from ejsrl.world.kinds import KINDS
 
 __all__ = [
     "Node",
@@ -87,8 +88,15 @@ class Node:
     kind: ClassVar[str] = "node"
     #: the properties that change the node's shape (and so its triangles)
     GEOMETRY_PROPS: ClassVar[tuple[str, ...]] = ()
-    #: default values of the node's own properties
+    #: default values of the node's own properties (for a declared kind: from its declaration
+    #: in ejsrl.world.kinds, unless the class gives its own)
     DEFAULTS: ClassVar[dict[str, Any]] = {}
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        decl = KINDS.get(cls.__dict__.get("kind", ""))
+        if decl is not None and "DEFAULTS" not in cls.__dict__:
+            cls.DEFAULTS = decl.node_defaults()
 
     def __init__(
         self,
@@ -195,7 +203,6 @@ class Box(Node):
 
     kind = "box"
     GEOMETRY_PROPS = ("size",)
-    DEFAULTS = {"size": (1.0, 1.0, 1.0)}
 
     def _make_parts(self) -> list[Part]:
         sx, sy, sz = (float(v) for v in np.asarray(self.props["size"], dtype=float).reshape(3))
@@ -213,7 +220,6 @@ class Sphere(Node):
 
     kind = "sphere"
     GEOMETRY_PROPS = ("radius",)
-    DEFAULTS = {"radius": 0.5}
 
     def _make_parts(self) -> list[Part]:
         import trimesh
@@ -226,7 +232,6 @@ class Cylinder(Node):
 
     kind = "cylinder"
     GEOMETRY_PROPS = ("radius", "height")
-    DEFAULTS = {"radius": 0.5, "height": 1.0}
 
     def _make_parts(self) -> list[Part]:
         import trimesh
@@ -240,7 +245,6 @@ class Arrow(Node):
 
     kind = "arrow"
     GEOMETRY_PROPS = ("start", "vector", "width")
-    DEFAULTS = {"start": (0.0, 0.0, 0.0), "vector": (1.0, 0.0, 0.0), "width": 0.02}
 
     def _make_parts(self) -> list[Part]:
         import trimesh
@@ -272,14 +276,12 @@ class Line(Node):
     """Polyline through ``points`` (N, 3); ``width`` in pixels. Not solid."""
 
     kind = "line"
-    DEFAULTS = {"points": np.zeros((0, 3)), "width": 2.0}
 
 
 class Trail(Node):
     """A polyline that grows with ``point`` over time, keeping ``max_points``."""
 
     kind = "trail"
-    DEFAULTS = {"points": np.zeros((0, 3)), "width": 2.0, "max_points": 1000}
 
     def push(self, point: ArrayLike) -> None:
         """Append a point (3,), dropping the oldest beyond ``max_points``."""
@@ -302,28 +304,24 @@ class Points(Node):
     """Point cloud ``points`` (N, 3) with a point ``size`` in metres. Not solid."""
 
     kind = "points"
-    DEFAULTS = {"points": np.zeros((0, 3)), "size": 0.02}
 
 
 class Frame(Node):
     """Coordinate axes (x red, y green, z blue) of length ``size``."""
 
     kind = "frame"
-    DEFAULTS = {"size": 0.2}
 
 
 class Grid(Node):
     """Square grid on the local xy plane: ``size`` wide, cells of ``cell``."""
 
     kind = "grid"
-    DEFAULTS = {"size": 2.0, "cell": 0.1}
 
 
 class Text3D(Node):
     """A text label anchored at the node frame."""
 
     kind = "text3d"
-    DEFAULTS = {"text": ""}
 
 
 class MeshNode(Node):
@@ -331,7 +329,6 @@ class MeshNode(Node):
 
     kind = "mesh"
     GEOMETRY_PROPS = ("mesh_parts", "scale")
-    DEFAULTS = {"mesh_parts": (), "scale": 1.0, "file": ""}
 
     def _make_parts(self) -> list[Part]:
         scale = np.asarray(self.props["scale"], dtype=float)
@@ -362,20 +359,28 @@ class CameraNode(Node):
     """
 
     kind = "camera"
-    DEFAULTS = {"fov": 60.0, "intrinsics": None, "resolution": (320, 240), "near": 0.01, "far": 100.0}
 
 
 class GizmoNode(Node):
     """A draggable transform handle; its pose is the bound 4x4 variable."""
 
     kind = "gizmo"
-    DEFAULTS = {"scale": 0.3}
 
 
-NODE_KINDS: dict[str, type[Node]] = {
-    cls.kind: cls
-    for cls in (Box, Sphere, Cylinder, Arrow, Line, Trail, Points, Frame, Grid, Text3D, MeshNode, Group, CameraNode, GizmoNode)
-}
+def _node_classes() -> dict[str, type[Node]]:
+    """A node class for every declared kind whose node this module makes: the class above
+    that names the kind, or a plain ``Node`` holding the declared properties."""
+    defined = {cls.kind: cls for cls in Node.__subclasses__() if cls.__module__ == __name__}
+    out: dict[str, type[Node]] = {}
+    for name, decl in KINDS.items():
+        if decl.node_module is None:
+            out[name] = defined.get(name) or type(name.capitalize(), (Node,), {"kind": name, "__doc__": decl.doc, "__module__": __name__})
+    return out
+
+
+#: kind -> node class, for every declared kind except those whose node is made elsewhere
+#: (``Kind.node_module``: a robot's node is ``ejsrl.world.robot_node.RobotNode``)
+NODE_KINDS: dict[str, type[Node]] = _node_classes()
 
 
 class World:
