@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ejsrl.robotics.transforms import q2r, r2q
+from ejsrl.world.kinds import KINDS
 
 __all__ = ["SceneMirror", "ROOT"]
 
@@ -70,10 +71,11 @@ def _snapshot(node: Any) -> tuple:
 class _Mirror:
     """What has been sent for one world node."""
 
-    __slots__ = ("kind", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref")
+    __slots__ = ("kind", "style", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref")
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
+        self.style = _style(kind)
         self.frame: Any = None  # the node handle (a frame, or transform controls)
         self.geoms: list[Any] = []  # geometry handles below it
         self.T: np.ndarray | None = None
@@ -144,7 +146,7 @@ class SceneMirror:
             m = self._create(node, T, visible)
             self._nodes[node.name] = m
             return
-        if m.kind == "gizmo" and self._is_dragging(node.name):
+        if m.style == "gizmo" and self._is_dragging(node.name):
             m.T = None  # the user moves it; send the model's pose again once the drag is over
         elif m.T is None or not np.array_equal(m.T, T):
             m.frame.position = T[:3, 3]
@@ -173,7 +175,7 @@ class SceneMirror:
         m = _Mirror(node.kind)
         path = self._path(node.name)
         pos, wxyz = T[:3, 3], r2q(T)
-        if node.kind == "gizmo":
+        if m.style == "gizmo":
             m.frame = self.scene.add_transform_controls(
                 path, scale=float(node.props.get("scale", 0.3)), position=pos, wxyz=wxyz, visible=visible
             )
@@ -202,60 +204,11 @@ class SceneMirror:
     def _build_geometry(self, node: Any, m: _Mirror) -> None:
         """Create the geometry handles of ``node`` below its frame."""
         base = self._path(node.name)
-        kind = node.kind
         color = _rgb255(node.color)
         opacity = _opacity(node.opacity)
-        props = node.props
-        s = self.scene
         m.geoms = []
         m.mesh_parts_rgb = []
-        if kind == "box":
-            size = tuple(float(v) for v in np.asarray(props["size"], dtype=float).reshape(3))
-            m.geoms.append(s.add_box(f"{base}/g0", dimensions=size, color=color, opacity=opacity))
-        elif kind == "sphere":
-            m.geoms.append(
-                s.add_icosphere(f"{base}/g0", radius=float(props["radius"]), color=color, opacity=opacity, subdivisions=3)
-            )
-        elif kind in ("line", "trail"):
-            segs = _polyline_segments(props["points"])
-            h = s.add_line_segments(
-                f"{base}/g0", segs, colors=color, thickness=float(props["width"]), thickness_units="screen"
-            )
-            h.visible = len(np.asarray(props["points"]).reshape(-1, 3)) >= 2
-            m.geoms.append(h)
-        elif kind == "points":
-            pts = np.asarray(props["points"], dtype=np.float32).reshape(-1, 3)
-            m.geoms.append(
-                s.add_point_cloud(
-                    f"{base}/g0", points=pts, colors=color, point_size=float(props["size"]), precision="float32"
-                )
-            )
-        elif kind == "frame":
-            size = float(props["size"])
-            m.geoms.append(s.add_frame(f"{base}/g0", axes_length=size, axes_radius=max(size * 0.04, 1e-4)))
-        elif kind == "grid":
-            size, cell = float(props["size"]), float(props["cell"])
-            m.geoms.append(
-                s.add_grid(
-                    f"{base}/g0",
-                    width=size,
-                    height=size,
-                    plane="xy",
-                    cell_size=cell,
-                    section_size=cell * 10,
-                    cell_color=color,
-                    section_color=tuple(max(0, c - 60) for c in color),
-                )
-            )
-        elif kind == "text3d":
-            m.geoms.append(s.add_label(f"{base}/g0", str(props["text"])))
-        elif kind == "camera":
-            fov, aspect = _camera_fov_aspect(props)
-            m.geoms.append(s.add_camera_frustum(f"{base}/g0", fov=fov, aspect=aspect, scale=0.1, color=color))
-        elif kind in ("group", "gizmo"):
-            pass
-        else:
-            self._build_mesh(node, m, base, color, opacity)
+        _BUILDERS[_style(node.kind)](self, node, m, base, color, opacity)
 
     def _build_mesh(self, node: Any, m: _Mirror, base: str, color: tuple[int, int, int], opacity: float | None) -> None:
         """Any solid node: its ``parts()`` as meshes, one per part and colour.
@@ -267,7 +220,9 @@ class SceneMirror:
             parts = node.parts()
         except Exception:
             parts = []
-        flat = node.kind in ("cylinder", "arrow", "box")
+        decl = KINDS.get(node.kind)
+        flat = decl is not None and decl.flat
+        side = "double" if decl is not None and decl.two_sided else "front"
         m.part_keys = []
         m.part_handles = []
         m.parts_ref = list(parts)
@@ -296,7 +251,7 @@ class SceneMirror:
                     color=c,
                     opacity=opacity,
                     flat_shading=flat,
-                    side="double" if node.kind == "mesh" else "front",
+                    side=side,
                     position=T[:3, 3],
                     wxyz=r2q(T),
                 )
@@ -327,13 +282,9 @@ class SceneMirror:
     def _update_geometry(self, node: Any, m: _Mirror) -> None:
         """The shape changed: update sizes in place where viser can, else rebuild."""
         self.counters["geometry"] += 1
-        props = node.props
-        if node.kind == "box" and m.geoms:
-            m.geoms[0].dimensions = tuple(float(v) for v in np.asarray(props["size"], dtype=float).reshape(3))
-            self._update_props(node, m, count=False)
-            return
-        if node.kind == "sphere" and m.geoms:
-            m.geoms[0].radius = float(props["radius"])
+        resize = _RESIZERS.get(_style(node.kind))
+        if resize is not None and m.geoms:
+            resize(m.geoms[0], node.props)
             self._update_props(node, m, count=False)
             return
         if self._move_parts(node, m):
@@ -348,51 +299,14 @@ class SceneMirror:
         """Colour, opacity and the kinds' own non-shape props, in place."""
         if count:
             self.counters["props"] += 1
-        kind = node.kind
-        props = node.props
         color = _rgb255(node.color)
         opacity = _opacity(node.opacity)
+        style = _style(node.kind)
         if not m.geoms:
-            if kind == "gizmo":
-                m.frame.scale = float(props.get("scale", 0.3))
+            if style == "gizmo":
+                m.frame.scale = float(node.props.get("scale", 0.3))
             return
-        g = m.geoms[0]
-        if kind in ("box", "sphere"):
-            g.color = color
-            g.opacity = opacity
-        elif kind in ("line", "trail"):
-            pts = np.asarray(props["points"]).reshape(-1, 3)
-            g.points = _polyline_segments(pts)
-            # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
-            # means; per-vertex colours would be read as linear and shown washed out
-            g.colors = np.array(color, dtype=np.uint8)
-            g.thickness = float(props["width"])
-            g.visible = len(pts) >= 2
-        elif kind == "points":
-            g.points = np.asarray(props["points"], dtype=np.float32).reshape(-1, 3)
-            n = len(g.points)
-            g.colors = np.broadcast_to(np.array(color, dtype=np.uint8), (n, 3)).copy()
-            g.point_size = float(props["size"])
-        elif kind == "frame":
-            size = float(props["size"])
-            g.axes_length = size
-            g.axes_radius = max(size * 0.04, 1e-4)
-        elif kind == "text3d":
-            g.text = str(props["text"])
-        elif kind == "camera":
-            fov, aspect = _camera_fov_aspect(props)
-            g.fov = fov
-            g.aspect = aspect
-            g.color = color
-        elif kind == "grid":
-            for h in m.geoms:
-                _safe_remove(h)
-            self._build_geometry(node, m)
-        else:
-            for h, takes_node_colour in zip(m.geoms, m.mesh_parts_rgb):
-                if takes_node_colour:
-                    h.color = color
-                h.opacity = opacity
+        _PROP_UPDATERS[style](self, node, m, color, opacity)
 
     # -- gizmos ---------------------------------------------------------------------------
     def _attach_gizmo(self, name: str, handle: Any) -> None:
@@ -431,6 +345,184 @@ def _camera_fov_aspect(props: dict[str, Any]) -> tuple[float, float]:
     else:
         fov = float(np.radians(float(props.get("fov", 60.0))))
     return fov, (w / h if h > 0 else 4.0 / 3.0)
+
+
+# -- what each drawing style sends (ejsrl.world.kinds: ``Kind.draw``) ---------------------------
+
+
+def _style(kind: str) -> str:
+    """How a node kind is drawn: its declared style, or its ``parts()`` as meshes."""
+    decl = KINDS.get(kind)
+    return decl.draw if decl is not None else "mesh"
+
+
+Color = tuple[int, int, int]
+
+
+def _build_box(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    size = tuple(float(v) for v in np.asarray(node.props["size"], dtype=float).reshape(3))
+    m.geoms.append(mirror.scene.add_box(f"{base}/g0", dimensions=size, color=color, opacity=opacity))
+
+
+def _build_sphere(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    m.geoms.append(
+        mirror.scene.add_icosphere(f"{base}/g0", radius=float(node.props["radius"]), color=color, opacity=opacity, subdivisions=3)
+    )
+
+
+def _build_polyline(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    props = node.props
+    segs = _polyline_segments(props["points"])
+    h = mirror.scene.add_line_segments(f"{base}/g0", segs, colors=color, thickness=float(props["width"]), thickness_units="screen")
+    h.visible = len(np.asarray(props["points"]).reshape(-1, 3)) >= 2
+    m.geoms.append(h)
+
+
+def _build_points(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    pts = np.asarray(node.props["points"], dtype=np.float32).reshape(-1, 3)
+    m.geoms.append(
+        mirror.scene.add_point_cloud(f"{base}/g0", points=pts, colors=color, point_size=float(node.props["size"]), precision="float32")
+    )
+
+
+def _build_frame(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    size = float(node.props["size"])
+    m.geoms.append(mirror.scene.add_frame(f"{base}/g0", axes_length=size, axes_radius=max(size * 0.04, 1e-4)))
+
+
+def _build_grid(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    size, cell = float(node.props["size"]), float(node.props["cell"])
+    m.geoms.append(
+        mirror.scene.add_grid(
+            f"{base}/g0",
+            width=size,
+            height=size,
+            plane="xy",
+            cell_size=cell,
+            section_size=cell * 10,
+            cell_color=color,
+            section_color=tuple(max(0, c - 60) for c in color),
+        )
+    )
+
+
+def _build_label(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    m.geoms.append(mirror.scene.add_label(f"{base}/g0", str(node.props["text"])))
+
+
+def _build_camera(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    fov, aspect = _camera_fov_aspect(node.props)
+    m.geoms.append(mirror.scene.add_camera_frustum(f"{base}/g0", fov=fov, aspect=aspect, scale=0.1, color=color))
+
+
+def _build_nothing(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    """A group or a gizmo: only its frame (or its transform controls)."""
+
+
+def _build_mesh(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
+    mirror._build_mesh(node, m, base, color, opacity)
+
+
+#: drawing style -> creates the geometry handles below the node's frame
+_BUILDERS: dict[str, Callable[[SceneMirror, Any, _Mirror, str, Color, float | None], None]] = {
+    "box": _build_box,
+    "sphere": _build_sphere,
+    "polyline": _build_polyline,
+    "points": _build_points,
+    "frame": _build_frame,
+    "grid": _build_grid,
+    "label": _build_label,
+    "camera": _build_camera,
+    "mesh": _build_mesh,
+    "gizmo": _build_nothing,
+    "none": _build_nothing,
+}
+
+
+def _resize_box(g: Any, props: dict[str, Any]) -> None:
+    g.dimensions = tuple(float(v) for v in np.asarray(props["size"], dtype=float).reshape(3))
+
+
+def _resize_sphere(g: Any, props: dict[str, Any]) -> None:
+    g.radius = float(props["radius"])
+
+
+#: drawing style -> changes the shape of its primitive in place (other styles are rebuilt,
+#: or for meshes whose parts only moved, moved)
+_RESIZERS: dict[str, Callable[[Any, dict[str, Any]], None]] = {"box": _resize_box, "sphere": _resize_sphere}
+
+
+def _props_solid(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    g = m.geoms[0]
+    g.color = color
+    g.opacity = opacity
+
+
+def _props_polyline(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    g = m.geoms[0]
+    pts = np.asarray(node.props["points"]).reshape(-1, 3)
+    g.points = _polyline_segments(pts)
+    # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
+    # means; per-vertex colours would be read as linear and shown washed out
+    g.colors = np.array(color, dtype=np.uint8)
+    g.thickness = float(node.props["width"])
+    g.visible = len(pts) >= 2
+
+
+def _props_points(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    g = m.geoms[0]
+    g.points = np.asarray(node.props["points"], dtype=np.float32).reshape(-1, 3)
+    n = len(g.points)
+    g.colors = np.broadcast_to(np.array(color, dtype=np.uint8), (n, 3)).copy()
+    g.point_size = float(node.props["size"])
+
+
+def _props_frame(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    g = m.geoms[0]
+    size = float(node.props["size"])
+    g.axes_length = size
+    g.axes_radius = max(size * 0.04, 1e-4)
+
+
+def _props_label(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    m.geoms[0].text = str(node.props["text"])
+
+
+def _props_camera(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    g = m.geoms[0]
+    fov, aspect = _camera_fov_aspect(node.props)
+    g.fov = fov
+    g.aspect = aspect
+    g.color = color
+
+
+def _props_rebuild(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    for h in m.geoms:
+        _safe_remove(h)
+    mirror._build_geometry(node, m)
+
+
+def _props_mesh(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    for h, takes_node_colour in zip(m.geoms, m.mesh_parts_rgb):
+        if takes_node_colour:
+            h.color = color
+        h.opacity = opacity
+
+
+#: drawing style -> updates colour, opacity and the non-shape props of its handles in place
+_PROP_UPDATERS: dict[str, Callable[[SceneMirror, Any, _Mirror, Color, float | None], None]] = {
+    "box": _props_solid,
+    "sphere": _props_solid,
+    "polyline": _props_polyline,
+    "points": _props_points,
+    "frame": _props_frame,
+    "label": _props_label,
+    "camera": _props_camera,
+    "grid": _props_rebuild,
+    "mesh": _props_mesh,
+    "gizmo": _props_mesh,
+    "none": _props_mesh,
+}
 
 
 def _faces_by_colour(face_rgb: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -101,7 +101,8 @@ class Kind:
 
     ``doc``: what it is (first line in the reference); ``props``: its own properties, in
     order; ``draw``: how the browser view draws it (one of ``DRAW_STYLES``); ``flat``: a
-    ``mesh``-drawn kind shaded flat; ``node_extra``: properties its world node holds that
+    ``mesh``-drawn kind shaded flat; ``two_sided``: its mesh faces show from both sides
+    (meshes from files, whose winding is not known); ``node_extra``: properties its world node holds that
     the spec does not give (state, or values set from code); ``node_module``: the module
     that defines its node class, when not ``ejsrl.world.scene``.
     """
@@ -111,6 +112,7 @@ class Kind:
     props: tuple[Prop, ...]
     draw: str = "mesh"
     flat: bool = False
+    two_sided: bool = False
     node_extra: dict[str, Any] = field(default_factory=dict)
     node_module: str | None = None
 
@@ -186,7 +188,7 @@ _KINDS: tuple[Kind, ...] = (
     Kind("mesh", "A mesh from a file (OBJ, STL, PLY, GLB/glTF, OFF or VRML97 .wrl).", (
         Prop("file", "file", REQUIRED, "Path relative to the spec.", node_default=""),
         Prop("scale", "num", 1.0, "Uniform scale."),
-    ), node_extra={"mesh_parts": ()}),
+    ), two_sided=True, node_extra={"mesh_parts": ()}),
     Kind("group", "A group whose pose applies to its children.", (
         Prop("children", "children", (), "3D elements inside."),
     ), draw="none"),
