@@ -4,6 +4,21 @@ A :class:`PlotBuffer` keeps the points of one ``Plot`` (one per display frame), 
 to the plot's ``window`` (x-span) and ``max_points``; :class:`PlotBinding` pushes them to
 a viser uPlot chart at most ``max_rate`` times a second. :class:`ImageBinding` sends an
 image only when its pixels or its overlay points changed.
+
+Two things about what the chart is sent:
+
+- The x range is sent, not left to the chart: :func:`x_range` — [x_last - window, x_last]
+  once the data is longer than ``window``, [x_first, x_first + window] before, the data's
+  extent without a window. viser's chart, left to auto-scale x, keeps the x range
+  *relative* to the data's extent across updates (so a user's zoom survives new data) and
+  learns that relation from the range it shows; in the first updates that range is still
+  empty (null), and it learns e.g. [0, 1/span], which it keeps: the x axis ran far past
+  the data, squeezed into the left tenth of the plot. A fixed ``range`` turns that off.
+- uPlot auto-scales y to the data's extent however small, so a quantity that is constant
+  up to round-off (an energy that RK4 keeps to 1e-9) shows as a steep line with equal tick
+  labels. When the y values span less than :func:`min_y_span` the y scale is pinned to a
+  range of that span around them (and kept while the values stay flat and inside it), so
+  the line looks flat. A ``y_range`` in the spec always wins.
 """
 
 from __future__ import annotations
@@ -136,6 +151,45 @@ def y_axis_size(lo: float, hi: float) -> int:
     return int(max(_Y_AXIS_MIN_PX, np.ceil(px / 10.0) * 10))
 
 
+def x_range(x: np.ndarray, window: float | None) -> tuple[float, float]:
+    """The x axis for points at ``x`` (sorted): the window, or the data (a unit span for one point)."""
+    if len(x) == 0:
+        return (0.0, float(window) if window else 1.0)
+    first, last = float(x[0]), float(x[-1])
+    if window:
+        w = float(window)
+        return (last - w, last) if last - first > w else (first, first + w)
+    return (first, last) if last > first else (first, first + 1.0)
+
+
+#: the least y span shown, relative to the values' magnitude, and its absolute floor
+Y_MIN_REL_SPAN = 1e-3
+Y_MIN_ABS_SPAN = 1e-12
+
+
+def min_y_span(lo: float, hi: float) -> float:
+    """The least span of the y axis for values in ``[lo, hi]`` (below it, differences are round-off)."""
+    return max(Y_MIN_REL_SPAN * max(abs(lo), abs(hi)), Y_MIN_ABS_SPAN)
+
+
+def flat_y_range(lo: float, hi: float, current: tuple[float, float] | None = None) -> tuple[float, float] | None:
+    """A fixed y range for values in ``[lo, hi]`` that span less than :func:`min_y_span`, else None.
+
+    The range is centred on the values and ``2 * min_y_span`` wide; ``current`` (the range
+    shown now) is kept while it still fits the values, so a flat line does not re-scale
+    the chart at every update.
+    """
+    if not (np.isfinite(lo) and np.isfinite(hi)):
+        return None
+    span = min_y_span(lo, hi)
+    if hi - lo >= span:
+        return None
+    if current is not None and current[0] <= lo and hi <= current[1] and current[1] - current[0] <= 4 * span:
+        return current
+    mid = 0.5 * (lo + hi)
+    return (mid - span, mid + span)
+
+
 class PlotBinding:
     """One ``Plot`` element shown as a viser uPlot chart, with a line of current values below.
 
@@ -171,23 +225,18 @@ class PlotBinding:
         series = [{"label": self.x_name}]
         for i, s in enumerate(plot.series):
             series.append({"label": self.labels[i] or f"y{i + 1}", "stroke": self.colors[i], "width": 2})
-        scales: dict[str, Any] = {"x": {"time": False, "auto": True}}
-        if plot.y_range is not None:
-            lo, hi = (float(v) for v in plot.y_range)
-            scales["y"] = {"auto": False, "range": [lo, hi]}
-        else:
-            scales["y"] = {"auto": True}
+        self._flat_y: tuple[float, float] | None = None
+        self._x_range = x_range(np.zeros(0), plot.window)
         x_axis = getattr(plot, "x_label", "") or self.x_name
         y_axis = getattr(plot, "y_label", "") or None
         self._y_title = y_axis
         self._y_size = y_axis_size(*plot.y_range) if plot.y_range is not None else _Y_AXIS_MIN_PX + 10
         self._x_axis = {"label": x_axis, "size": 40, "labelSize": 18, "space": 50}
-        empty = np.zeros(0)
         self.handle = gui.add_uplot(
-            data=(empty, *(empty for _ in plot.series)),
+            data=self.buffer.data(),
             series=tuple(series),
             title=self.title or None,
-            scales=scales,
+            scales=self._scales(),
             # room for tick labels such as "-0.0025" on the left and a last x tick on the right
             axes=self._axes(),
             legend={"show": False},
@@ -195,6 +244,29 @@ class PlotBinding:
             aspect=1.6,
         )
         self.values = gui.add_markdown(self._values_text())
+
+    def _scales(self) -> dict[str, Any]:
+        """uPlot's scales: x fixed to :func:`x_range`; y fixed to ``y_range``, or to the flat range, or auto."""
+        scales: dict[str, Any] = {"x": {"time": False, "auto": False, "range": [float(v) for v in self._x_range]}}
+        if self.plot.y_range is not None:
+            lo, hi = (float(v) for v in self.plot.y_range)
+            scales["y"] = {"auto": False, "range": [lo, hi]}
+        elif self._flat_y is not None:
+            scales["y"] = {"auto": False, "range": [float(self._flat_y[0]), float(self._flat_y[1])]}
+        else:
+            scales["y"] = {"auto": True}
+        return scales
+
+    def _fit_scales(self, data: tuple[np.ndarray, ...]) -> None:
+        """Send the scales when the x window moved or y became flat or not (see the module's docstring)."""
+        xr = x_range(data[0], self.plot.window)
+        flat = self._flat_y
+        if self.plot.y_range is None and len(data[0]) and len(data) > 1:
+            ys = np.concatenate(data[1:])
+            flat = flat_y_range(float(ys.min()), float(ys.max()), self._flat_y)
+        if xr != self._x_range or flat != self._flat_y:
+            self._x_range, self._flat_y = xr, flat
+            self.handle.scales = self._scales()
 
     def _axes(self) -> tuple[dict[str, Any], dict[str, Any]]:
         y = {"label": self._y_title, "size": self._y_size + (18 if self._y_title else 0), "labelSize": 18 if self._y_title else 0}
@@ -209,13 +281,14 @@ class PlotBinding:
         if len(data[0]) == 0:
             return
         changed = False
-        space = x_tick_space(float(data[0][0]), float(data[0][-1]))
+        space = x_tick_space(*self._x_range)
         if space != self._x_axis["space"]:
             self._x_axis = dict(self._x_axis, space=space)
             changed = True
         ys = np.concatenate(data[1:]) if len(data) > 1 else np.zeros(0)
         if self.plot.y_range is None and len(ys):
-            size = y_axis_size(float(ys.min()), float(ys.max()))
+            lo, hi = self._flat_y if self._flat_y is not None else (float(ys.min()), float(ys.max()))
+            size = y_axis_size(lo, hi)
             if size != self._y_size:
                 self._y_size = size
                 changed = True
@@ -264,6 +337,7 @@ class PlotBinding:
         if not force and now - self._last_push < 1.0 / self.max_rate:
             return False
         data = self.buffer.data()
+        self._fit_scales(data)
         self._fit_axes(data)
         self.handle.data = data
         text = self._values_text()

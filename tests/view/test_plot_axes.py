@@ -1,0 +1,116 @@
+"""The axes a plot's chart is sent: the x window of a strip chart, a flat y that looks flat.
+
+What viser receives (the chart's ``scales``) decides what the user sees: uPlot draws the
+x axis over ``scales["x"]["range"]`` and, when y is not auto, the y axis over
+``scales["y"]["range"]``. The expected ranges are worked out here by hand from the points.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from ejsrl.view._plots import PlotBinding
+from ejsrl.view.elements import Dynamic, Plot, Series
+
+
+def _binding(served, *, window: float | None = None, y_range: tuple[float, float] | None = None, n: int = 1) -> PlotBinding:
+    series = [Series(Dynamic(lambda m: 0.0, f"y{i}"), f"y{i}") for i in range(n)]
+    plot = Plot("p", Dynamic(lambda m: m.t, "t"), series, window=window, y_range=y_range)
+    return PlotBinding(served.server.gui, plot, x_label="t", clock=served.clock)
+
+
+def _play(binding: PlotBinding, t0: float, t1: float, dt: float, f) -> None:
+    """Append a point every ``dt`` from t0 to t1 (inclusive) and push, as the view does each frame."""
+    for i in range(int(round((t1 - t0) / dt)) + 1):
+        t = t0 + i * dt
+        binding.append(t, [f(t)])
+        binding.push(force=True)
+
+
+def _x_range(binding: PlotBinding) -> tuple[float, float]:
+    x = binding.handle.scales["x"]
+    assert x.get("auto") is False, f"x is left to the chart's auto-scaling: {x}"
+    return tuple(x["range"])
+
+
+def _y(binding: PlotBinding) -> dict:
+    return binding.handle.scales["y"]
+
+
+def test_a_window_longer_than_the_data_shows_the_data_at_the_left_of_the_window(served):
+    b = _binding(served, window=6.0)
+    _play(b, 0.0, 2.0, 0.02, math.sin)
+    assert _x_range(b) == pytest.approx((0.0, 6.0))
+
+
+def test_once_the_data_is_longer_than_the_window_the_x_axis_is_the_last_window(served):
+    # the PID lab: window 6, at t = 12 s the axis ran from about 5 to 63 s
+    b = _binding(served, window=6.0)
+    _play(b, 0.0, 12.0, 0.02, math.sin)
+    lo, hi = _x_range(b)
+    assert (lo, hi) == pytest.approx((6.0, 12.0))
+    x = b.handle.data[0]
+    assert x[-1] == pytest.approx(12.0) and x[0] >= lo - 1e-9  # every point sent is on the axis
+
+
+def test_the_x_window_follows_the_data_after_a_reset(served):
+    b = _binding(served, window=8.0)
+    _play(b, 0.0, 20.0, 0.05, math.sin)
+    b.clear()
+    _play(b, 0.0, 9.5, 0.05, math.sin)
+    assert _x_range(b) == pytest.approx((1.5, 9.5))
+
+
+def test_a_plot_without_a_window_spans_its_data(served):
+    b = _binding(served)
+    _play(b, 2.0, 5.0, 0.1, math.cos)
+    assert _x_range(b) == pytest.approx((2.0, 5.0))
+
+
+def test_a_flat_quantity_gets_a_y_range_where_round_off_looks_flat(served):
+    # the tutorial's energy: 0.196 J/kg, RK4 round-off of 7.6e-10 over the run
+    b = _binding(served, window=10.0)
+    _play(b, 0.0, 9.0, 0.01, lambda t: 0.196 - 7.6e-10 * t / 9.0)
+    y = _y(b)
+    assert y.get("auto") is False, f"a flat line is auto-scaled onto its round-off: {y}"
+    lo, hi = y["range"]
+    assert lo < 0.196 - 7.6e-10 and hi > 0.196
+    assert hi - lo >= 1e-3 * 0.196  # the round-off is < 1e-5 of the axis: a flat line
+    assert (lo + hi) / 2 == pytest.approx(0.196, rel=1e-4)  # the line in the middle
+
+
+def test_zero_plotted_with_round_off_is_flat_too(served):
+    b = _binding(served)
+    _play(b, 0.0, 1.0, 0.01, lambda t: 1e-17 * math.sin(40 * t))
+    lo, hi = _y(b)["range"]
+    assert lo < 0.0 < hi and hi - lo >= 1e-12
+
+
+def test_a_quantity_that_varies_is_auto_scaled(served):
+    b = _binding(served, window=10.0)
+    _play(b, 0.0, 3.0, 0.01, lambda t: 0.2 * math.sin(3 * t))
+    assert _y(b) == {"auto": True}
+
+
+def test_a_flat_start_that_then_varies_goes_back_to_auto_scaling(served):
+    b = _binding(served)
+    _play(b, 0.0, 1.0, 0.01, lambda t: 1.0)
+    assert _y(b)["auto"] is False
+    _play(b, 1.01, 2.0, 0.01, lambda t: 1.0 + (t - 1.0))
+    assert _y(b) == {"auto": True}
+
+
+def test_a_flat_line_does_not_resend_its_y_range_at_every_frame(served):
+    b = _binding(served)
+    _play(b, 0.0, 0.5, 0.01, lambda t: 0.196)
+    first = list(_y(b)["range"])
+    _play(b, 0.51, 5.0, 0.01, lambda t: 0.196 + 1e-9 * t)
+    assert list(_y(b)["range"]) == first
+
+
+def test_a_y_range_in_the_spec_wins_over_the_flat_range(served):
+    b = _binding(served, y_range=(0.0, 0.5))
+    _play(b, 0.0, 2.0, 0.01, lambda t: 0.196)
+    assert _y(b) == {"auto": False, "range": [0.0, 0.5]}
