@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import ast
 import re
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from ejsgen._interpolate import BraceError, split_fields
@@ -28,9 +29,12 @@ __all__ = ["ViewCompiler"]
 #: kind -> {property: property type} of the values the compiler turns into a node's props
 #: (declared in ejsrl.world.kinds; a gizmo's bind and on_change and a group's children are
 #: compiled by the element itself)
-_OWN_PROPS: dict[str, dict[str, str]] = {
-    name: {p.name: p.type for p in kind.props if p.is_value} for name, kind in KINDS.items()
-}
+def own_props() -> dict[str, dict[str, str]]:
+    """kind -> {property: property type} of every declared 3D element kind."""
+    return {name: {p.name: p.type for p in kind.props if p.is_value} for name, kind in KINDS.items()}
+
+
+_OWN_PROPS: dict[str, dict[str, str]] = own_props()
 _MAX_LEN = 100
 
 
@@ -484,32 +488,7 @@ class ViewCompiler:
             what = f"the {prop} of {kind} '{name}'"
             if value is None:
                 continue
-            if ptype == "num":
-                props[prop] = self.number(value, ppath, f"{base}_{prop}", what)
-            elif ptype == "vec3":
-                props[prop] = self.vector(value, ppath, f"{base}_{prop}", what, 3)
-            elif ptype == "vec":
-                props[prop] = self.vector(value, ppath, f"{base}_{prop}", what, None)
-            elif ptype == "mat":
-                props[prop] = self.matrix(value, ppath, f"{base}_{prop}", what, None, cols=3)
-            elif ptype == "mat4":
-                props[prop] = self.matrix(value, ppath, f"{base}_{prop}", what, (4, 4))
-            elif ptype == "mat3":
-                props[prop] = self.matrix(value, ppath, f"{base}_{prop}", what, (3, 3))
-            elif ptype == "text":
-                props[prop] = self.interpolated(ppath, value, f"{base}_{prop}", what)
-            elif ptype == "expr":
-                props[prop] = self.dynamic(ppath, f"{base}_{prop}", what, value)
-            elif ptype == "file":
-                props[prop] = c.asset(value, ppath, "mesh file")
-            elif ptype == "files":
-                props[prop] = [c.asset(f, ppath + (i,), "mesh file") for i, f in enumerate(value)]
-            elif ptype == "ints2":
-                if len(value) != 2 or any(v <= 0 or v > 8192 for v in value):
-                    c.errors.append(SpecError(c.loc(ppath), "resolution is [width, height] in pixels (1 to 8192)"))
-                props[prop] = tuple(int(v) for v in value)
-            else:
-                props[prop] = value
+            props[prop] = _PROP_COMPILERS[ptype](self, value, ppath, f"{base}_{prop}", what)
         kw["props"] = props
         if p.transform is not None:
             if p.position is not None or p.rotation is not None:
@@ -542,6 +521,30 @@ class ViewCompiler:
         if item.children:
             kw["children"] = _Children([self.node3d(ch, indent + 8) for ch in item.children])
         return self.call("E.Node3D", kw, indent)
+
+
+def _ints2(vc: ViewCompiler, value: Any, path: Path_, base: str, what: str) -> Any:
+    if len(value) != 2 or any(v <= 0 or v > 8192 for v in value):
+        vc.c.errors.append(SpecError(vc.c.loc(path), "resolution is [width, height] in pixels (1 to 8192)"))
+    return tuple(int(v) for v in value)
+
+
+#: property type (ejsrl.world.kinds) -> compiles a value the spec gave into the app's props
+_PROP_COMPILERS: dict[str, Callable[[ViewCompiler, Any, Path_, str, str], Any]] = {
+    "num": lambda vc, v, path, base, what: vc.number(v, path, base, what),
+    "vec3": lambda vc, v, path, base, what: vc.vector(v, path, base, what, 3),
+    "vec": lambda vc, v, path, base, what: vc.vector(v, path, base, what, None),
+    "mat": lambda vc, v, path, base, what: vc.matrix(v, path, base, what, None, cols=3),
+    "mat4": lambda vc, v, path, base, what: vc.matrix(v, path, base, what, (4, 4)),
+    "mat3": lambda vc, v, path, base, what: vc.matrix(v, path, base, what, (3, 3)),
+    "text": lambda vc, v, path, base, what: vc.interpolated(path, v, base, what),
+    "expr": lambda vc, v, path, base, what: vc.dynamic(path, base, what, v),
+    "file": lambda vc, v, path, base, what: vc.c.asset(v, path, "mesh file"),
+    "files": lambda vc, v, path, base, what: [vc.c.asset(f, path + (i,), "mesh file") for i, f in enumerate(v)],
+    "ints2": _ints2,
+    "int": lambda vc, v, path, base, what: v,
+    "bool": lambda vc, v, path, base, what: v,
+}
 
 
 def _list_text(value: Any) -> str:

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, Spec, Variable
+from ejsgen import spec
+from ejsgen.spec import GUI_ELEMENT_MODELS, Spec, Variable
 
 __all__ = ["json_schema"]
 
@@ -26,9 +27,10 @@ def _one_key(kind: str, ref: dict[str, Any], description: str) -> dict[str, Any]
 
 def json_schema() -> dict[str, Any]:
     """The whole schema (draft 2020-12)."""
+    scene_models = spec.SCENE_ELEMENT_MODELS  # derived from the kinds' declarations (ejsrl.world.kinds)
     schema = Spec.model_json_schema(ref_template="#/$defs/{model}")
     defs = schema.setdefault("$defs", {})
-    for models in (GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS):
+    for models in (GUI_ELEMENT_MODELS, scene_models):
         for cls in models.values():
             sub = cls.model_json_schema(ref_template="#/$defs/{model}")
             for name, d in sub.pop("$defs", {}).items():
@@ -37,7 +39,7 @@ def json_schema() -> dict[str, Any]:
     var_schema = Variable.model_json_schema(ref_template="#/$defs/{model}")
     defs["Variable"] = var_schema
     scene_item = {
-        "oneOf": [_one_key(k, {"$ref": f"#/$defs/{c.__name__}"}, c.__doc__ or k) for k, c in SCENE_ELEMENT_MODELS.items()],
+        "oneOf": [_one_key(k, {"$ref": f"#/$defs/{c.__name__}"}, c.__doc__ or k) for k, c in scene_models.items()],
     }
     defs["SceneItem"] = scene_item
     gui_items = [_one_key(k, {"$ref": f"#/$defs/{c.__name__}"}, c.__doc__ or k) for k, c in GUI_ELEMENT_MODELS.items()]

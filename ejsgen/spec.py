@@ -27,7 +27,6 @@ __all__ = [
     "CodeEvolutionPage",
     "Program",
     "Simulation",
-    "VIEW_KINDS",
     "GUI_ELEMENT_MODELS",
     "SCENE_ELEMENT_MODELS",
     "ODE_METHODS",
@@ -399,6 +398,7 @@ def _field(prop: Prop) -> tuple[str, Any]:
 
 
 def _scene_models() -> dict[str, type[Strict]]:
+    """One model per declared 3D element kind, ``<Kind>El``, the common properties first."""
     base = create_model("_Node", __base__=Strict, **{p.name: _field(p) for p in COMMON})  # type: ignore[call-overload]
     return {
         name: create_model(f"{name.capitalize()}El", __base__=base, __doc__=kind.doc, **{p.name: _field(p) for p in kind.props})  # type: ignore[call-overload]
@@ -407,8 +407,6 @@ def _scene_models() -> dict[str, type[Strict]]:
 
 
 SCENE_ELEMENT_MODELS: dict[str, type[Strict]] = _scene_models()
-
-VIEW_KINDS = tuple(GUI_ELEMENT_MODELS) + ("scene",)
 
 
 class Simulation(Strict):

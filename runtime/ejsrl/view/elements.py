@@ -43,7 +43,6 @@ __all__ = [
     "Image",
     "Scene",
     "Node3D",
-    "GUI_KINDS",
 ]
 
 
@@ -339,5 +338,3 @@ class Scene(Element):
 
     children: list[Node3D]
 
-
-GUI_KINDS = ("folder", "tabs", "markdown", "label", "slider", "number", "checkbox", "text", "dropdown", "button", "plot", "image", "scene")
