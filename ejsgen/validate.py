@@ -17,6 +17,7 @@ from pydantic import BaseModel, ValidationError
 from ejsrl.sim import names as _names
 
 from ejsgen._suggest import did_you_mean
+from ejsgen._view_union import SCENE_ELEMENT, VIEW_ELEMENT, gui_models, scene_models, view_adapter
 from ejsgen.errors import SpecError, SpecErrors
 from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, Spec, Strict, Variable
 from ejsgen.yamlload import Document, Path_
@@ -179,9 +180,14 @@ def _data_at(data: Any, path: Path_) -> tuple[Path_, Any]:
 
 def pydantic_errors(doc: Document, exc: ValidationError, base: Path_, model: type[BaseModel], data: Any) -> list[SpecError]:
     """Turn a pydantic ``ValidationError`` into spec errors at the right places."""
+    return _spec_errors(doc, exc.errors(include_url=False), base, model, data)
+
+
+def _spec_errors(doc: Document, errors: Iterable[Any], base: Path_, model: type[BaseModel], data: Any) -> list[SpecError]:
+    """Spec errors for pydantic's ``errors`` (locations relative to ``data`` at ``base``)."""
     grouped: dict[Path_, list[dict[str, Any]]] = {}
     order: list[Path_] = []
-    for err in exc.errors(include_url=False):
+    for err in errors:
         loc = tuple(err["loc"])
         if err["type"] in ("extra_forbidden", "missing"):
             followed = loc
@@ -306,52 +312,97 @@ def _validate_model(doc: Document, cls: type[Strict], data: Any, path: Path_, er
         return None
 
 
-def _view_items(doc: Document, items: Any, path: Path_, errors: list[SpecError], *, scene: bool) -> list[ViewItem]:
-    kinds = SCENE_ELEMENT_MODELS if scene else {**GUI_ELEMENT_MODELS, "scene": None}
-    where = "3D element" if scene else "view element"
+def _view_items(doc: Document, items: Any, path: Path_, errors: list[SpecError]) -> list[ViewItem]:
+    """The view tree, validated in one go by pydantic (``ejsgen._view_union``)."""
     if not isinstance(items, list):
-        errors.append(SpecError(doc.loc(path), f"expected a list of {where}s, got {_describe(items)}"))
+        errors.append(SpecError(doc.loc(path), f"expected a list of view elements, got {_describe(items)}"))
         return []
+    try:
+        validated = view_adapter.validate_python(items)
+    except ValidationError as exc:
+        errors.extend(_view_errors(doc, exc.errors(include_url=False), path, items))
+        return []
+    return _tree(validated, path)
+
+
+def _tree(items: list[Any], path: Path_) -> list[ViewItem]:
+    """ViewItems (with their paths in the document) for a validated list of elements."""
     out: list[ViewItem] = []
     for i, item in enumerate(items):
-        ipath = path + (i,)
-        if isinstance(item, dict) and len(item) > 1 and next(iter(item)) in kinds:
-            errors.append(_misplaced_key(doc, item, ipath, kinds))
-            continue
-        if not isinstance(item, dict) or len(item) != 1:
-            errors.append(
-                SpecError(doc.loc(ipath), f"each {where} is a one-key mapping 'kind: {{properties}}'", f"kinds: {', '.join(kinds)}")
-            )
-            continue
-        (kind, props), = item.items()
-        kpath = ipath + (kind,)
-        if kind not in kinds:
-            other = GUI_ELEMENT_MODELS if scene else SCENE_ELEMENT_MODELS
-            if kind in other:
-                msg = f"'{kind}' is a {'GUI' if scene else '3D'} element and cannot stand {'in a scene' if scene else 'outside a scene'}"
-                errors.append(SpecError(doc.key_loc(kpath), msg))
-            else:
-                errors.append(SpecError(doc.key_loc(kpath), f"unknown {where} kind '{kind}'", did_you_mean(kind, kinds) or f"kinds: {', '.join(kinds)}"))
-            continue
+        (kind,) = item.model_fields_set
+        kpath = path + (i, kind)
+        props = getattr(item, kind)
         if kind == "scene":
-            children = _view_items(doc, props, kpath, errors, scene=True)
-            out.append(ViewItem(kind, None, kpath, children=children))
+            out.append(ViewItem(kind, None, kpath, children=_tree(props, kpath)))
             continue
-        cls = kinds[kind]
-        assert cls is not None
-        model = _validate_model(doc, cls, props, kpath, errors)
-        if model is None:
-            continue
-        vi = ViewItem(kind, model, kpath)
-        if kind == "folder":
-            vi.children = _view_items(doc, model.children, kpath + ("children",), errors, scene=False)
-        elif kind == "tabs":
-            for label, children in model.tabs.items():
-                vi.tabs.append((label, _view_items(doc, children, kpath + ("tabs", label), errors, scene=False)))
-        elif kind == "group":
-            vi.children = _view_items(doc, model.children, kpath + ("children",), errors, scene=True)
+        vi = ViewItem(kind, props, kpath)
+        if kind == "tabs":
+            vi.tabs = [(label, _tree(children, kpath + ("tabs", label))) for label, children in props.tabs.items()]
+        elif "children" in type(props).model_fields:
+            vi.children = _tree(props.children, kpath + ("children",))
         out.append(vi)
     return out
+
+
+def _element_at(loc: tuple[Any, ...]) -> tuple[Path_, str | None, tuple[Any, ...]]:
+    """Split a location in the validated tree into (document path of the innermost element's
+    properties, its kind, location inside them); the union's tags are dropped."""
+    path: list[Any] = []
+    kind: str | None = None
+    start = 0
+    j = 0
+    while j < len(loc):
+        path.append(loc[j])
+        if isinstance(loc[j], int) and j + 2 < len(loc) and loc[j + 1] == loc[j + 2]:  # index, tag, field
+            kind = loc[j + 1]
+            path.append(kind)
+            j += 3
+            start = len(path)
+            continue
+        j += 1
+    return tuple(path[:start]), kind, tuple(path[start:])
+
+
+def _view_errors(doc: Document, errs: list[Any], base: Path_, data: Any) -> list[SpecError]:
+    """Spec errors for pydantic's errors in the view tree, worded as for a hand walk."""
+    out: list[SpecError] = []
+    grouped: dict[Path_, tuple[str, list[dict[str, Any]]]] = {}
+    for err in errs:
+        element, kind, inner = _element_at(tuple(err["loc"]))
+        if err["type"] in (VIEW_ELEMENT, SCENE_ELEMENT):
+            ipath = element + inner
+            _, item = _data_at(data, ipath)
+            out.append(_item_error(doc, item, base + ipath, scene=err["type"] == SCENE_ELEMENT))
+            continue
+        assert kind is not None
+        if not inner:  # the element's value itself
+            _, value = _data_at(data, element)
+            what = "a list of 3D elements" if kind == "scene" else "a mapping of properties"
+            out.append(SpecError(doc.loc(base + element), f"expected {what}, got {_describe(value)}"))
+            continue
+        grouped.setdefault(element, (kind, []))[1].append({**err, "loc": inner})
+    for element, (kind, kind_errs) in grouped.items():
+        model = scene_models.get(kind) or gui_models[kind]
+        _, props = _data_at(data, element)
+        out.extend(_spec_errors(doc, kind_errs, base + element, model, props))
+    return out
+
+
+def _item_error(doc: Document, item: Any, ipath: Path_, *, scene: bool) -> SpecError:
+    """Why ``item`` is not an element of its list (a scene's if ``scene``, else the view's)."""
+    kinds = SCENE_ELEMENT_MODELS if scene else {**GUI_ELEMENT_MODELS, "scene": None}
+    where = "3D element" if scene else "view element"
+    if isinstance(item, dict) and len(item) > 1 and next(iter(item)) in kinds:
+        return _misplaced_key(doc, item, ipath, kinds)
+    if not isinstance(item, dict) or len(item) != 1:
+        return SpecError(doc.loc(ipath), f"each {where} is a one-key mapping 'kind: {{properties}}'", f"kinds: {', '.join(kinds)}")
+    (kind,) = item
+    kpath = ipath + (kind,)
+    other = GUI_ELEMENT_MODELS if scene else SCENE_ELEMENT_MODELS
+    if kind in other:
+        msg = f"'{kind}' is a {'GUI' if scene else '3D'} element and cannot stand {'in a scene' if scene else 'outside a scene'}"
+        return SpecError(doc.key_loc(kpath), msg)
+    return SpecError(doc.key_loc(kpath), f"unknown {where} kind '{kind}'", did_you_mean(str(kind), kinds) or f"kinds: {', '.join(kinds)}")
 
 
 def _misplaced_key(doc: Document, item: dict[str, Any], ipath: Path_, kinds: dict[str, Any]) -> SpecError:
@@ -397,7 +448,7 @@ def validate(doc: Document) -> Checked:
         if _check_name(doc, pname, ppath, "program", errors) and pname in seen_programs:
             errors.append(SpecError(doc.key_loc(ppath), f"the program '{pname}' has the name of a variable"))
 
-    view = _view_items(doc, data.get("view", []), ("view",), errors, scene=False)
+    view = _view_items(doc, data.get("view", []), ("view",), errors)
     if errors:
         raise SpecErrors(errors)
     return Checked(doc, spec, variables, view)
