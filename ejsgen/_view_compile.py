@@ -339,73 +339,97 @@ class ViewCompiler:
 
     def element(self, item: ViewItem, indent: int) -> list[str]:
         self.n += 1
-        n = self.n
-        kind, p, path = item.kind, item.props, item.path
-        where = self.c.where(path)
+        return _ELEMENT_COMPILERS[item.kind](self, item, self.n, indent)
+
+    def _folder(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        p, path = item.props, item.path
+        where = self.c.where(item.path)
+        base = f"_view{n}"
+        kids = _Children([self.element(ch, indent + 8) for ch in item.children])
+        label = self.interpolated(path + ("label",), p.label, f"{base}_label", "a folder's label")
+        return self.call("E.Folder", {"label": label, "expanded": p.expanded, "where": where, "children": kids}, indent)
+
+    def _tabs(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        path = item.path
+        where = self.c.where(item.path)
+        base = f"_view{n}"
+        pad = " " * indent
+        lines = [f"{pad}E.Tabs(", f"{pad}    tabs=["]
+        for i, (label, children) in enumerate(item.tabs):
+            shown = self.interpolated(path + ("tabs", label), label, f"{base}_tab{i + 1}", "a tab's label", origin=self._key_origin(path + ("tabs", label)))
+            lines.append(f"{pad}        ({py(shown)}, [")
+            for ch in children:
+                lines.extend(self.element(ch, indent + 12))
+            lines.append(f"{pad}        ]),")
+        lines += [f"{pad}    ],", f"{pad}    where={where!r},", f"{pad}),"]
+        return lines
+
+    def _markdown(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        p = item.props
+        where = self.c.where(item.path)
+        return self.call("E.Markdown", {"text": p.text, "where": where}, indent)
+
+    def _label(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        p, path = item.props, item.path
+        where = self.c.where(item.path)
+        base = f"_view{n}"
+        return self.call("E.Label", {"text": self.interpolated(path + ("text",), p.text, f"{base}_text", "a label", markdown=True), "where": where}, indent)
+
+    def _button(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        p, path = item.props, item.path
+        where = self.c.where(item.path)
         c = self.c
         base = f"_view{n}"
-        if kind == "folder":
-            kids = _Children([self.element(ch, indent + 8) for ch in item.children])
-            label = self.interpolated(path + ("label",), p.label, f"{base}_label", "a folder's label")
-            return self.call("E.Folder", {"label": label, "expanded": p.expanded, "where": where, "children": kids}, indent)
-        if kind == "tabs":
-            pad = " " * indent
-            lines = [f"{pad}E.Tabs(", f"{pad}    tabs=["]
-            for i, (label, children) in enumerate(item.tabs):
-                shown = self.interpolated(path + ("tabs", label), label, f"{base}_tab{i + 1}", "a tab's label", origin=self._key_origin(path + ("tabs", label)))
-                lines.append(f"{pad}        ({py(shown)}, [")
-                for ch in children:
-                    lines.extend(self.element(ch, indent + 12))
-                lines.append(f"{pad}        ]),")
-            lines += [f"{pad}    ],", f"{pad}    where={where!r},", f"{pad}),"]
-            return lines
-        if kind == "markdown":
-            return self.call("E.Markdown", {"text": p.text, "where": where}, indent)
-        if kind == "label":
-            return self.call("E.Label", {"text": self.interpolated(path + ("text",), p.text, f"{base}_text", "a label", markdown=True), "where": where}, indent)
-        if kind in ("slider", "number", "checkbox", "text", "dropdown"):
-            return self.control(item, n, indent)
-        if kind == "button":
-            lines = c.code_lines(p.action, path + ("action",), f"the action of button '{p.label}'")
-            name = c.add_method(c.method_name(f"_action_{_slug(p.label)}"), "self", f"Action of the button '{p.label}'.", lines)
-            label = self.interpolated(path + ("label",), p.label, f"{base}_label", f"the label of button '{p.label}'")
-            return self.call("E.Button", {"label": label, "action": Src(f"Model.{name}"), "where": where}, indent)
-        if kind == "plot":
-            x = self.number(p.x, path + ("x",), f"{base}_x", "the plot's x")
-            series = []
-            for i, s in enumerate(p.series):
-                spath = path + ("series", i)
-                y = self.number(s.y, spath + ("y",), f"{base}_y{i}", f"series {i + 1} of the plot")
-                if s.label is not None:
-                    label = self.interpolated(spath + ("label",), s.label, f"{base}_label{i}", f"the label of series {i + 1}")
-                else:
-                    label = str(s.y)
-                if s.color is not None:
-                    self.color(s.color, spath + ("color",), f"{base}_c{i}")
-                series.append(Src("E.Series(" + ", ".join([f"y={py(y)}", f"label={py(label)}", f"color={s.color!r}", f"where={self.c.where(spath)!r}"]) + ")"))
-            if p.y_range is not None and (len(p.y_range) != 2 or p.y_range[0] >= p.y_range[1]):
-                c.errors.append(SpecError(c.loc(path + ("y_range",)), "y_range is [ymin, ymax] with ymin < ymax"))
-            y_range = tuple(float(v) for v in p.y_range) if p.y_range else None
-            title = self.interpolated(path + ("title",), p.title, f"{base}_title", "the plot's title")
-            x_label = p.x_label if p.x_label is not None else self._axis_title(p.x)
-            y_units = {self._unit_of(s.y) for s in p.series}
-            y_label = p.y_label if p.y_label is not None else (y_units.pop() or "" if len(y_units) == 1 else "")
-            kw = {"title": title, "x": x, "series": series, "window": p.window, "max_points": p.max_points, "y_range": y_range}
-            if x_label:
-                kw["x_label"] = x_label
-            if y_label:
-                kw["y_label"] = y_label
-            kw["where"] = where
-            return self.call("E.Plot", kw, indent)
-        if kind == "image":
-            src = self.dynamic(path + ("source",), f"{base}_source", "an image source", p.source)
-            pts = self.dynamic(path + ("points",), f"{base}_points", "the image's points", p.points) if p.points is not None else None
-            label = self.interpolated(path + ("label",), p.label or "", f"{base}_label", "the image's label")
-            return self.call("E.Image", {"source": src, "label": label, "points": pts, "where": where}, indent)
-        if kind == "scene":
-            kids = _Children([self.node3d(ch, indent + 8) for ch in item.children])
-            return self.call("E.Scene", {"where": where, "children": kids}, indent)
-        raise AssertionError(kind)
+        lines = c.code_lines(p.action, path + ("action",), f"the action of button '{p.label}'")
+        name = c.add_method(c.method_name(f"_action_{_slug(p.label)}"), "self", f"Action of the button '{p.label}'.", lines)
+        label = self.interpolated(path + ("label",), p.label, f"{base}_label", f"the label of button '{p.label}'")
+        return self.call("E.Button", {"label": label, "action": Src(f"Model.{name}"), "where": where}, indent)
+
+    def _plot(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        p, path = item.props, item.path
+        where = self.c.where(item.path)
+        c = self.c
+        base = f"_view{n}"
+        x = self.number(p.x, path + ("x",), f"{base}_x", "the plot's x")
+        series = []
+        for i, s in enumerate(p.series):
+            spath = path + ("series", i)
+            y = self.number(s.y, spath + ("y",), f"{base}_y{i}", f"series {i + 1} of the plot")
+            if s.label is not None:
+                label = self.interpolated(spath + ("label",), s.label, f"{base}_label{i}", f"the label of series {i + 1}")
+            else:
+                label = str(s.y)
+            if s.color is not None:
+                self.color(s.color, spath + ("color",), f"{base}_c{i}")
+            series.append(Src("E.Series(" + ", ".join([f"y={py(y)}", f"label={py(label)}", f"color={s.color!r}", f"where={self.c.where(spath)!r}"]) + ")"))
+        if p.y_range is not None and (len(p.y_range) != 2 or p.y_range[0] >= p.y_range[1]):
+            c.errors.append(SpecError(c.loc(path + ("y_range",)), "y_range is [ymin, ymax] with ymin < ymax"))
+        y_range = tuple(float(v) for v in p.y_range) if p.y_range else None
+        title = self.interpolated(path + ("title",), p.title, f"{base}_title", "the plot's title")
+        x_label = p.x_label if p.x_label is not None else self._axis_title(p.x)
+        y_units = {self._unit_of(s.y) for s in p.series}
+        y_label = p.y_label if p.y_label is not None else (y_units.pop() or "" if len(y_units) == 1 else "")
+        kw = {"title": title, "x": x, "series": series, "window": p.window, "max_points": p.max_points, "y_range": y_range}
+        if x_label:
+            kw["x_label"] = x_label
+        if y_label:
+            kw["y_label"] = y_label
+        kw["where"] = where
+        return self.call("E.Plot", kw, indent)
+
+    def _image(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        p, path = item.props, item.path
+        where = self.c.where(item.path)
+        base = f"_view{n}"
+        src = self.dynamic(path + ("source",), f"{base}_source", "an image source", p.source)
+        pts = self.dynamic(path + ("points",), f"{base}_points", "the image's points", p.points) if p.points is not None else None
+        label = self.interpolated(path + ("label",), p.label or "", f"{base}_label", "the image's label")
+        return self.call("E.Image", {"source": src, "label": label, "points": pts, "where": where}, indent)
+
+    def _scene(self, item: ViewItem, n: int, indent: int) -> list[str]:
+        where = self.c.where(item.path)
+        kids = _Children([self.node3d(ch, indent + 8) for ch in item.children])
+        return self.call("E.Scene", {"where": where, "children": kids}, indent)
 
     def control(self, item: ViewItem, n: int, indent: int) -> list[str]:
         c = self.c
@@ -475,9 +499,12 @@ class ViewCompiler:
         self.scene_names.add(name)
         kw: dict[str, Any] = {"kind": kind, "name": name}
         props: dict[str, Any] = {}
-        for prop, ptype in _OWN_PROPS[kind].items():
+        for decl in KINDS[kind].props:
+            if not decl.is_value:
+                continue  # a gizmo's bind and on_change, a group's children: below
+            prop = decl.name
             if prop not in p.model_fields_set:
-                if not KINDS[kind].prop(prop).required and KINDS[kind].prop(prop).default is not None:  # the spec's default
+                if not decl.required and decl.default is not None:  # the app's node gets the spec's default
                     value = getattr(p, prop)
                     if isinstance(value, list):
                         value = tuple(value)
@@ -488,7 +515,7 @@ class ViewCompiler:
             what = f"the {prop} of {kind} '{name}'"
             if value is None:
                 continue
-            props[prop] = _PROP_COMPILERS[ptype](self, value, ppath, f"{base}_{prop}", what)
+            props[prop] = _PROP_COMPILERS[decl.type](self, value, ppath, f"{base}_{prop}", what)
         kw["props"] = props
         if p.transform is not None:
             if p.position is not None or p.rotation is not None:
@@ -521,6 +548,24 @@ class ViewCompiler:
         if item.children:
             kw["children"] = _Children([self.node3d(ch, indent + 8) for ch in item.children])
         return self.call("E.Node3D", kw, indent)
+
+
+#: view element kind -> compiles one element into the lines of its record in ``VIEW``
+_ELEMENT_COMPILERS: dict[str, Callable[[ViewCompiler, ViewItem, int, int], list[str]]] = {
+    "folder": ViewCompiler._folder,
+    "tabs": ViewCompiler._tabs,
+    "markdown": ViewCompiler._markdown,
+    "label": ViewCompiler._label,
+    "slider": ViewCompiler.control,
+    "number": ViewCompiler.control,
+    "checkbox": ViewCompiler.control,
+    "text": ViewCompiler.control,
+    "dropdown": ViewCompiler.control,
+    "button": ViewCompiler._button,
+    "plot": ViewCompiler._plot,
+    "image": ViewCompiler._image,
+    "scene": ViewCompiler._scene,
+}
 
 
 def _ints2(vc: ViewCompiler, value: Any, path: Path_, base: str, what: str) -> Any:

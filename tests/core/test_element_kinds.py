@@ -17,9 +17,12 @@ from typing import Any
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 
-from ejsgen import _docs, spec
-from ejsgen._view_compile import _OWN_PROPS, _PROP_COMPILERS, own_props
+from ejsgen import _docs, _view_union, spec, validate
+from ejsgen.cli import main
+from ejsgen._view_compile import _ELEMENT_COMPILERS, _OWN_PROPS, _PROP_COMPILERS, own_props
+from ejsgen._view_union import view_adapter
 from ejsgen.schema import json_schema
 from ejsrl.view import _scene_mirror as mirror_mod
 from ejsrl.view.elements import Node3D
@@ -38,6 +41,14 @@ def _node_class(kind: Kind) -> type[scene.Node]:
     return found[0]
 
 
+def _required(kind: Kind) -> dict[str, Any]:
+    """Values for a kind's required properties."""
+    out: dict[str, Any] = {p.name: "x" for p in kind.props if p.required and p.type in ("text", "file", "expr", "bind")}
+    out |= {p.name: [0, 0, 1] for p in kind.props if p.required and p.type in ("vec3", "vec")}
+    out |= {p.name: [[0, 0, 0]] for p in kind.props if p.required and p.type == "mat"}
+    return out
+
+
 # -- every declared kind reaches every consumer -------------------------------------------------
 
 
@@ -51,14 +62,27 @@ def test_each_kind_has_a_spec_model_with_its_declared_properties(name: str) -> N
         info = model.model_fields[p.name]
         assert info.description == p.doc
         assert info.is_required() == p.required, p.name
-    required = {p.name: "x" for p in kind.props if p.required and p.type in ("text", "file", "expr", "bind")}
-    required |= {p.name: [0, 0, 1] for p in kind.props if p.required and p.type in ("vec3", "vec")}
-    required |= {p.name: [[0, 0, 0]] for p in kind.props if p.required and p.type == "mat"}
-    element = model.model_validate(required)
+    element = model.model_validate(_required(kind))
     for p in kind.props:
         if not p.required:
             got = getattr(element, p.name)
             assert got == (list(p.default) if isinstance(p.default, tuple) else p.default), p.name
+
+
+@pytest.mark.parametrize("name", list(KINDS))
+def test_each_kind_is_validated_in_a_scene_and_a_group(name: str) -> None:
+    props = _required(KINDS[name])
+    (scene_item,) = view_adapter.validate_python([{"scene": [{"group": {"children": [{name: props}]}}]}])
+    (inner,) = scene_item.scene[0].group.children
+    assert type(getattr(inner, name)).__name__ == f"{name.capitalize()}El"
+    with pytest.raises(ValidationError):
+        view_adapter.validate_python([{name: props}])  # a 3D element outside a scene
+
+
+def test_every_view_element_kind_is_validated_and_compiled() -> None:
+    assert set(_ELEMENT_COMPILERS) == set(spec.GUI_ELEMENT_MODELS) | {"scene"}
+    assert set(_view_union.gui_models) == set(spec.GUI_ELEMENT_MODELS)
+    assert list(_view_union.scene_models) == list(KINDS)
 
 
 @pytest.mark.parametrize("name", list(KINDS))
@@ -152,7 +176,9 @@ class _FakeScene:
         return add
 
 
-def test_a_kind_added_to_the_declarations_alone_reaches_every_consumer(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_kind_added_to_the_declarations_alone_reaches_every_consumer(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     cone = Kind(
         "cone",
         "A cone along its local z axis.",
@@ -178,6 +204,20 @@ def test_a_kind_added_to_the_declarations_alone_reaches_every_consumer(monkeypat
     assert "Where its tip is." in _docs.generate("scene-properties")
 
     assert own_props()["cone"] == {"radius": "num", "tip": "vec3", "size": "num"}
+
+    # validated and compiled: a spec with a cone builds into an app that declares it
+    gui_models, scene_models, adapter = _view_union._build()
+    monkeypatch.setattr(validate, "view_adapter", adapter)
+    monkeypatch.setattr(validate, "scene_models", scene_models)
+    monkeypatch.setattr(validate, "SCENE_ELEMENT_MODELS", models)
+    spec_file = tmp_path / "cone.ejs.yaml"
+    spec_file.write_text("ejs: 1\ntitle: Cone\nmodel:\n  variables:\n    h: 2.0\nview:\n  - scene:\n      - cone: {tip: [0, 0, h]}\n")
+    assert main(["build", str(spec_file), "-o", str(tmp_path / "app")]) == 0
+    app = (tmp_path / "app" / "app.py").read_text(encoding="utf-8")
+    assert "kind='cone'" in app and "'radius': 0.25" in app and "'[0, 0, h]'" in app
+    spec_file.write_text("ejs: 1\ntitle: Cone\nview:\n  - scene:\n      - cone: {radius: 1}\n")
+    assert main(["validate", str(spec_file)]) == 1
+    assert "5:15: error: missing required key 'tip'" in capsys.readouterr().err
 
     classes = scene._node_classes()
     node_cls = classes["cone"]
