@@ -162,8 +162,10 @@ def x_range(x: np.ndarray, window: float | None) -> tuple[float, float]:
     return (first, last) if last > first else (first, first + 1.0)
 
 
-#: the least y span shown, relative to the values' magnitude, and its absolute floor
-Y_MIN_REL_SPAN = 1e-3
+#: the least y span shown, relative to the values' magnitude, and its absolute floor. 1 %:
+#: uPlot labels ticks with at most three decimals, so around 0.2 a smaller axis labels
+#: every tick alike ("0.196")
+Y_MIN_REL_SPAN = 1e-2
 Y_MIN_ABS_SPAN = 1e-12
 
 

@@ -1,0 +1,167 @@
+"""Plot axes as the browser draws them: a strip chart shows its last window; a flat line looks flat.
+
+A small lab plays, is reset (its plots empty), and plays for 1.5 simulated seconds past its
+plot's 1 s window. The chart's x scale
+(read from viser's uPlot test point) must be about [t - 1, t] for the last t it holds, and
+the x tick labels uPlot draws on its canvas (recorded by wrapping ``fillText``) must lie in
+that range. A 10 s window not yet full shows [first, first + 10]. A second chart plots a constant up to round-off (0.196 + 1e-10 t, like the
+tutorial's RK4 energy): its y tick labels must not all read the same.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+import pytest
+
+from browser_helpers import wait_until
+from ejsrl.app import App, AppMeta, SimConfig
+from ejsrl.sim.model import CodePage, ModelBase
+from ejsrl.view.elements import Dynamic, Node3D, Plot, Scene, Series
+
+SPEC = "strip.ejs.yaml"
+WINDOW = 1.0
+TOL = 0.05  # s: 2.5 frames of the lab
+
+
+class Strip(ModelBase):
+    SPEC = SPEC
+    VARIABLES = {"t": "float", "dt": "float", "y": "float", "E": "float"}
+    INDEPENDENT = "t"
+
+    def _declare(self) -> None:
+        self.t = 0.0
+        self.dt = 0.02
+        self.y = 0.0
+        self.E = 0.196
+
+    def _evolution(self) -> list:
+        return [CodePage("step", self._step)]
+
+    def _step(self) -> None:
+        self.t += self.dt
+
+    def _fixed_relations(self) -> None:
+        self.y = math.sin(3.0 * self.t)
+        self.E = 0.196 + 1e-10 * self.t
+
+
+VIEW = [
+    Plot("Signal", Dynamic(lambda m: m.t, "t"), [Series(Dynamic(lambda m: m.y, "y"), "y", "blue")], window=WINDOW),
+    Plot("Energy", Dynamic(lambda m: m.t, "t"), [Series(Dynamic(lambda m: m.E, "E"), "E", "red")], window=10.0),
+    Scene([
+        Node3D("grid", "floor", props={"size": 4.0, "cell": 0.25}),
+        Node3D("sphere", "bob", props={"radius": 0.08}, position=Dynamic(lambda m: (m.y, 0.0, 1.0), "[y, 0, 1]"), color="orange"),
+    ]),
+]
+
+#: record, per canvas, the text uPlot draws since its last clear (its axis labels)
+RECORD_TEXT = """
+window.__texts = new Map();
+const C = CanvasRenderingContext2D.prototype;
+const fill = C.fillText, clear = C.clearRect;
+C.clearRect = function (...a) { window.__texts.set(this.canvas, []); return clear.apply(this, a); };
+C.fillText = function (t, x, y, ...r) {
+  const l = window.__texts.get(this.canvas) || [];
+  l.push([String(t), x, y]);
+  window.__texts.set(this.canvas, l);
+  return fill.call(this, t, x, y, ...r);
+};
+"""
+
+#: each chart: title, x scale, its x data's ends, the text last drawn on its canvas
+CHARTS = """
+() => Object.values((window.__viserTestpoints || {}).uplots || {}).map(({chart}) => {
+  const x = chart.data[0];
+  return {
+    title: (chart.root.querySelector('.u-title') || {}).textContent || '',
+    min: chart.scales.x.min, max: chart.scales.x.max,
+    first: x.length ? x[0] : null, last: x.length ? x[x.length - 1] : null,
+    texts: window.__texts.get(chart.ctx.canvas) || [],
+  };
+})
+"""
+
+
+@contextmanager
+def serving_app(app: App) -> Iterator[str]:
+    """Serve ``app`` on a free port: yields its URL."""
+    server = app.serve("127.0.0.1", 0, block=False)
+    try:
+        yield f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+
+
+def _chart(page, title: str) -> dict:
+    charts = [c for c in page.evaluate(CHARTS) if c["title"] == title]
+    return charts[0] if charts else {}
+
+
+def _tick_labels(texts: list) -> tuple[list[str], list[str]]:
+    """(x tick labels, y tick labels): the x ticks share a baseline, the y ticks a left edge."""
+    by_y = Counter(round(t[2], 1) for t in texts)
+    by_x = Counter(round(t[1], 1) for t in texts)
+    row = by_y.most_common(1)[0][0] if by_y else None
+    col = by_x.most_common(1)[0][0] if by_x else None
+    xs = [t[0] for t in texts if round(t[2], 1) == row]
+    ys = [t[0] for t in texts if round(t[1], 1) == col and round(t[2], 1) != row]
+    return xs, ys
+
+
+def _number(label: str) -> float:
+    return float(label.replace(",", "").replace("\u2212", "-"))
+
+
+@pytest.mark.browser
+def test_a_strip_chart_shows_its_last_window_and_a_flat_line_looks_flat(page):
+    app = App(Strip, VIEW, sim=SimConfig(fps=30.0), meta=AppMeta(title="Strip chart", description="", author="Tests", spec=SPEC))
+    with serving_app(app) as url:
+        page.add_init_script(RECORD_TEXT)
+        page.goto(url)
+        page.get_by_role("button", name="Play").first.wait_for(timeout=45_000)
+        wait_until(lambda: len(page.evaluate(CHARTS)) == 2, timeout=30, what="two uPlot charts in the panel")
+        # play a little, reset (the plots empty), play again: what a student does
+        page.get_by_role("button", name="Play").first.click()
+        wait_until(lambda: app.model.t > 0.5, timeout=30, what="t to advance after Play")
+        page.get_by_role("button", name="Reset").first.click()
+        wait_until(lambda: app.model.t < 0.5, timeout=10, what="the reset")
+        page.get_by_role("button", name="Play").first.click()
+        wait_until(lambda: app.model.t > WINDOW + 1.5, timeout=30, what="t to run 1.5 s past the window")
+
+        def settled() -> bool:
+            c = _chart(page, "Signal")
+            return bool(c) and c["last"] is not None and c["last"] > WINDOW + 1.0 and len(_tick_labels(c["texts"])[0]) >= 2
+
+        wait_until(settled, timeout=20, what="the signal chart to hold data past its window")
+        page.get_by_role("button", name="Pause").first.click()
+        wait_until(lambda: not app.is_playing(), timeout=10, what="the lab to pause")
+        t_end = app.model.t
+        wait_until(lambda: abs((_chart(page, "Signal").get("last") or 0.0) - t_end) < 1e-6, timeout=10,
+                   what="the chart to show the last point")
+
+        signal = _chart(page, "Signal")
+        t = signal["last"]
+        # within a few frames: the page may hold the scale of the frame after its data
+        assert signal["min"] == pytest.approx(t - WINDOW, abs=TOL) and signal["max"] == pytest.approx(t, abs=TOL), (
+            f"x axis [{signal['min']}, {signal['max']}] for data ending at t = {t} with a {WINDOW} s window")
+        x_ticks, _ = _tick_labels(signal["texts"])
+        values = [_number(v) for v in x_ticks]
+        assert len(values) >= 2 and all(t - WINDOW - TOL <= v <= t + TOL for v in values), (
+            f"x tick labels {x_ticks} outside [{t - WINDOW:.2f}, {t:.2f}]")
+
+        # a 10 s window not yet full: the data from the left, the axis [first, first + 10]
+        energy = _chart(page, "Energy")
+        first = energy["first"]
+        assert energy["min"] == pytest.approx(first, abs=TOL) and energy["max"] == pytest.approx(first + 10.0, abs=TOL), (
+            f"x axis [{energy['min']}, {energy['max']}] for data from t = {first} with a 10 s window")
+        x_ticks, y_ticks = _tick_labels(energy["texts"])
+        assert x_ticks and all(first - TOL <= _number(v) <= first + 10.0 + TOL for v in x_ticks), x_ticks
+        assert len(y_ticks) >= 3, f"y tick labels of the flat chart: {y_ticks} (all text: {energy['texts']})"
+        assert len(set(y_ticks)) == len(y_ticks), f"y tick labels of a flat line repeat: {y_ticks}"
+        values = sorted(_number(v) for v in y_ticks)
+        assert values[-1] - values[0] >= 1e-4, f"the flat line's y axis spans only {values[-1] - values[0]:g}: {y_ticks}"
