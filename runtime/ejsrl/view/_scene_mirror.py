@@ -502,6 +502,10 @@ def _props_rebuild(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opa
     mirror._build_geometry(node, m)
 
 
+def _props_nothing(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    """A group or a gizmo has no geometry to update."""
+
+
 def _props_mesh(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
     for h, takes_node_colour in zip(m.geoms, m.mesh_parts_rgb):
         if takes_node_colour:
@@ -520,8 +524,8 @@ _PROP_UPDATERS: dict[str, Callable[[SceneMirror, Any, _Mirror, Color, float | No
     "camera": _props_camera,
     "grid": _props_rebuild,
     "mesh": _props_mesh,
-    "gizmo": _props_mesh,
-    "none": _props_mesh,
+    "gizmo": _props_nothing,
+    "none": _props_nothing,
 }
 
 

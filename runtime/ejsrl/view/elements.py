@@ -309,8 +309,9 @@ class Node3D(Element):
     """One 3D element of the scene.
 
     ``kind``: the spec's element kind (``box``, ``sphere``, ..., ``group``, ``robot``,
-    ``camera``, ``gizmo``); ``name``: unique in the scene (the generator makes one up for
-    unnamed elements); ``props``: the kind's own properties, constant or ``Dynamic``;
+    ``camera``, ``gizmo``), declared with its properties in ``ejsrl.world.kinds.KINDS``;
+    ``name``: unique in the scene (the generator makes one up for unnamed elements);
+    ``props``: the kind's own properties (its declared value properties), constant or ``Dynamic``;
     the pose is ``transform`` (a (4, 4) constant or ``Dynamic``) or ``position`` (3,) with
     optional ``rotation`` (roll, pitch, yaw, radians); ``children`` for groups.
     Common properties ``visible``, ``color``, ``opacity``, ``graspable`` may be dynamic too.
