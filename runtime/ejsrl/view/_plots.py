@@ -16,9 +16,9 @@ Two things about what the chart is sent:
   the data, squeezed into the left tenth of the plot. A fixed ``range`` turns that off.
 - uPlot auto-scales y to the data's extent however small, so a quantity that is constant
   up to round-off (an energy that RK4 keeps to 1e-9) shows as a steep line with equal tick
-  labels. When the y values span less than :func:`min_y_span` the y scale is pinned to a
-  range of that span around them (and kept while the values stay flat and inside it), so
-  the line looks flat. A ``y_range`` in the spec always wins.
+  labels. When the y values span less than :func:`min_y_span` (1 % of their magnitude) the
+  y scale is pinned to ± that span around them (and kept while the values stay flat and
+  inside it), so the line looks flat. A ``y_range`` in the spec always wins.
 """
 
 from __future__ import annotations
@@ -170,7 +170,7 @@ Y_MIN_ABS_SPAN = 1e-12
 
 
 def min_y_span(lo: float, hi: float) -> float:
-    """The least span of the y axis for values in ``[lo, hi]`` (below it, differences are round-off)."""
+    """The least y span shown for values in ``[lo, hi]``: values that vary less are drawn as flat."""
     return max(Y_MIN_REL_SPAN * max(abs(lo), abs(hi)), Y_MIN_ABS_SPAN)
 
 
