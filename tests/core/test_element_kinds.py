@@ -150,6 +150,18 @@ def test_every_style_and_property_type_has_its_handlers() -> None:
     assert set(_PROP_COMPILERS) <= set(PROP_TYPES)
 
 
+def test_the_runtime_record_of_a_3d_element_is_checked_against_the_declarations() -> None:
+    """An app (or a script) that names a kind or property no kind declares hears so at once,
+    instead of the property being silently dropped from the world."""
+    Node3D("sphere", "ball", props={"radius": 0.1})
+    with pytest.raises(ValueError, match=r"lab.ejs.yaml:3:5: a sphere has no property 'radus'; did you mean 'radius'\?"):
+        Node3D("sphere", "ball", props={"radus": 0.1}, where="lab.ejs.yaml:3:5")
+    with pytest.raises(ValueError, match=r"unknown 3D element kind 'cylindre'; did you mean 'cylinder'\?"):
+        Node3D("cylindre", "post")
+    with pytest.raises(ValueError, match=r"a group has no property 'size' \(it has: none\)"):
+        Node3D("group", "g", props={"size": 1.0})
+
+
 def test_the_dead_copies_of_the_kind_lists_are_gone() -> None:
     import ejsrl.view.elements as elements
 

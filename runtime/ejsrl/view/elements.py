@@ -332,6 +332,24 @@ class Node3D(Element):
     set: Callable[[Any, Any], None] | None = None
     on_change: Callable[[Any], None] | None = None
 
+    def __post_init__(self) -> None:
+        from difflib import get_close_matches
+
+        from ejsrl.world.kinds import KINDS  # imported here: the world package imports this module
+
+        decl = KINDS.get(self.kind)
+        at = f"{self.where}: " if self.where else ""
+        if decl is None:
+            close = get_close_matches(self.kind, list(KINDS), n=1)
+            hint = f"; did you mean {close[0]!r}?" if close else f" (kinds: {', '.join(KINDS)})"
+            raise ValueError(f"{at}unknown 3D element kind {self.kind!r}{hint}")
+        known = [p.name for p in decl.props if p.is_value]
+        for key in self.props:
+            if key not in known:
+                close = get_close_matches(key, known, n=1)
+                hint = f"; did you mean {close[0]!r}?" if close else f" (it has: {', '.join(known) or 'none'})"
+                raise ValueError(f"{at}a {self.kind} has no property {key!r}{hint}")
+
 
 @dataclass
 class Scene(Element):
