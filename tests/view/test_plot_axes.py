@@ -114,3 +114,33 @@ def test_a_y_range_in_the_spec_wins_over_the_flat_range(served):
     b = _binding(served, y_range=(0.0, 0.5))
     _play(b, 0.0, 2.0, 0.01, lambda t: 0.196)
     assert _y(b) == {"auto": False, "range": [0.0, 0.5]}
+
+
+def test_the_tutorials_energy_plot_is_flat_and_its_angle_plot_shows_the_last_10_s(tmp_path):
+    # the lab the user tried: tutorial step 2 (RK4 pendulum, window 10), played 12 s
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from ejsrl.view.viser_view import ViserView, make_server
+    from tests.conftest import EXAMPLES
+
+    app = load_app(build(EXAMPLES / "tutorial" / "step2_plot.ejs.yaml", tmp_path / "app"))
+    server, _url = make_server("127.0.0.1", 0)
+    try:
+        view = ViserView(app, server)
+        angle, energy = view.panel.plots
+        energies = []
+        while app.model.t < 12.0:
+            for _ in range(5):
+                app.step_once()
+            energies.append(app.model.E)
+            view.on_frame()
+        t = app.model.t
+        assert _x_range(angle) == pytest.approx((t - 10.0, t))
+        assert _x_range(energy) == pytest.approx((t - 10.0, t))
+        lo, hi = _y(energy)["range"]
+        drift = max(energies) - min(energies)
+        assert 0 < drift < 1e-6 * (hi - lo)  # RK4's drift is there, and invisible on the axis
+        assert lo < min(energies) and max(energies) < hi
+        assert _y(angle) == {"auto": True}  # the angle swings: auto-scaled
+    finally:
+        server.stop()
