@@ -162,6 +162,13 @@ def test_the_runtime_record_of_a_3d_element_is_checked_against_the_declarations(
         Node3D("group", "g", props={"size": 1.0})
 
 
+def test_a_declaration_with_an_unknown_type_or_style_is_refused() -> None:
+    with pytest.raises(ValueError, match="unknown property type 'vector3'"):
+        Prop("tip", "vector3", REQUIRED, "Where its tip is.")
+    with pytest.raises(ValueError, match="unknown drawing style 'cone'"):
+        Kind("cone", "A cone.", (), draw="cone")
+
+
 def test_the_dead_copies_of_the_kind_lists_are_gone() -> None:
     import ejsrl.view.elements as elements
 

@@ -75,6 +75,10 @@ class Prop:
     ge: int | None = None
     le: int | None = None
 
+    def __post_init__(self) -> None:
+        if self.type not in PROP_TYPES:
+            raise ValueError(f"property {self.name!r}: unknown property type {self.type!r} (types: {', '.join(sorted(PROP_TYPES))})")
+
     @property
     def required(self) -> bool:
         """The spec must give this property."""
@@ -115,6 +119,10 @@ class Kind:
     two_sided: bool = False
     node_extra: dict[str, Any] = field(default_factory=dict)
     node_module: str | None = None
+
+    def __post_init__(self) -> None:
+        if self.draw not in DRAW_STYLES:
+            raise ValueError(f"kind {self.name!r}: unknown drawing style {self.draw!r} (styles: {', '.join(DRAW_STYLES)})")
 
     def prop(self, name: str) -> Prop:
         """The own property called ``name``."""
