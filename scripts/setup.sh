@@ -17,4 +17,12 @@ if [ ${#need[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null
 fi
-python3 -m pip install -q --disable-pip-version-check -e ".[test]"
+# The package itself: built and installed as a wheel, as students get it (CI tests that), or
+# with --editable for development in this checkout.
+if [ "${1:-}" = "--editable" ]; then
+  python3 -m pip install -q --disable-pip-version-check -e ".[test]"
+else
+  python3 -m pip install -q --disable-pip-version-check ".[test]"
+  # replaces an earlier editable install of this checkout, if any
+  python3 -m pip install -q --disable-pip-version-check --force-reinstall --no-deps .
+fi

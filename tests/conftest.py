@@ -2,29 +2,11 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
-EXAMPLES = ROOT / "examples"
-ARTIFACTS = ROOT / "test-artifacts"
-
-
-def imported_modules(path: Path) -> set[str]:
-    """Every module a Python file imports by absolute name, at its top or inside functions."""
-    import ast
-
-    out: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
-        if isinstance(node, ast.Import):
-            out.update(a.name for a in node.names)
-        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
-            out.add(node.module)
-    return out
+from testkit import ARTIFACTS, EXAMPLES
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -53,9 +35,3 @@ def built(tmp_path_factory: pytest.TempPathFactory):
         return cache[name]
 
     return _build
-
-
-def run_app(app_dir: Path, *args: str, timeout: float = 300) -> subprocess.CompletedProcess[str]:
-    """Run a built app's ``app.py`` with arguments; returns the finished process."""
-    env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
-    return subprocess.run([sys.executable, str(app_dir / "app.py"), *args], capture_output=True, text=True, timeout=timeout, env=env)

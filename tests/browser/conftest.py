@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from browser_helpers import ARTIFACTS
+from testkit.browser import ARTIFACTS
 
 CHROMIUM = "/usr/bin/chromium"
 ARGS = [

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from browser_lab import make_app
-from browser_helpers import ARTIFACTS, wait_until
+from testkit.browser_lab import make_app
+from testkit.browser import ARTIFACTS, wait_until
 
 
 # served_app comes first in the tests' arguments so that it is torn down after the page's

@@ -16,8 +16,8 @@ import threading
 import pytest
 import viser
 
-from browser_helpers import wait_until
-from browser_lab import make_app
+from testkit.browser import wait_until
+from testkit.browser_lab import make_app
 from ejsrl.app import App, AppMeta, SimConfig
 from ejsrl.sim.model import ModelBase
 from ejsrl.view._validate import MAX_TEXT_LENGTH

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from browser_helpers import ARTIFACTS, canvas_pixels, serving, wait_until
-from tests.conftest import ROOT
+from testkit.browser import ARTIFACTS, canvas_pixels, serving, wait_until
+from testkit import ROOT
 
 GALLERY = ROOT / "examples" / "gallery"
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from browser_helpers import ARTIFACTS, canvas_pixels, serving, wait_until
-from tests.conftest import EXAMPLES
+from testkit.browser import ARTIFACTS, canvas_pixels, serving, wait_until
+from testkit import EXAMPLES
 
 
 @pytest.fixture

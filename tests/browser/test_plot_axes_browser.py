@@ -17,7 +17,7 @@ from contextlib import contextmanager
 
 import pytest
 
-from browser_helpers import wait_until
+from testkit.browser import wait_until
 from ejsrl.app import App, AppMeta, SimConfig
 from ejsrl.sim.model import CodePage, ModelBase
 from ejsrl.view.elements import Dynamic, Node3D, Plot, Scene, Series

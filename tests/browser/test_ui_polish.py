@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from browser_helpers import ARTIFACTS, serving, wait_until
+from testkit.browser import ARTIFACTS, serving, wait_until
 from ejsgen.cli import build
 
 TITLE = "A rather long title for a lab, which the panel shows whole"

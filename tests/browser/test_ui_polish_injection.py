@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from browser_helpers import ARTIFACTS, serving, wait_until
+from testkit.browser import ARTIFACTS, serving, wait_until
 from ejsgen.cli import build
 
 SPEC = """\

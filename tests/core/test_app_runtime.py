@@ -13,8 +13,8 @@ import pytest
 
 from ejsrl.app import App, SimConfig, load_app, parse_set
 from ejsrl.view.elements import Button, Slider, Text
-from tests.conftest import run_app
-from tests.fake_clock import FakeClock
+from testkit import run_app
+from testkit.clock import FakeClock
 
 SPECS = Path(__file__).parent / "specs"
 

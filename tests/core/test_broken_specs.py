@@ -35,7 +35,7 @@ def test_broken_spec_is_reported_at_its_place(spec: Path, capsys: pytest.Capture
 
 def test_validate_reports_from_a_separate_process_without_traceback() -> None:
     spec = next(p for p in BROKEN if p.name == "unknown_name_rate.ejs.yaml")
-    r = subprocess.run([sys.executable, "-m", "ejsgen", "validate", str(spec)], capture_output=True, text=True)
+    r = subprocess.run([sys.executable, "-P", "-m", "ejsgen", "validate", str(spec)], capture_output=True, text=True)
     assert r.returncode == 1
     assert "did you mean 'theta'?" in r.stderr
     assert "Traceback" not in r.stderr

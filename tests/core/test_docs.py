@@ -24,7 +24,7 @@ from scipy.special import ellipk
 
 from ejsgen.cli import main
 from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, Model, Ode, OdeEvent, Program, Simulation, Spec, Variable
-from tests.conftest import EXAMPLES, ROOT
+from testkit import EXAMPLES, ROOT
 
 LANGUAGE = ROOT / "specs" / "language.md"
 TUTORIAL = ROOT / "specs" / "tutorial.md"

@@ -14,7 +14,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.special import ellipk
 
-from tests.conftest import run_app
+from testkit import run_app
 
 
 def csv_columns(text: str) -> dict[str, np.ndarray]:

@@ -18,7 +18,7 @@ import pytest
 
 from ejsgen.cli import build, load_plan, main
 from ejsgen.generate import render_app
-from tests.conftest import EXAMPLES, ROOT, run_app
+from testkit import EXAMPLES, ROOT, run_app
 
 GOLDEN = Path(__file__).parent / "golden"
 CORE_EXAMPLES = ["pendulum", "bouncing_ball", "lorenz", "van_der_pol", "mass_spring_chain"]
@@ -148,7 +148,7 @@ def test_new_says_a_command_that_pastes_into_a_shell_for_a_name_with_spaces(
 
 def test_run_passes_options_to_the_app(tmp_path: Path) -> None:
     r = subprocess.run(
-        [sys.executable, "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--headless", "--duration", "0.1", "--csv", "-", "--vars", "t"],
+        [sys.executable, "-P", "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--headless", "--duration", "0.1", "--csv", "-", "--vars", "t"],
         capture_output=True, text=True, timeout=120,
     )
     assert r.returncode == 0, r.stderr

@@ -102,7 +102,7 @@ def _generated_locals(app: Path) -> set[str]:
 
 
 def test_every_name_a_built_app_binds_is_refused_as_an_import(built, tmp_path: Path) -> None:
-    from tests.conftest import EXAMPLES
+    from testkit import EXAMPLES
 
     reserved: set[str] = set()
     for name in EXAMPLES_BUILT:

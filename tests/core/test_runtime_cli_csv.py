@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ejsrl.app import parse_set
-from tests.conftest import run_app
+from testkit import run_app
 
 SPEC = """\
 ejs: 1

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import EXAMPLES, run_app
+from testkit import EXAMPLES, run_app
 
 STATUS = {signal.SIGINT: 130, signal.SIGTERM: 143}
 
@@ -123,7 +123,7 @@ def test_ejsgen_run_stops_the_app_and_removes_its_temporary_folder(tmp_path, sig
     tmp.mkdir()
     port = free_port()
     proc = start(
-        [sys.executable, "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--port", str(port)],
+        [sys.executable, "-P", "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--port", str(port)],
         tmp_path / "o", tmp_path / "e", env={"TMPDIR": str(tmp)},
     )
     try:
@@ -145,7 +145,7 @@ def test_ejsgen_run_stopped_while_building_leaves_nothing_behind(tmp_path) -> No
     tmp = tmp_path / "tmp"
     tmp.mkdir()
     proc = start(
-        [sys.executable, "-m", "ejsgen", "run", str(EXAMPLES / "paper" / "six_axis_kinematics.ejs.yaml"), "--port", str(free_port())],
+        [sys.executable, "-P", "-m", "ejsgen", "run", str(EXAMPLES / "paper" / "six_axis_kinematics.ejs.yaml"), "--port", str(free_port())],
         tmp_path / "o", tmp_path / "e", env={"TMPDIR": str(tmp)},
     )
     try:
@@ -175,7 +175,7 @@ def test_ctrl_c_while_the_app_is_starting_up_prints_no_traceback(tmp_path) -> No
     tmp = tmp_path / "tmp"
     tmp.mkdir()
     proc = start(
-        [sys.executable, "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--port", str(free_port())],
+        [sys.executable, "-P", "-m", "ejsgen", "run", str(EXAMPLES / "pendulum.ejs.yaml"), "--port", str(free_port())],
         tmp_path / "o", tmp_path / "e", env={"TMPDIR": str(tmp)},
     )
     try:

@@ -13,7 +13,7 @@ import pytest
 
 from ejsrl.app import App, load_app
 from ejsrl.view.elements import Button, Control
-from tests.conftest import EXAMPLES
+from testkit import EXAMPLES
 
 G = 9.81
 

@@ -13,7 +13,7 @@ import pytest
 
 import ejsrl.app
 import ejsrl.world
-from tests.conftest import imported_modules
+from testkit import imported_modules
 
 RUNTIME = Path(ejsrl.world.__file__).resolve().parents[1]
 SPECS = Path(__file__).parent / "specs"

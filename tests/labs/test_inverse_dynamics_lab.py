@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from labs_helpers import LABS, headless, vector
+from testkit.labs import LABS, headless, vector
 
 from ejsrl.robotics import models
 from ejsrl.robotics.transforms import transl

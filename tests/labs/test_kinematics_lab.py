@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from labs_helpers import LABS, dh_frames, headless, matrices, vector
+from testkit.labs import LABS, dh_frames, headless, matrices, vector
 
 # the paper's table (figure 4): (d, a, alpha, offset) with L1 = 0.45, A2 = 0.40, L4 = 0.40, L6 = 0.10
 TABLE = [(0.45, 0.0, -np.pi / 2, np.pi / 2), (0.0, 0.40, 0.0, -np.pi / 2), (0.0, 0.0, np.pi / 2, np.pi),

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from labs_helpers import LABS
+from testkit.labs import LABS
 
 from ejsrl.view.elements import Button, Control, Folder, Tabs
 

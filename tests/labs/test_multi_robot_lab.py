@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from labs_helpers import LABS, dh_frames, headless, matrices, vector
+from testkit.labs import LABS, dh_frames, headless, matrices, vector
 
 from ejsrl.robotics import models
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from labs_helpers import LABS, headless, vector
+from testkit.labs import LABS, headless, vector
 
 Q0 = np.radians([0, 45, -180, 0, 45, 0])
 QF = np.radians([90, 10, -110, 60, -60, 90])

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ejsrl.app import load_app
-from tests.conftest import EXAMPLES
+from testkit import EXAMPLES
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from labs_helpers import LABS, dh_frames, headless, settle_time, vector
+from testkit.labs import LABS, dh_frames, headless, settle_time, vector
 
 TARGETS = np.array([np.pi / 2, np.pi / 3, -np.pi / 4])
 VARS = "t,q,qd,i,V,tau,saturated"

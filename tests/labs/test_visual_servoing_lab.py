@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from labs_helpers import LABS, dh_frames, headless, pinhole, vector
+from testkit.labs import LABS, dh_frames, headless, pinhole, vector
 
 # Puma 560 standard DH (d, a, alpha, offset), as published (Corke & Armstrong-Helouvry)
 PUMA = [(0.67183, 0.0, np.pi / 2, 0), (0.0, 0.4318, 0.0, 0), (0.15005, 0.0203, -np.pi / 2, 0),

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from robotics_helpers import FIXTURES
+from testkit.robotics import FIXTURES
 
 
 @pytest.fixture(scope="session")

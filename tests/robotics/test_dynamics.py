@@ -8,7 +8,7 @@ from scipy.integrate import solve_ivp
 
 from ejsrl.robotics import Robot, models
 
-from robotics_helpers import ALL_MODELS, random_q, with_base_tool
+from testkit.robotics import ALL_MODELS, random_q, with_base_tool
 
 DYN_MODELS = list(ALL_MODELS)
 

@@ -10,7 +10,7 @@ from ejsrl.robotics import models
 from ejsrl.robotics.ik import ikine_a_all, pose_error
 from ejsrl.robotics.transforms import transl
 
-from robotics_helpers import random_q, with_base_tool
+from testkit.robotics import random_q, with_base_tool
 
 
 @pytest.mark.parametrize(("make", "count"), [(models.puma560, 1000), (models.stanford, 1000), (models.ur5, 1000),

@@ -13,7 +13,7 @@ import pytest
 from ejsrl.robotics import Robot, _kernels
 from ejsrl.robotics.transforms import rpy2tr, transl
 
-from robotics_helpers import ALL_MODELS, random_q, with_base_tool
+from testkit.robotics import ALL_MODELS, random_q, with_base_tool
 
 TOL = dict(rtol=1e-10, atol=1e-10)
 

@@ -8,7 +8,7 @@ import pytest
 from ejsrl.robotics import Link, Robot, models
 from ejsrl.robotics.transforms import vex
 
-from robotics_helpers import ALL_MODELS, random_q, with_base_tool
+from testkit.robotics import ALL_MODELS, random_q, with_base_tool
 
 
 def fd_jacob0(robot: Robot, q: np.ndarray, h: float = 1e-6) -> np.ndarray:

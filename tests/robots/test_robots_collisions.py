@@ -15,7 +15,7 @@ from ejsrl.robotics import models
 from ejsrl.robotics.transforms import rpy2tr, transl
 from ejsrl.view.elements import Dynamic, Node3D
 
-from robots_lab import Model, random_q, robot, scene
+from testkit.robots import Model, random_q, robot, scene
 
 
 def box(name: str, position, size=(0.1, 0.1, 0.1), **kw) -> Node3D:
@@ -135,7 +135,7 @@ def test_a_grasped_object_does_not_collide_with_its_gripper_but_with_the_world()
 def test_collisions_from_model_code_in_a_built_app(tmp_path) -> None:
     from ejsgen.cli import build
 
-    from robots_lab import load_built
+    from testkit.robots import load_built
 
     spec = tmp_path / "cell.ejs.yaml"
     spec.write_text(

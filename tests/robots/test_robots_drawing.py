@@ -19,7 +19,7 @@ from ejsrl.view.elements import Dynamic, Node3D
 from ejsrl.world.binding import SceneSync
 from ejsrl.world.robot_node import LinkNode, RobotNode
 
-from robots_lab import Model, random_q, robot, scene
+from testkit.robots import Model, random_q, robot, scene
 
 ARMS = {"puma560": models.puma560, "ur5": models.ur5, "pa10": models.pa10, "stanford": models.stanford, "scara": models.scara}
 

@@ -16,8 +16,8 @@ import pytest
 from ejsrl.view.elements import Button, Folder, Number, Slider
 from ejsrl.world.mesh import load_mesh
 
-from robots_lab import load_built
-from tests.conftest import EXAMPLES, run_app
+from testkit.robots import load_built
+from testkit import EXAMPLES, run_app
 
 L1, A2, L4, L6 = 0.45, 0.40, 0.40, 0.10
 #: the paper's table, per joint: (theta offset, d, a, alpha)

@@ -17,8 +17,8 @@ from ejsrl.robotics.trajectory import jtraj
 from ejsrl.robotics.transforms import rpy2tr, transl
 from ejsrl.view.elements import Dynamic, Node3D
 
-from robots_lab import Model, load_built, robot, scene
-from tests.conftest import run_app
+from testkit.robots import Model, load_built, robot, scene
+from testkit import run_app
 
 SPECS = Path(__file__).resolve().parent / "specs"
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.conftest import run_app
+from testkit import run_app
 
 G = 9.81
 

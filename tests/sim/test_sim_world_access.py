@@ -15,7 +15,7 @@ import pytest
 import ejsrl.sim
 from ejsrl.sim.model import Controller
 from ejsrl.sim.world_access import WorldAccess, WorldFunctionsAccess
-from tests.conftest import imported_modules
+from testkit import imported_modules
 
 ROOT = Path(__file__).resolve().parents[2]
 SIM = Path(ejsrl.sim.__file__).parent

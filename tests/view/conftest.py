@@ -3,8 +3,8 @@ from __future__ import annotations
 import pytest
 
 from ejsrl.view.viser_view import ViserView, make_server
-from tests.fake_clock import FakeClock
-from view_lab import make_app
+from testkit.clock import FakeClock
+from testkit.view_lab import make_app
 
 
 class Served:

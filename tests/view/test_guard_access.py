@@ -19,8 +19,8 @@ import ejsrl.view._guard as guard_module
 from ejsrl.app import main
 from ejsrl.view._guard import MAX_MESSAGE_BYTES, VISER_TESTED, guard_of, parse_origin, start_server
 from ejsrl.view.viser_view import ViserView, make_server
-from guard_client import Client, gui_update, run_async
-from view_lab import LabModel, make_app, make_view
+from testkit.guard_client import Client, gui_update, run_async
+from testkit.view_lab import LabModel, make_app, make_view
 
 
 def _run(coro):

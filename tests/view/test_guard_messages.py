@@ -9,7 +9,7 @@ import math
 
 import pytest
 
-from guard_client import CAMERA, Client, gui_update, run_async
+from testkit.guard_client import CAMERA, Client, gui_update, run_async
 
 
 def _uuid(served, label: str) -> str:

@@ -22,7 +22,7 @@ class Recorded:
 
     def __init__(self, **sim) -> None:
         from ejsrl.view.viser_view import ViserView, make_server
-        from view_lab import make_app
+        from testkit.view_lab import make_app
 
         self.app = make_app(**sim)
         self.server, _url = make_server("127.0.0.1", 0)

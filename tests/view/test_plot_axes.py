@@ -121,7 +121,7 @@ def test_the_tutorials_energy_plot_is_flat_and_its_angle_plot_shows_the_last_10_
     from ejsgen.cli import build
     from ejsrl.app import load_app
     from ejsrl.view.viser_view import ViserView, make_server
-    from tests.conftest import EXAMPLES
+    from testkit import EXAMPLES
 
     app = load_app(build(EXAMPLES / "tutorial" / "step2_plot.ejs.yaml", tmp_path / "app"))
     server, _url = make_server("127.0.0.1", 0)

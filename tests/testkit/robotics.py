@@ -10,7 +10,7 @@ from ejsrl.robotics import Robot, models
 from ejsrl.robotics.link import PrismaticMDH, RevoluteMDH
 from ejsrl.robotics.transforms import rpy2tr, transl
 
-FIXTURES = Path(__file__).parent / "fixtures"
+FIXTURES = Path(__file__).resolve().parents[1] / "robotics" / "fixtures"
 
 
 def mdh_arm() -> Robot:

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 #: where screenshots go (git-ignored)
-ARTIFACTS = Path(__file__).resolve().parents[2] / "test-artifacts"
+from testkit import ARTIFACTS
 
 
 def wait_until(condition: Callable[[], bool], *, timeout: float = 30.0, what: str = "condition") -> None:

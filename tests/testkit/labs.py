@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tests.conftest import run_app
+from testkit import run_app
 
 #: the labs, as names for the session's ``built`` fixture (examples/<name>.ejs.yaml)
 LABS = {
