@@ -4,6 +4,16 @@ Frames and conventions: the camera frame has z forward (the optical axis), x rig
 y down, as in OpenCV. Pixel coordinates are ``(x, y)`` = (column, row) with the centre of
 pixel ``img[r, c]`` at ``(c, r)``; the image covers ``[-0.5, w - 0.5] x [-0.5, h - 0.5]``.
 ``T_world_camera`` is the (4, 4) pose of the camera frame in the world.
+
+Lens distortion follows OpenCV's (Brown-Conrady) model and its coefficient order
+``(k1, k2, p1, p2, k3)`` (MVTB lists the same five as ``k1, k2, k3, p1, p2``): ideal
+normalised coordinates ``(x, y) = (X/Z, Y/Z)`` with ``r^2 = x^2 + y^2`` become
+
+    x_d = x (1 + k1 r^2 + k2 r^4 + k3 r^6) + 2 p1 x y + p2 (r^2 + 2 x^2)
+    y_d = y (1 + k1 r^2 + k2 r^4 + k3 r^6) + p1 (r^2 + 2 y^2) + 2 p2 x y
+
+and the pixel is ``K (x_d, y_d, 1)``. Pixels "as observed" are distorted; "ideal" pixels
+are those a distortion-free camera with the same K would see.
 """
 
 from __future__ import annotations
@@ -14,7 +24,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["CameraModel", "intrinsics_from_fov", "look_at"]
+__all__ = ["CameraModel", "intrinsics_from_fov", "look_at", "pose_from_rvec"]
 
 Array = NDArray[np.float64]
 
@@ -46,6 +56,44 @@ def intrinsics_from_fov(width: int, height: int, fov_deg: float) -> Array:
     return np.array([[f, 0.0, (width - 1) / 2.0], [0.0, f, (height - 1) / 2.0], [0.0, 0.0, 1.0]])
 
 
+def pose_from_rvec(rvec: ArrayLike, tvec: ArrayLike) -> Array:
+    """OpenCV's pose ``(rvec, tvec)`` (Rodrigues rotation vector, translation) as a (4, 4) matrix."""
+    T = np.eye(4)
+    T[:3, :3] = _rodrigues(np.asarray(rvec, dtype=np.float64).reshape(3))
+    T[:3, 3] = np.asarray(tvec, dtype=np.float64).reshape(3)
+    return T
+
+
+def _rodrigues(r: Array) -> Array:
+    theta = float(np.linalg.norm(r))
+    if theta < 1e-15:
+        return np.eye(3)
+    k = r / theta
+    Kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    return np.eye(3) + math.sin(theta) * Kx + (1.0 - math.cos(theta)) * (Kx @ Kx)
+
+
+def _distortion(coeffs: ArrayLike | None) -> Array:
+    """Coefficients as the 5-vector (k1, k2, p1, p2, k3); 2 (k1, k2) or 4 (no k3) are padded with zeros."""
+    if coeffs is None:
+        return np.zeros(5)
+    d = np.asarray(coeffs, dtype=np.float64).reshape(-1)
+    if len(d) not in (0, 2, 4, 5):
+        raise ValueError(
+            f"distortion takes 5 coefficients (k1, k2, p1, p2, k3), OpenCV's order (or 2 or 4 of them), got {len(d)}"
+        )
+    if not np.all(np.isfinite(d)):
+        raise ValueError(f"distortion coefficients must be finite, got {d.tolist()}")
+    return np.concatenate([d, np.zeros(5 - len(d))])
+
+
+def _pixels(px: ArrayLike, name: str = "pixels") -> Array:
+    arr = np.asarray(px, dtype=np.float64)
+    if arr.shape[-1:] != (2,) and arr.size != 0:
+        raise ValueError(f"{name} must have shape (N, 2) of (x, y), got {arr.shape}")
+    return arr.reshape(-1, 2)
+
+
 def _points(P: ArrayLike) -> Array:
     arr = np.asarray(P, dtype=np.float64)
     if arr.shape[-1] != 3:
@@ -58,7 +106,10 @@ class CameraModel:
 
     Give either ``fov_deg`` (vertical field of view in degrees, square pixels, centred
     principal point) or ``K``; with neither, a 60 degree field of view is used. ``near`` and
-    ``far`` (metres) bound what the renderer draws.
+    ``far`` (metres) bound what the renderer draws. ``distortion``: lens distortion
+    coefficients ``(k1, k2, p1, p2, k3)`` in OpenCV's order (see the module docstring);
+    projecting applies it, :meth:`normalized` and :meth:`backproject` invert it, and
+    :meth:`undistort` / :meth:`distort` convert images.
     """
 
     def __init__(
@@ -70,6 +121,7 @@ class CameraModel:
         *,
         near: float = 0.01,
         far: float = 100.0,
+        distortion: ArrayLike | None = None,
     ) -> None:
         self.width = int(width)
         self.height = int(height)
@@ -80,7 +132,13 @@ class CameraModel:
         if K is None:
             self.K = intrinsics_from_fov(self.width, self.height, 60.0 if fov_deg is None else float(fov_deg))
         else:
-            self.K = np.array(K, dtype=np.float64).reshape(3, 3)
+            K = np.array(K, dtype=np.float64)
+            if K.size == 9:
+                K = K.reshape(3, 3)
+            if K.shape != (3, 3) or not np.all(np.isfinite(K)) or K[0, 0] <= 0 or K[1, 1] <= 0:
+                raise ValueError(f"K must be a finite 3 x 3 matrix with fx, fy > 0, got {K.tolist()}")
+            self.K = K
+        self.distortion = _distortion(distortion)
         self.near = float(near)
         self.far = float(far)
 
@@ -111,6 +169,31 @@ class CameraModel:
         return float(self.K[1, 2])
 
     @property
+    def k1(self) -> float:
+        return float(self.distortion[0])
+
+    @property
+    def k2(self) -> float:
+        return float(self.distortion[1])
+
+    @property
+    def p1(self) -> float:
+        return float(self.distortion[2])
+
+    @property
+    def p2(self) -> float:
+        return float(self.distortion[3])
+
+    @property
+    def k3(self) -> float:
+        return float(self.distortion[4])
+
+    @property
+    def distorted(self) -> bool:
+        """Whether the lens has any distortion."""
+        return bool(np.any(self.distortion != 0.0))
+
+    @property
     def resolution(self) -> tuple[int, int]:
         """(width, height) in pixels."""
         return self.width, self.height
@@ -139,10 +222,9 @@ class CameraModel:
         """Camera-frame points (N, 3) -> pixels (N, 2) as (x, y); nan for points with Z <= 0."""
         P = _points(P_camera)
         with np.errstate(divide="ignore", invalid="ignore"):
-            uvw = P @ self.K.T
-            px = uvw[:, :2] / uvw[:, 2:3]
-        px[P[:, 2] <= 0] = np.nan
-        return px
+            xy = P[:, :2] / P[:, 2:3]
+        xy[P[:, 2] <= 0] = np.nan
+        return self.denormalized(xy)
 
     def project(self, P_world: ArrayLike, T_world_camera: ArrayLike) -> Array:
         """World points (N, 3) seen by a camera at ``T_world_camera`` (4, 4) -> pixels (N, 2) (x, y).
@@ -156,17 +238,146 @@ class CameraModel:
         return self.world_to_camera(P_world, T_world_camera)[:, 2]
 
     def normalized(self, pixels: ArrayLike) -> Array:
-        """Pixels (N, 2) (x, y) -> normalised image coordinates (N, 2), i.e. (X/Z, Y/Z)."""
-        px = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        """Pixels (N, 2) (x, y), as observed -> ideal normalised coordinates (N, 2), i.e. (X/Z, Y/Z).
+
+        With lens distortion the distortion is inverted (Newton's method, to ~1e-12).
+        """
+        px = _pixels(pixels)
         h = np.column_stack([px, np.ones(len(px))])
-        return (h @ np.linalg.inv(self.K).T)[:, :2]
+        xy = (h @ np.linalg.inv(self.K).T)[:, :2]
+        return self.undistort_normalized(xy) if self.distorted else xy
 
     def denormalized(self, xy: ArrayLike) -> Array:
-        """Normalised image coordinates (N, 2) -> pixels (N, 2) (x, y)."""
-        n = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        """Ideal normalised coordinates (N, 2) -> pixels (N, 2) (x, y) as observed (distortion applied)."""
+        n = _pixels(xy, "xy")
+        if self.distorted:
+            n = self.distort_normalized(n)
         h = np.column_stack([n, np.ones(len(n))])
         uvw = h @ self.K.T
         return uvw[:, :2] / uvw[:, 2:3]
+
+    # -- lens distortion --------------------------------------------------------------------
+    def distort_normalized(self, xy: ArrayLike) -> Array:
+        """Ideal normalised coordinates (N, 2) -> distorted normalised coordinates (N, 2)."""
+        n = _pixels(xy, "xy")
+        k1, k2, p1, p2, k3 = self.distortion
+        x, y = n[:, 0], n[:, 1]
+        r2 = x * x + y * y
+        radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+        return np.column_stack(
+            [x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x), y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y]
+        )
+
+    def undistort_normalized(self, xy_distorted: ArrayLike, *, iterations: int = 30) -> Array:
+        """Distorted normalised coordinates (N, 2) -> ideal ones (N, 2), by Newton's method.
+
+        Converges where the distortion is invertible (inside the image for any real lens);
+        a point where it does not converge comes back as nan.
+        """
+        target = _pixels(xy_distorted, "xy_distorted")
+        k1, k2, p1, p2, k3 = self.distortion
+        n = target.copy()
+        for _ in range(iterations):
+            x, y = n[:, 0], n[:, 1]
+            r2 = x * x + y * y
+            radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3))
+            drad = k1 + r2 * (2.0 * k2 + 3.0 * k3 * r2)  # d radial / d r^2
+            res = self.distort_normalized(n) - target
+            a = radial + 2.0 * x * x * drad + 2.0 * p1 * y + 6.0 * p2 * x
+            b = 2.0 * x * y * drad + 2.0 * p1 * x + 2.0 * p2 * y
+            d = radial + 2.0 * y * y * drad + 6.0 * p1 * y + 2.0 * p2 * x
+            det = a * d - b * b
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = np.column_stack([(d * res[:, 0] - b * res[:, 1]) / det, (a * res[:, 1] - b * res[:, 0]) / det])
+            n = n - step
+            if np.nanmax(np.abs(step), initial=0.0) < 1e-14:
+                break
+        with np.errstate(invalid="ignore"):
+            bad = np.abs(self.distort_normalized(n) - target).max(axis=1) > 1e-9
+        n[bad] = np.nan
+        return n
+
+    def distort_points(self, pixels: ArrayLike) -> Array:
+        """Ideal pixels (N, 2) (distortion-free, same K) -> pixels as observed through the lens."""
+        px = _pixels(pixels)
+        h = np.column_stack([px, np.ones(len(px))])
+        return self.denormalized((h @ np.linalg.inv(self.K).T)[:, :2])
+
+    def undistort_points(self, pixels: ArrayLike) -> Array:
+        """Observed pixels (N, 2) -> ideal pixels (N, 2): where a distortion-free camera with the same K sees them."""
+        n = self.normalized(pixels)
+        return n @ self.K[:2, :2].T + self.K[:2, 2]
+
+    def _remap(self, img: ArrayLike, source_of: Any, interpolation: str) -> NDArray:
+        import cv2
+
+        arr = np.asarray(img)
+        if arr.ndim not in (2, 3) or arr.shape[0] == 0 or arr.shape[1] == 0:
+            raise ValueError(f"img must be a non-empty H x W or H x W x C image, got shape {arr.shape}")
+        if arr.shape[:2] != (self.height, self.width):
+            raise ValueError(
+                f"img is {arr.shape[1]} x {arr.shape[0]} pixels but the camera is {self.width} x {self.height}"
+            )
+        modes = {"linear": cv2.INTER_LINEAR, "nearest": cv2.INTER_NEAREST, "cubic": cv2.INTER_CUBIC}
+        if interpolation not in modes:
+            raise ValueError(f"interpolation must be one of {sorted(modes)}, got {interpolation!r}")
+        if not self.distorted:
+            return arr.copy()
+        v, u = np.mgrid[0 : self.height, 0 : self.width]
+        src = source_of(np.column_stack([u.ravel(), v.ravel()]).astype(np.float64))
+        maps = np.nan_to_num(src, nan=-1e6).astype(np.float32).reshape(self.height, self.width, 2)
+        return cv2.remap(np.ascontiguousarray(arr), maps[..., 0], maps[..., 1], modes[interpolation], borderMode=cv2.BORDER_CONSTANT)
+
+    def undistort(self, img: ArrayLike, *, interpolation: str = "linear") -> NDArray:
+        """The image (H, W[, C]) a distortion-free camera with the same K would have seen (as ``cv2.undistort``).
+
+        Pixels whose source falls outside the input are black.
+        """
+        return self._remap(img, self.distort_points, interpolation)
+
+    def distort(self, img: ArrayLike, *, interpolation: str = "linear") -> NDArray:
+        """The inverse of :meth:`undistort`: an ideal (pinhole) image (H, W[, C]) as this lens would see it.
+
+        Use it to give a rendered image this camera's distortion; a scene point at ideal
+        pixel p appears at ``distort_points(p)``.
+        """
+        return self._remap(img, self.undistort_points, interpolation)
+
+    # -- pose from points (PnP) -------------------------------------------------------------
+    def estimate_pose(self, P_object: ArrayLike, pixels: ArrayLike, *, method: str = "sqpnp") -> Array:
+        """``T_camera_object`` (4, 4): the pose of an object in the camera frame from N >= 4 of its points.
+
+        ``P_object`` (N, 3): the points in the object's own frame (metres); ``pixels``
+        (N, 2): where they are seen, (x, y) as observed (this camera's K and distortion
+        are used). ``method``: ``"sqpnp"`` (global, any N >= 4 points, default),
+        ``"iterative"`` (Levenberg-Marquardt from a DLT/homography start), ``"ippe"``
+        (coplanar points, z = 0 in the object frame) or ``"epnp"``; every result is refined
+        with Levenberg-Marquardt (OpenCV ``solvePnP`` + ``solvePnPRefineLM``). The camera's
+        pose in the object frame is ``np.linalg.inv(T_camera_object)``; with ``P_object``
+        in world coordinates that is ``T_world_camera``.
+        """
+        import cv2
+
+        methods = {"sqpnp": cv2.SOLVEPNP_SQPNP, "iterative": cv2.SOLVEPNP_ITERATIVE, "ippe": cv2.SOLVEPNP_IPPE, "epnp": cv2.SOLVEPNP_EPNP}
+        if method not in methods:
+            raise ValueError(f"method must be one of {sorted(methods)}, got {method!r}")
+        P = np.asarray(P_object, dtype=np.float64)
+        px = np.asarray(pixels, dtype=np.float64)
+        if P.ndim != 2 or P.shape[1] != 3:
+            raise ValueError(f"P_object must have shape (N, 3), got {P.shape}")
+        if px.ndim != 2 or px.shape[1] != 2:
+            raise ValueError(f"pixels must have shape (N, 2), got {px.shape}")
+        if len(P) != len(px):
+            raise ValueError(f"{len(P)} object points but {len(px)} pixels: give one pixel per point")
+        if len(P) < 4:
+            raise ValueError(f"estimate_pose needs at least 4 points, got {len(P)}")
+        if not (np.all(np.isfinite(P)) and np.all(np.isfinite(px))):
+            raise ValueError("P_object and pixels must be finite (drop the points that were not seen)")
+        ok, rvec, tvec = cv2.solvePnP(P, px, self.K, self.distortion, flags=methods[method])
+        if not ok:
+            raise ValueError("no pose fits these points (are they degenerate, e.g. all on one line?)")
+        rvec, tvec = cv2.solvePnPRefineLM(P, px, self.K, self.distortion, rvec, tvec)
+        return pose_from_rvec(rvec, tvec)
 
     def backproject(self, pixels: ArrayLike, depth: ArrayLike, T_world_camera: ArrayLike | None = None) -> Array:
         """Pixels (N, 2) (x, y) with depths Z (N,) (metres along the optical axis) -> 3-D points (N, 3).
@@ -210,4 +421,5 @@ class CameraModel:
         return out
 
     def __repr__(self) -> str:
-        return f"CameraModel({self.width}x{self.height}, fx={self.fx:.1f}, fy={self.fy:.1f}, cx={self.cx:.1f}, cy={self.cy:.1f})"
+        extra = f", distortion={np.round(self.distortion, 6).tolist()}" if self.distorted else ""
+        return f"CameraModel({self.width}x{self.height}, fx={self.fx:.1f}, fy={self.fy:.1f}, cx={self.cx:.1f}, cy={self.cy:.1f}{extra})"
