@@ -9,7 +9,8 @@ Images are (H, W) uint8 grey or (H, W, 3) uint8 RGB arrays; features are ``(x, y
 from __future__ import annotations
 
 from ejsrl.vision._susan import SUSAN_MASK, susan, susan_corners, susan_edges, usan_area
-from ejsrl.vision.camera import CameraModel, intrinsics_from_fov, look_at
+from ejsrl.vision.camera import CameraModel, intrinsics_from_fov, look_at, pose_from_rvec
+from ejsrl.vision.calibration import Calibration, calibrate_camera, calibrate_chessboard, chessboard_points, find_chessboard
 from ejsrl.vision.color import (
     adjust_brightness_contrast,
     adjust_gamma,
@@ -120,5 +121,7 @@ __all__ = [
     "CameraModel",
     "intrinsics_from_fov",
     "look_at",
+    "pose_from_rvec",
+    "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "find_chessboard",
     *_servo.__all__,
 ]
