@@ -20,7 +20,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from ejsrl.vision._util import as_gray
+from ejsrl.vision._util import as_gray, choice, image_function
 
 __all__ = ["SUSAN_MASK", "usan_area", "susan_corners", "susan_edges", "susan"]
 
@@ -37,6 +37,7 @@ def _lut(t: float) -> NDArray[np.uint8]:
     return np.rint(_SCALE * np.exp(-((d / float(t)) ** 6))).astype(np.uint8)
 
 
+@image_function
 def usan_area(img: NDArray, t: float = 20.0) -> NDArray[np.float32]:
     """The USAN area ``n`` (H, W) float32 in mask pixels (0..37) of each pixel of a grey image.
 
@@ -134,6 +135,7 @@ def _clear_border(resp: NDArray, b: int) -> None:
     resp[:, -b:] = 0
 
 
+@image_function
 def susan_corners(
     img: NDArray,
     t: float = 20.0,
@@ -211,6 +213,7 @@ def susan_corners(
     return (pts, resp) if return_response else pts
 
 
+@image_function
 def susan_edges(
     img: NDArray,
     t: float = 20.0,
@@ -263,13 +266,12 @@ def susan_edges(
     return edges, pts
 
 
+@image_function
 def susan(img: NDArray, t: float = 20.0, *, kind: str = "corners", **options):
     """SUSAN in one call: ``kind="corners"`` -> ``susan_corners``; ``kind="edges"`` -> ``susan_edges``.
 
     ``t``: brightness threshold; other options go to the chosen detector.
     """
-    if kind == "corners":
+    if choice(kind, ("corners", "edges"), "SUSAN kind") == "corners":
         return susan_corners(img, t, **options)
-    if kind == "edges":
-        return susan_edges(img, t, **options)
-    raise ValueError(f"unknown SUSAN kind {kind!r}; use 'corners' or 'edges'")
+    return susan_edges(img, t, **options)

@@ -2,7 +2,8 @@
 
 The derivative operators return float64 images (signed) so students see the sign of the
 gradient; ``normalize`` turns them into viewable uint8. ``x`` is along columns, ``y``
-along rows (down).
+along rows (down). Input: a grey or RGB image (uint8, or another type read as
+``ejsrl.vision._util`` says); bad input is a ``ValueError``.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ejsrl.vision._util import as_gray
+from ejsrl.vision._util import as_gray, choice, image_function
 
 __all__ = ["sobel", "scharr", "prewitt", "roberts", "laplacian", "gradient_magnitude", "canny"]
 
@@ -29,11 +30,11 @@ def _pair(gx: Float, gy: Float, direction: str) -> Float | tuple[Float, Float]:
         return gy
     if direction == "both":
         return gx, gy
-    if direction == "magnitude":
-        return np.hypot(gx, gy)
-    raise ValueError(f"direction must be 'x', 'y', 'both' or 'magnitude', got {direction!r}")
+    choice(direction, ("x", "y", "both", "magnitude"), "direction")
+    return np.hypot(gx, gy)
 
 
+@image_function
 def sobel(img: ArrayLike, direction: str = "magnitude", ksize: int = 3) -> Float | tuple[Float, Float]:
     """Sobel derivative of the grey image (float64).
 
@@ -46,18 +47,21 @@ def sobel(img: ArrayLike, direction: str = "magnitude", ksize: int = 3) -> Float
     return _pair(gx, gy, direction)
 
 
+@image_function
 def scharr(img: ArrayLike, direction: str = "magnitude") -> Float | tuple[Float, Float]:
     """Scharr derivative (a 3x3 kernel more rotation-invariant than Sobel's); see ``sobel``."""
     g = as_gray(img)
     return _pair(cv2.Scharr(g, cv2.CV_64F, 1, 0), cv2.Scharr(g, cv2.CV_64F, 0, 1), direction)
 
 
+@image_function
 def prewitt(img: ArrayLike, direction: str = "magnitude") -> Float | tuple[Float, Float]:
     """Prewitt derivative (kernel [[-1,0,1]]*3 and its transpose); see ``sobel``."""
     g = as_gray(img).astype(np.float64)
     return _pair(cv2.filter2D(g, cv2.CV_64F, _PREWITT_X), cv2.filter2D(g, cv2.CV_64F, _PREWITT_X.T), direction)
 
 
+@image_function
 def roberts(img: ArrayLike, direction: str = "magnitude") -> Float | tuple[Float, Float]:
     """Roberts cross: the two diagonal differences ``I(r,c) - I(r+1,c+1)`` and ``I(r,c+1) - I(r+1,c)``.
 
@@ -71,18 +75,21 @@ def roberts(img: ArrayLike, direction: str = "magnitude") -> Float | tuple[Float
     return _pair(d1, d2, direction)
 
 
+@image_function
 def laplacian(img: ArrayLike, ksize: int = 1) -> Float:
     """Laplacian ``d2I/dx2 + d2I/dy2`` (float64); ``ksize`` 1 is the 4-neighbour kernel."""
     return cv2.Laplacian(as_gray(img), cv2.CV_64F, ksize=int(ksize))
 
 
+@image_function
 def gradient_magnitude(img: ArrayLike) -> NDArray[np.uint8]:
     """Sobel gradient magnitude scaled to uint8 0..255 (for display)."""
     m = sobel(img, "magnitude")
-    top = float(m.max()) if m.size else 0.0  # type: ignore[union-attr]
+    top = float(m.max())  # type: ignore[union-attr]
     return np.zeros(np.shape(m), np.uint8) if top == 0 else np.rint(255.0 * m / top).astype(np.uint8)  # type: ignore[operator]
 
 
+@image_function
 def canny(img: ArrayLike, low: float = 50.0, high: float = 150.0, *, aperture: int = 3, l2: bool = False) -> NDArray[np.uint8]:
     """Canny edges (H, W) uint8 0/255 with hysteresis thresholds ``low`` < ``high`` on the gradient."""
     return cv2.Canny(as_gray(img), float(low), float(high), apertureSize=int(aperture), L2gradient=bool(l2))
