@@ -76,7 +76,15 @@ class App(Controller):
         self.sim = sim or SimConfig()
         self.meta = meta or AppMeta(title=model_cls.__name__)
         self.base_dir = Path(base_dir)
+        self.overrides = overrides
         self.lock = threading.RLock()
+        #: called after a change from the view (a control, a button, Play, Step, Reset): a
+        #: classroom's scheduler then shows it (a paused session is otherwise not stepped)
+        self.on_wake: Callable[[], None] | None = None
+        #: the measured speed while playing: sim time per wall second over the nominal rate
+        #: (1.0: as fast as the lab asks; None: not measured yet, or paused)
+        self.speed: float | None = None
+        self._speed_mark: tuple[float, float, int] | None = None
         self.error: UserCodeError | None = None
         self.error_rev = 0
         self.frame_count = 0
@@ -87,6 +95,8 @@ class App(Controller):
         self._stopped = threading.Event()
         self._world_functions: Any = None
         self._loop_thread: threading.Thread | None = None
+        #: the sessions of a lab served with a simulation per browser tab (``serve(per_client=True)``)
+        self.classroom: Any = None
         self.interrupted: int | None = None
         """A signal's number once SIGINT/SIGTERM asked a headless run to stop (set by ``main``)."""
         self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
@@ -138,10 +148,16 @@ class App(Controller):
             if self.error is None:
                 self.playing = True
                 self._wall0 = None
+        self._wake()
 
     def pause(self) -> None:
         with self.lock:
             self.playing = False
+        self._wake()
+
+    def _wake(self) -> None:
+        if self.on_wake is not None:
+            self.on_wake()
 
     def is_playing(self) -> bool:
         return self.playing
@@ -152,6 +168,7 @@ class App(Controller):
             if self.error is None:
                 self._run_steps(1)
                 self._after_change()
+        self._wake()
 
     def request_reset(self) -> None:
         self._pending = "reset"
@@ -165,6 +182,7 @@ class App(Controller):
             self._pending = "reset"
             self._apply_pending()
             self._refresh_views()
+        self._wake()
 
     def _apply_pending(self) -> None:
         """A reset (paused, the user's settings forgotten) or an initialize (the user's
@@ -187,17 +205,20 @@ class App(Controller):
         """Write an already validated value from the UI, then ``on_change`` and the fixed relations."""
         with self.lock:
             if self.guard(lambda: control.set(self.model, value), control.where) is None and self.error is not None:
+                self._wake()  # shows the error
                 return
             self.remember_user_value(control.bind, control.set, value)
             if control.on_change is not None:
                 self.guard(lambda: control.on_change(self.model), control.where)  # type: ignore[misc]
             self._after_change()
+        self._wake()
 
     def run_action(self, button: Button) -> None:
         """Run a button's action, then the fixed relations."""
         with self.lock:
             self.guard(lambda: button.action(self.model), button.where)
             self._after_change()
+        self._wake()
 
     def apply_gizmo(self, name: str, T_world: Any) -> None:
         """A gizmo was dragged: write its bound pose, run ``on_change`` and the fixed relations."""
@@ -213,6 +234,7 @@ class App(Controller):
                     if element.on_change is not None:
                         self.guard(lambda: element.on_change(self.model), element.where)  # type: ignore[misc]
                     self._after_change()
+                self._wake()
                 return
 
     def _after_change(self) -> None:
@@ -278,8 +300,34 @@ class App(Controller):
             self._apply_pending()
             self._refresh_views()
             self.frame_count += 1
+            self._measure_speed()
             for v in self.views:
                 v.on_frame()
+
+    #: how long the speed is measured over (seconds of the clock)
+    SPEED_WINDOW = 1.0
+
+    def _measure_speed(self) -> None:
+        """Update :attr:`speed`: over the last :data:`SPEED_WINDOW`, sim time per wall second
+        (realtime labs) or frames per second (others) over what the lab asks for."""
+        if not self.playing or self.error is not None:
+            self.speed, self._speed_mark = None, None
+            return
+        now = self.clock()
+        t = self.model._ejs_time() if self.model.INDEPENDENT is not None else None
+        mark = (now, float(t) if t is not None else 0.0, self.frame_count)
+        if self._speed_mark is None:
+            self._speed_mark = mark
+            return
+        wall = now - self._speed_mark[0]
+        if wall < self.SPEED_WINDOW:
+            return
+        if self.sim.realtime and t is not None:
+            speed = (mark[1] - self._speed_mark[1]) / wall
+        else:
+            speed = (mark[2] - self._speed_mark[2]) / (wall * max(float(self.sim.fps), 1.0))
+        self.speed = max(0.0, speed)
+        self._speed_mark = mark
 
     def _realtime_steps(self) -> None:
         now = self.clock()
@@ -310,17 +358,36 @@ class App(Controller):
                 next_time = self.clock()
 
     def stop(self) -> None:
-        """Stop the loop; when it runs in its own thread (``serve(block=False)``), wait for it."""
+        """Stop the loop (and a classroom's sessions); when it runs in its own thread
+        (``serve(block=False)``), wait for it."""
         self._stopped.set()
+        if self.classroom is not None:
+            self.classroom.stop()
         thread = self._loop_thread
         if thread is not None and thread is not threading.current_thread():
             thread.join(timeout=5.0)
 
     # -- serving ----------------------------------------------------------------------------------
     def serve(
-        self, host: str = "127.0.0.1", port: int = 8080, *, block: bool = True, allow_origins: Sequence[str] = ()
+        self,
+        host: str = "127.0.0.1",
+        port: int = 8080,
+        *,
+        block: bool = True,
+        allow_origins: Sequence[str] = (),
+        per_client: bool = False,
+        max_sessions: int | None = None,
+        grace: float | None = None,
+        workers: int | None = None,
     ) -> Any:
         """Start the viser server and the loop; returns the server (its real port: ``get_port()``).
+
+        By default every browser tab shows this app's one simulation (``app.model``). With
+        ``per_client`` (what a generated app does unless ``--shared``), every tab gets a
+        simulation of its own, made like this one (see :mod:`ejsrl.app._sessions`;
+        ``self.classroom`` keeps them): at most ``max_sessions`` tabs at once (default:
+        what this machine's cores can step at full rate, measured on this app), a closed
+        tab's session kept ``grace`` seconds for a reload, stepped by ``workers`` threads.
 
         Only pages served by the app itself may open its websocket (and ``allow_origins``;
         ``"*"``: any); a ``host`` other than this machine's loopback prints a warning.
@@ -329,8 +396,11 @@ class App(Controller):
         from ejsrl.view.viser_view import ViserView, make_server
 
         server, _url = make_server(host, port, allow_origins=allow_origins, label=self.meta.title)
-        view = ViserView(self, server)
-        self.views.append(view)
+        if per_client:
+            self._start_classroom(server, max_sessions=max_sessions, grace=grace, workers=workers)
+        else:
+            view = ViserView(self, server)
+            self.views.append(view)
         port = server.get_port()
         url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "", "::") else host
         print(f"{self.meta.title}: serving on http://{url_host}:{port} (Ctrl+C to stop)", flush=True)
@@ -347,6 +417,23 @@ class App(Controller):
                 file=sys.stderr,
                 flush=True,
             )
+        if self.classroom is not None:
+            print(
+                f"  every browser tab gets its own simulation, up to {self.classroom.max_sessions} at once "
+                "(--max-sessions N to change; --shared: one simulation for everyone)",
+                flush=True,
+            )
+            if not block:
+                return server
+            try:
+                while not self._stopped.wait(0.5):
+                    pass
+            except KeyboardInterrupt:
+                pass
+            finally:
+                self.classroom.stop()
+                server.stop()
+            return server
         if not block:
             self._loop_thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)
             self._loop_thread.start()
@@ -358,6 +445,19 @@ class App(Controller):
         finally:
             server.stop()
         return server
+
+    def _start_classroom(self, server: Any, *, max_sessions: int | None, grace: float | None, workers: int | None) -> None:
+        from ejsrl.app._sessions import GRACE_SECONDS, Classroom, default_max_sessions, measure_frame_cost
+
+        if max_sessions is None:
+            max_sessions = default_max_sessions(measure_frame_cost(self), self.sim.fps)
+
+        def make_app() -> App:
+            return type(self)(self.model_cls, self.view, sim=self.sim, meta=self.meta, base_dir=self.base_dir,
+                              overrides=self.overrides, clock=self.clock)
+
+        self.classroom = Classroom(make_app, server, max_sessions=max_sessions,
+                                   grace=GRACE_SECONDS if grace is None else grace, workers=workers)
 
     # -- headless -----------------------------------------------------------------------------------
     def run_headless(

@@ -2,7 +2,9 @@
 
 ``main`` parses the command line of the language's last section (``--host``, ``--port``,
 ``--headless --duration T [--csv FILE] [--vars a,b,q] [--every N] [--set NAME=VALUE ...]``)
-and serves the app in the browser or runs it headless.
+and serves the app in the browser or runs it headless. Served, every browser tab gets a
+simulation of its own (``--max-sessions N``, ``--grace SECONDS``), or, with ``--shared``,
+every tab shows the same one.
 """
 
 from __future__ import annotations
@@ -131,6 +133,20 @@ def _parser(title: str) -> argparse.ArgumentParser:
         help="also accept the lab's websocket from pages at ORIGIN, e.g. https://labs.example.org behind a proxy "
         "(repeatable; '*' accepts any page and any Host: only behind a proxy you trust). By default only the "
         "lab's own page may connect",
+    )
+    p.add_argument(
+        "--shared", action="store_true",
+        help="one simulation for everyone: every browser tab shows and drives the same one (a lecture demo). "
+        "By default every tab (every student) gets a simulation of its own",
+    )
+    p.add_argument(
+        "--max-sessions", type=int, metavar="N",
+        help="serve at most N tabs at once, each with its own simulation; the next one is told the lab is full "
+        "(default: as many as this machine's cores can run at full speed, measured on this lab at start)",
+    )
+    p.add_argument(
+        "--grace", type=float, default=60.0, metavar="SECONDS",
+        help="keep a closed tab's simulation this long, so that a reload finds it again (default 60)",
     )
     p.add_argument("--headless", action="store_true", help="run without a server")
     p.add_argument("--duration", type=float, help="headless: how long to run, in units of the independent variable")
@@ -276,6 +292,13 @@ def _main(
     except ValueError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
+    if args.max_sessions is not None and args.max_sessions < 1:
+        print("error: --max-sessions must be at least 1", file=sys.stderr)
+        return 2
+    if not math.isfinite(args.grace) or args.grace < 0:
+        print("error: --grace must be a number of seconds >= 0", file=sys.stderr)
+        return 2
     app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
-    app.serve(args.host, args.port, allow_origins=origins)
+    app.serve(args.host, args.port, allow_origins=origins, per_client=not args.shared,
+              max_sessions=args.max_sessions, grace=args.grace)
     return 0

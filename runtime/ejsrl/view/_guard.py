@@ -34,6 +34,7 @@ import http
 import ipaddress
 import logging
 import math
+import re
 import socket
 import threading
 import weakref
@@ -52,6 +53,8 @@ __all__ = [
     "start_server",
     "guard_of",
     "is_loopback",
+    "SESSION_PATH",
+    "session_token",
 ]
 
 log = logging.getLogger("ejsrl.serve")
@@ -70,6 +73,11 @@ MAX_COORDINATE = 1e6
 _VISER_HANDLER = "WebsockServer._background_worker.<locals>.ws_handler"
 
 _WILDCARD_HOSTS = ("0.0.0.0", "", "::")
+
+#: a tab's own address, ``/s/<token>`` (see :mod:`ejsrl.app._sessions`): the page is the
+#: lab's page, and its websocket's path carries the token, so that a reload of the tab
+#: finds its simulation again
+SESSION_PATH = re.compile(r"/s/([A-Za-z0-9_-]{8,64})/?")
 
 
 # -- who may connect ---------------------------------------------------------------------------
@@ -348,6 +356,11 @@ class MessageGuard:
         """Validate values sent for ``handle`` (a viser GUI input) with ``check``."""
         self.checks[handle._impl.uuid] = check
 
+    def unwatch(self, handles: Iterable[Any]) -> None:
+        """Forget the checks of ``handles`` (a closed tab's controls)."""
+        for handle in handles:
+            self.checks.pop(handle._impl.uuid, None)
+
     # -- called on viser's event loop, for every message ---------------------------------------
     def filter(self, connection: Any, raw: Any) -> bytes | None:
         """The message to hand to viser (possibly rewritten), or None to drop it."""
@@ -392,6 +405,9 @@ class MessageGuard:
         if not isinstance(uuid, str) or not isinstance(updates, dict) or set(updates) != {"value"}:
             return None
         handle = self.server.gui._gui_input_handle_from_uuid.get(uuid) if self.server is not None else None
+        if handle is None:  # a control of this tab's own panel (a simulation per tab)
+            owner = self._client(connection)
+            handle = owner.gui._gui_input_handle_from_uuid.get(uuid) if owner is not None else None
         if handle is None:
             return None
         check = self.checks.get(uuid) or generic_check(handle)
@@ -431,6 +447,17 @@ class MessageGuard:
         from viser._messages import GuiUpdateMessage
 
         client._websock_connection.queue_message(GuiUpdateMessage(uuid, {"value": value}))
+
+
+def session_token(server: Any, client_id: int) -> str | None:
+    """The token in the path of client ``client_id``'s websocket (``/s/<token>``), or None."""
+    try:
+        connection = server._websock_server._live_connections.get(client_id)
+        path = connection.request.path if connection is not None and connection.request is not None else ""
+    except AttributeError:
+        return None
+    match = SESSION_PATH.fullmatch(path.partition("?")[0])
+    return match.group(1) if match is not None else None
 
 
 def _default_notify(client: Any, title: str, body: str) -> Any:
@@ -476,6 +503,11 @@ class _Hook:
                     log.warning("ejsrl: refused a connection: %s. If that page should reach the lab, "
                                 "start the lab with --allow-origin %s", why, _suggestion(request.headers))
                 return connection.respond(http.HTTPStatus.FORBIDDEN, f"This lab refuses the request: {why}.\n")
+            session_page = SESSION_PATH.fullmatch(request.path.partition("?")[0])
+            if session_page is not None and "websocket" not in (v.lower() for v in request.headers.get_all("Upgrade")):
+                # a tab's own address (/s/<token>/): the lab's page, the same for every tab
+                query = request.path.partition("?")[2]
+                request.path = "/" + ("?" + query if query else "")
             return inner(connection, request) if inner is not None else None
 
         async def guarded_handler(connection: Any) -> None:

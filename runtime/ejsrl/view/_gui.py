@@ -82,6 +82,17 @@ CLIENT_TWEAKS = (
 )
 
 
+#: below this measured speed (1.0: as fast as the lab asks) the readout says the server is busy
+SLOW_SPEED = 0.95
+
+
+def slow_text(speed: float, realtime: bool) -> str:
+    """What the time readout adds when the server cannot keep up (``speed`` < :data:`SLOW_SPEED`)."""
+    if realtime:
+        return f" · *{speed:.2f}× real time (the server is busy)*"
+    return f" · *running at {speed:.0%} speed (the server is busy)*"
+
+
 def panel_width_for(title: str) -> int:
     """The panel width (pixels) that shows ``title`` whole, and plots and images at a readable size."""
     return int(min(640, max(PANEL_WIDTH, _HEADER_PX + _TITLE_PX_PER_CHAR * len(title))))
@@ -501,6 +512,9 @@ class Panel:
         if value is None or not _finite(value):
             return
         text = f"**{self._time_name}** = {float(value):.6g}"
+        speed = getattr(self.app, "speed", None) if self.app.is_playing() else None
+        if speed is not None and speed < SLOW_SPEED:
+            text += slow_text(speed, bool(getattr(getattr(self.app, "sim", None), "realtime", False)))
         if text != self._readout_shown:
             self.readout.content = text
             self._readout_shown = text

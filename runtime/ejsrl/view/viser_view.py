@@ -78,51 +78,106 @@ def control_check(b: ControlBinding) -> Any:
     return check
 
 
+def _notify_red(client: Any, title: str, body: str) -> list[Any]:
+    """The guard's notification of a refused value: to the client that sent it, kept until closed."""
+    try:
+        return [client.add_notification(title, body, color="red", auto_close_seconds=None)]
+    except Exception:
+        log.debug("notification to a client failed", exc_info=True)
+        return []
+
+
 class ViserView:
     """Shows ``app`` in the browser through ``server`` (a ``viser.ViserServer``).
 
-    Builds the control panel and the 3D scene at construction; afterwards
-    :meth:`on_frame` sends only what changed.
+    With ``client`` (a ``viser.ClientHandle``), the panel and the scene are that tab's own
+    (``client.gui``, ``client.scene``): a simulation per browser tab. Without, they are
+    the server's, which every tab shares. Builds the control panel and the 3D scene at
+    construction; afterwards :meth:`on_frame` sends only what changed.
     """
 
-    def __init__(self, app: Any, server: Any) -> None:
+    def __init__(self, app: Any, server: Any, *, client: Any = None) -> None:
         self.app = app
         self.server = server
+        #: the one browser tab this view shows ``app`` to (a ``viser.ClientHandle``), or None:
+        #: every tab sees the same panel and scene (``--shared``)
+        self.client = client
         self.frames = 0
+        #: frames not sent because the client had not yet received the previous ones
+        self.skipped = 0
+        #: set by a classroom while the client has not taken the last frames: frames are then
+        #: not sent (plots still record their points)
+        self.hold = False
         self._broken: set[str] = set()
-        server.scene.set_up_direction("+z")
-        with server.atomic():
+        self._closed = False
+        target = client if client is not None else server
+        self._target = target
+        target.scene.set_up_direction("+z")
+        with target.atomic():
             clock = getattr(app, "clock", time.monotonic)
-            self.panel = Panel(app, server.gui, self.notify, clock=clock)
-            self.scene = SceneMirror(server.scene, on_gizmo=self._on_gizmo, clock=clock)
+            self.panel = Panel(app, target.gui, self.notify, clock=clock)
+            self.scene = SceneMirror(target.scene, on_gizmo=self._on_gizmo, clock=clock)
             world = self._world()
             if world is not None:
                 with app.lock:
                     self.scene.sync(world)
-        guard = guard_of(server)
+        self._guard = guard = guard_of(server)
         if guard is not None:
-            guard.notify = lambda client, title, body: self.notify(client, title, body, "red")
+            guard.notify = _notify_red
             for b in self.panel.controls:
                 guard.watch(b.handle, control_check(b))
 
-        @server.on_client_connect
-        def _(client: Any) -> None:
-            # a first view that frames the scene's content (metres, z up)
-            try:
-                frame_camera(client.camera, self._world(), app.lock)
-            except Exception:
-                log.debug("framing the camera failed", exc_info=True)
+        if client is not None:
+            self._frame(client)
+        else:
+
+            @server.on_client_connect
+            def _(client: Any) -> None:
+                self._frame(client)
+
+    def _frame(self, client: Any) -> None:
+        """A first view that frames the scene's content (metres, z up)."""
+        try:
+            frame_camera(client.camera, self._world(), self.app.lock)
+        except Exception:
+            log.debug("framing the camera failed", exc_info=True)
+
+    def close(self) -> None:
+        """Forget this view's controls (its client is gone): the guard stops checking them."""
+        self._closed = True
+        if self._guard is not None:
+            self._guard.unwatch(b.handle for b in self.panel.controls)
 
     # -- called by the app's loop -------------------------------------------------------
     def on_frame(self) -> None:
         """Send this frame's changes (the caller holds ``app.lock``)."""
+        if self._closed:
+            return
+        if self.hold:
+            self.skipped += 1
+            self._guarded("plots", self._record_plots)
+            return
         self.frames += 1
-        with self.server.atomic():
+        with self._target.atomic():
             self._guarded("panel", self.panel.refresh)
             world = self._world()
             if world is not None:
                 self._guarded("scene", lambda: self.scene.sync(world))
             self._guarded("alerts", self._show_alerts)
+
+    def adopt(self, old: ViserView) -> None:
+        """Take over the plot data of ``old``, the same app's view in a tab that was reloaded."""
+        for new, previous in zip(self.panel.plots, old.panel.plots):
+            new.buffer = previous.buffer
+            new._sent_rev = -1
+
+    def _record_plots(self) -> None:
+        app = self.app
+        for p in self.panel.plots:
+            x = app.safe_value(p.plot.x, p.plot.where)
+            ys = [app.safe_value(s.y, s.where or p.plot.where) for s in p.plot.series]
+            if x is not None and all(y is not None for y in ys):
+                p.append(x, ys)
 
     def on_reset(self) -> None:
         """Forget accumulated data (plot points, cached images) after a reset."""
@@ -130,11 +185,17 @@ class ViserView:
 
     # -- helpers ----------------------------------------------------------------------------
     def notify(self, client: Any, title: str, body: str, color: str = "blue") -> list[Any]:
-        """Show a notification to ``client``, or to every connected client if None.
+        """Show a notification to ``client``, or to everyone this view shows the app to if
+        None (its own client, or every connected client for a shared view).
 
         Red ones (errors) stay until closed; returns the notification handles.
         """
-        clients = [client] if client is not None else list(self.server.get_clients().values())
+        if client is not None:
+            clients = [client]
+        elif self.client is not None:
+            clients = [] if self._closed else [self.client]
+        else:
+            clients = list(self.server.get_clients().values())
         auto_close = None if color == "red" else 6.0
         handles = []
         for c in clients:

@@ -1,0 +1,419 @@
+"""Classroom serving: a simulation per browser tab.
+
+A served lab gives every tab that connects its own :class:`ejsrl.app.App` (model, control
+panel, plots, images, 3D scene, play/pause and error pause), shown through viser's
+per-client API (``client.gui``, ``client.scene``). :class:`Classroom` keeps the sessions:
+
+- **Created on connect**, up to ``max_sessions`` connected at once; the next tab is told
+  that the lab is full and to try again later (nobody else slows down).
+- **A reload finds its session again.** viser gives a reloaded tab a new client, so each
+  session has a random token that the tab's address carries (``/s/<token>/``, written
+  into the address bar with ``history.replaceState``). The page at that address is the
+  lab's page; its websocket connects to the same path, where the server reads the token.
+  A tab closed for longer than ``grace`` seconds loses its session: it is freed.
+  A copy of the address opened while its tab is still open gets a session of its own.
+- **Idle costs nothing.** A session is stepped by the shared :class:`Scheduler` at the
+  lab's frame rate while it plays, and for a moment after each change a user makes
+  (to show it); a paused session, or one whose tab is gone, is not stepped at all.
+- **A slow tab stalls nobody.** Frames go to a tab only once it has taken the previous
+  ones (viser coalesces what is waiting); a tab that stays behind for
+  :data:`DROP_AFTER_SECONDS` is disconnected with a log line (a reload brings it back).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import gc
+import logging
+import math
+import os
+import secrets
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from ejsrl.app._scheduler import Scheduler, default_workers
+
+__all__ = ["Classroom", "Session", "default_max_sessions", "measure_frame_cost", "GRACE_SECONDS"]
+
+log = logging.getLogger("ejsrl.serve")
+
+#: how long a closed tab's session is kept for a reload (seconds)
+GRACE_SECONDS = 60.0
+#: after a change from the browser, a paused session is refreshed for this long (seconds):
+#: the change shows, and a control the user held gets the model's value back
+IDLE_TAIL_SECONDS = 1.0
+#: messages waiting for a tab above which its frames are skipped (the model still steps)
+SKIP_BACKLOG = 64
+#: ... and above which, held for DROP_AFTER_SECONDS, the tab is disconnected
+DROP_BACKLOG = 256
+DROP_AFTER_SECONDS = 10.0
+#: a tab reloading may connect before its old connection is seen to close: how long the
+#: new one waits for the old one to go before it is given a session of its own (seconds)
+RELOAD_WAIT_SECONDS = 2.0
+#: the share of the machine's cores that sessions may use when the default limit is derived
+CPU_SHARE = 0.8
+MAX_DEFAULT_SESSIONS = 100
+
+
+def _token_script(token: str) -> str:
+    """HTML that writes the session's address into the tab's address bar (no reload)."""
+    js = (
+        "var p=location.pathname.replace(/s\\/[A-Za-z0-9_-]+\\/?$/,'');if(p.slice(-1)!='/')p+='/';"
+        f"history.replaceState(null,'',p+'s/{token}/'+location.search+location.hash);"
+    )
+    return f'<img style="display:none" alt="" src="data:," onerror="{js}">'
+
+
+def _full_text(limit: int) -> str:
+    return (
+        "### This lab is full\n\n"
+        f"All **{limit}** places are taken: every student gets a simulation of their own, and this "
+        "machine cannot run more without slowing everyone down.\n\n"
+        "**Try again later**: reload this page in a few minutes, or ask your teacher."
+    )
+
+
+class Session:
+    """One tab's simulation: its ``app``, the ``view`` showing it (None while the tab is
+    gone) and the ``token`` its address carries."""
+
+    def __init__(self, classroom: Classroom, token: str, client_id: int) -> None:
+        self.classroom = classroom
+        self.token = token
+        self.client_id: int | None = client_id
+        self.app: Any = None
+        self.view: Any = None
+        self.detached_at: float | None = None
+        self.resume_playing = False
+        self.awake_until = -math.inf
+        self.behind_since: float | None = None
+        self.freed = False
+
+    def wake(self) -> None:
+        """A change from the browser: show it (and keep refreshing a moment)."""
+        self.awake_until = self.classroom.clock() + IDLE_TAIL_SECONDS
+        self.classroom.scheduler.wake(self)
+
+    def tick(self, due: float) -> float | None:
+        """One frame (the scheduler's task); when the next one is due, or None to rest."""
+        app, view = self.app, self.view
+        if app is None or view is None or self.freed:
+            return None
+        backlog = self.classroom.backlog(self.client_id)
+        view.hold = backlog > SKIP_BACKLOG
+        app.frame()
+        now = self.classroom.clock()
+        if not (app.is_playing() or now < self.awake_until):
+            return None
+        period = 1.0 / max(float(app.sim.fps), 1.0)
+        nxt = due + period
+        return nxt if nxt >= now else now  # behind: no catching up, back of the queue
+
+
+class Classroom:
+    """The sessions of a served lab (see the module docstring).
+
+    ``make_app()`` builds a new ``App`` (not playing unless the lab autoplays); ``server``:
+    a viser server from :func:`ejsrl.view.viser_view.make_server`; ``max_sessions``: tabs
+    served at once; ``grace``: seconds a closed tab's session is kept for a reload.
+    """
+
+    def __init__(
+        self,
+        make_app: Callable[[], Any],
+        server: Any,
+        *,
+        max_sessions: int,
+        grace: float = GRACE_SECONDS,
+        workers: int | None = None,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.make_app = make_app
+        self.server = server
+        self.max_sessions = max(1, int(max_sessions))
+        self.grace = float(grace)
+        self.clock = clock
+        self.scheduler = Scheduler(workers or default_workers(), clock=clock)
+        self.sessions: dict[str, Session] = {}
+        self._by_client: dict[int, Session] = {}
+        #: the tabs that were told the lab is full
+        self.turned_away: set[int] = set()
+        self.dropped_clients = 0
+        self._lock = threading.Lock()
+        self._stopped = threading.Event()
+        server.on_client_connect(self._connect)
+        server.on_client_disconnect(self._disconnect)
+        self._reaper = threading.Thread(target=self._reap_loop, name="ejsrl-sessions", daemon=True)
+        self._reaper.start()
+
+    # -- queries ---------------------------------------------------------------------------------
+    def session_of(self, client_id: int) -> Session | None:
+        with self._lock:
+            return self._by_client.get(client_id)
+
+    def connected(self) -> list[Session]:
+        """The sessions whose tab is open."""
+        with self._lock:
+            return [s for s in self.sessions.values() if s.client_id is not None]
+
+    def backlog(self, client_id: int | None) -> int:
+        """How many messages wait to be sent to client ``client_id`` (0 if unknown)."""
+        if client_id is None:
+            return 0
+        state = self.server._websock_server._client_state_from_id.get(client_id)
+        if state is None:
+            return 0
+        return len(state.message_buffer.message_from_id)
+
+    # -- connecting and leaving -------------------------------------------------------------------
+    def _connect(self, client: Any) -> None:
+        from ejsrl.view._guard import session_token
+
+        token = session_token(self.server, client.client_id)
+        with self._lock:
+            old = self.sessions.get(token) if token else None
+        if old is not None and old.client_id is not None:
+            # a reload whose old connection is still closing, or a copy of an open tab's address
+            deadline = self.clock() + RELOAD_WAIT_SECONDS
+            while old.client_id is not None and self.clock() < deadline:
+                time.sleep(0.05)
+        with self._lock:
+            if old is not None and old.client_id is None and not old.freed:
+                old.client_id = client.client_id
+                old.detached_at = None
+                self._by_client[client.client_id] = old
+                session, fresh = old, False
+            elif sum(1 for s in self.sessions.values() if s.client_id is not None) >= self.max_sessions:
+                self.turned_away.add(client.client_id)
+                session = None
+            else:
+                token = secrets.token_urlsafe(12)
+                session = Session(self, token, client.client_id)
+                self.sessions[token] = session
+                self._by_client[client.client_id] = session
+                fresh = True
+        if session is None:
+            log.warning("ejsrl: the lab is full (%d sessions); a new tab was turned away", self.max_sessions)
+            self._show_full(client)
+            return
+        try:
+            self._attach(session, client, fresh)
+        except Exception:
+            log.exception("ejsrl: could not start a session")
+            with self._lock:
+                self._by_client.pop(client.client_id, None)
+                if fresh:
+                    self.sessions.pop(session.token, None)
+            self._free(session)
+
+    def _attach(self, session: Session, client: Any, fresh: bool) -> None:
+        from ejsrl.view.viser_view import ViserView
+
+        if fresh:
+            app = self.make_app()
+            app.on_wake = session.wake
+            session.app = app
+        app = session.app
+        old_view = session.view
+        view = ViserView(app, self.server, client=client)
+        client.gui.add_html(_token_script(session.token))
+        with app.lock:
+            if old_view is not None:
+                view.adopt(old_view)
+            app.views = [view]
+            session.view = view
+            if session.resume_playing and app.error is None:
+                app.playing = True
+            session.resume_playing = False
+        with self._lock:
+            gone = session.client_id != client.client_id
+        if gone:  # the tab closed while its panel was being built
+            self._detach(session)
+            return
+        log.info("ejsrl: %s session %s… (%d connected)", "new" if fresh else "reconnected",
+                 session.token[:6], len(self.connected()))
+        session.wake()
+
+    def _disconnect(self, client: Any) -> None:
+        with self._lock:
+            self.turned_away.discard(client.client_id)
+            session = self._by_client.pop(client.client_id, None)
+            if session is None:
+                return
+            session.client_id = None
+            session.detached_at = self.clock()
+        self._detach(session)
+
+    def _detach(self, session: Session) -> None:
+        """The tab is gone: stop stepping the session, keep it for a reload."""
+        self.scheduler.remove(session)
+        app = session.app
+        if app is None:
+            return
+        with app.lock:
+            if session.view is not None:
+                session.resume_playing = bool(app.playing)
+                app.playing = False
+                session.view.close()
+            app.views = []
+        # the old view is kept (closed) until a reload takes its plots over, or it is freed
+        self._trim_detached()
+
+    def _show_full(self, client: Any) -> None:
+        try:
+            client.gui.set_panel_label("This lab is full")
+            client.gui.add_markdown(_full_text(self.max_sessions))
+            client.add_notification("This lab is full", "Try again later: reload this page in a few minutes.",
+                                    color="yellow", auto_close_seconds=None)
+        except Exception:
+            log.debug("telling a client the lab is full failed", exc_info=True)
+
+    # -- freeing ------------------------------------------------------------------------------------
+    def _trim_detached(self) -> None:
+        """Keep at most ``max_sessions`` closed tabs' sessions (the oldest go first)."""
+        with self._lock:
+            detached = sorted((s for s in self.sessions.values() if s.client_id is None and s.detached_at is not None),
+                              key=lambda s: s.detached_at)
+            extra = detached[: max(0, len(detached) - self.max_sessions)]
+            for s in extra:
+                self.sessions.pop(s.token, None)
+        for s in extra:
+            self._free(s)
+
+    def _free(self, session: Session) -> None:
+        session.freed = True
+        self.scheduler.remove(session)
+        app, session.app, session.view = session.app, None, None
+        if app is not None:
+            app.on_wake = None
+            app.views = []
+
+    def _reap_loop(self) -> None:
+        while not self._stopped.wait(0.5):
+            try:
+                self.reap()
+            except Exception:  # noqa: BLE001
+                log.exception("ejsrl: looking after the sessions failed")
+
+    def reap(self) -> int:
+        """Free the sessions of tabs closed longer than ``grace``, and disconnect tabs that
+        stay behind; returns how many sessions were freed."""
+        now = self.clock()
+        with self._lock:
+            expired = [s for s in self.sessions.values()
+                       if s.client_id is None and s.detached_at is not None and now - s.detached_at > self.grace]
+            for s in expired:
+                self.sessions.pop(s.token, None)
+            live = [s for s in self.sessions.values() if s.client_id is not None]
+        for s in expired:
+            self._free(s)
+        if expired:
+            gc.collect()
+            _trim_heap()
+            log.info("ejsrl: freed %d session(s) of closed tabs", len(expired))
+        for s in live:
+            cid = s.client_id
+            backlog = self.backlog(cid)
+            if backlog <= DROP_BACKLOG:
+                s.behind_since = None
+                continue
+            if s.behind_since is None:
+                s.behind_since = now
+            elif now - s.behind_since > DROP_AFTER_SECONDS and cid is not None:
+                s.behind_since = None
+                self.dropped_clients += 1
+                log.warning("ejsrl: disconnected a tab that stayed behind (%d messages waiting for %.0f s); "
+                            "a reload brings its session back", backlog, DROP_AFTER_SECONDS)
+                self._close_connection(cid)
+        return len(expired)
+
+    def _close_connection(self, client_id: int) -> None:
+        ws = self.server._websock_server
+        connection = ws._live_connections.get(client_id)
+        loop = getattr(ws, "_background_event_loop", None)
+        if connection is None or loop is None:
+            return
+        try:
+            asyncio.run_coroutine_threadsafe(connection.close(1008, "the tab fell behind"), loop)
+        except RuntimeError:
+            pass
+
+    def stop(self) -> None:
+        self._stopped.set()
+        self.scheduler.stop()
+        with self._lock:
+            sessions = list(self.sessions.values())
+            self.sessions.clear()
+            self._by_client.clear()
+        for s in sessions:
+            self._free(s)
+
+
+def _trim_heap() -> None:
+    """Give freed memory back to the system (glibc keeps it otherwise)."""
+    try:
+        import ctypes
+
+        ctypes.CDLL("libc.so.6").malloc_trim(0)
+    except Exception:  # noqa: BLE001 - not glibc: nothing to do
+        pass
+
+
+# -- how many sessions fit -----------------------------------------------------------------------
+
+
+def measure_frame_cost(app: Any, frames: int = 12) -> float:
+    """CPU seconds one display frame of ``app`` takes while playing: the steps, the world,
+    and every value its view shows (plots, images, labels, controls). ``app`` is played for
+    ``frames`` frames at its frame rate, then reset."""
+    from ejsrl.view.elements import Control, Dynamic, Folder, Image, Label, Plot, Tabs
+
+    props: list[tuple[Any, str]] = []
+
+    def walk(elements: list[Any]) -> None:
+        for el in elements:
+            if isinstance(el, Folder):
+                walk(el.children)
+            elif isinstance(el, Tabs):
+                for _label, children in el.tabs:
+                    walk(children)
+            elif isinstance(el, Plot):
+                props.append((el.x, el.where))
+                props.extend((s.y, s.where or el.where) for s in el.series)
+            elif isinstance(el, Image):
+                props.append((el.source, el.where))
+                if el.points is not None:
+                    props.append((el.points, el.where))
+            elif isinstance(el, Label):
+                props.append((el.text, el.where))
+            elif isinstance(el, Control):
+                props.append((Dynamic(el.get, el.bind), el.where))
+
+    walk(list(app.view or []))
+    period = 1.0 / max(float(app.sim.fps), 1.0)
+    costs: list[float] = []
+    app.play()
+    try:
+        for _ in range(frames):
+            start = time.thread_time()
+            app.frame()
+            with app.lock:
+                for prop, where in props:
+                    app.safe_value(prop, where)
+            costs.append(time.thread_time() - start)
+            time.sleep(period)
+    finally:
+        app.reset()
+    costs.sort()
+    return costs[len(costs) // 2] if costs else 0.0
+
+
+def default_max_sessions(frame_cost: float, fps: float, cpus: int | None = None) -> int:
+    """How many sessions playing at ``fps`` frames of ``frame_cost`` CPU seconds fit in
+    :data:`CPU_SHARE` of ``cpus`` cores, with the view's own cost (sending the changes)
+    counted as half again; between 2 and :data:`MAX_DEFAULT_SESSIONS`."""
+    n = cpus if cpus is not None else (os.cpu_count() or 1)
+    per_session = max(frame_cost, 1e-4) * 1.5 * max(float(fps), 1.0)
+    return int(min(MAX_DEFAULT_SESSIONS, max(2, math.floor(n * CPU_SHARE / per_session))))
