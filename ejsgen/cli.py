@@ -1,4 +1,4 @@
-"""The ``ejsgen`` command: new, validate, build, run, schema.
+"""The ``ejsgen`` command: new, validate, build, run, schema, docs, sweep.
 
 User errors (bad specs, missing files) print as ``FILE:LINE:COL: error: message`` without a
 traceback and exit with status 1; bad command lines exit with 2.
@@ -243,6 +243,9 @@ def _parser() -> argparse.ArgumentParser:
     from ejsgen._docs import add_parser as _add_docs_parser
 
     _add_docs_parser(sub)
+    from ejsgen.sweep import add_parser as _add_sweep_parser
+
+    _add_sweep_parser(sub)
     return p
 
 
@@ -272,6 +275,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from ejsgen._docs import cmd_docs
 
             return cmd_docs(args)
+        if args.command == "sweep":
+            from ejsgen.sweep import cmd_sweep
+
+            return cmd_sweep(args)
     except EjsError as exc:
         print(exc, file=sys.stderr)
         return 1

@@ -1,0 +1,265 @@
+"""Where a sweep's runs execute: this process, a local process pool, or a Dask cluster.
+
+Every executor runs the same function (:func:`ejsrl.app.sweep_worker.run_batch`) on the
+same batches, so a sweep's results do not depend on where it ran. SIGINT (Ctrl+C) and
+SIGTERM stop a sweep: the runs not yet finished are dropped, the finished ones kept.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any, TextIO
+
+from ejsrl._signals import SignalScope
+from ejsrl.app.sweep_design import Run
+from ejsrl.app.sweep_worker import AppRef, RunOptions, RunResult, loaded, run_batch
+
+__all__ = ["Executor", "Progress", "cpu_count", "execute", "batches", "DASK_HINT"]
+
+DASK_HINT = "Dask is not installed: pip install 'ejsgen[sweep]' (or: pip install 'dask[distributed]')"
+
+
+def cpu_count() -> int:
+    """The cores this process may use."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+@dataclass
+class Executor:
+    """Where to run: ``workers`` processes (0: in this process) on this machine, or on Dask
+    (``dask``: a LocalCluster of ``workers`` processes started here; ``scheduler``: the
+    address of a running cluster's scheduler, ``tcp://host:8786``)."""
+
+    workers: int
+    dask: bool = False
+    scheduler: str | None = None
+
+    def describe(self) -> str:
+        if self.scheduler:
+            return f"the Dask cluster at {self.scheduler}"
+        if self.dask:
+            return f"a Dask LocalCluster of {self.workers} worker{'s' if self.workers != 1 else ''}"
+        if self.workers == 0:
+            return "this process"
+        return f"{self.workers} local worker process{'es' if self.workers != 1 else ''}"
+
+
+class Progress:
+    """Runs done, rate and time left: a bar redrawn in place on a terminal, a line every 10 % elsewhere."""
+
+    def __init__(self, total: int, stream: TextIO | None = None, *, tty: bool | None = None, clock: Callable[[], float] = time.monotonic) -> None:
+        self.total = total
+        self.stream = stream if stream is not None else sys.stderr
+        self.tty = self.stream.isatty() if tty is None else tty
+        self.clock = clock
+        self.start = clock()
+        self.done = 0
+        self.failed = 0
+        self._last_draw = -1.0
+        self._last_decile = 0
+
+    def text(self) -> str:
+        elapsed = max(self.clock() - self.start, 1e-9)
+        rate = self.done / elapsed
+        left = (self.total - self.done) / rate if rate > 0 else math.inf
+        eta = "--:--" if not math.isfinite(left) else _clock_text(left)
+        width = 24
+        filled = int(width * self.done / self.total) if self.total else width
+        bar = "#" * filled + "-" * (width - filled)
+        failed = f"  {self.failed} failed" if self.failed else ""
+        return f"[{bar}] {self.done}/{self.total} runs  {rate:.1f} runs/s  ETA {eta}{failed}"
+
+    def update(self, results: Sequence[RunResult]) -> None:
+        self.done += len(results)
+        self.failed += sum(r.status == "error" for r in results)
+        now = self.clock()
+        if self.tty:
+            if now - self._last_draw >= 0.1 or self.done == self.total:
+                self._last_draw = now
+                self.stream.write("\r" + self.text() + "\x1b[K")
+                self.stream.flush()
+        else:
+            decile = (10 * self.done) // max(self.total, 1)
+            if decile > self._last_decile:
+                self._last_decile = decile
+                print(self.text(), file=self.stream, flush=True)
+
+    def close(self) -> None:
+        if self.tty:
+            self.stream.write("\n")
+            self.stream.flush()
+
+
+def _clock_text(seconds: float) -> str:
+    s = int(round(seconds))
+    h, rest = divmod(s, 3600)
+    m, s = divmod(rest, 60)
+    return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
+
+
+def batches(runs: Sequence[Run], workers: int) -> list[list[Run]]:
+    """The runs in batches: about 16 per worker, so that the work balances and the progress moves,
+    while each task carries enough runs to pay for its dispatch."""
+    size = max(1, len(runs) // (max(workers, 1) * 16))
+    return [list(runs[i : i + size]) for i in range(0, len(runs), size)]
+
+
+class _Stop(Exception):
+    def __init__(self, signum: int) -> None:
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+class _StopOnSignal(SignalScope):
+    """The first SIGINT/SIGTERM raises :class:`_Stop` in the main thread; later ones are ignored."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.signum: int | None = None
+
+    def _handle(self, signum: int, frame: object) -> None:
+        if self.signum is None:
+            self.signum = signum
+            raise _Stop(signum)
+
+
+def _failed_batch(batch: Sequence[Run], exc: BaseException) -> list[RunResult]:
+    text = f"{type(exc).__name__}: {exc}" if str(exc) else type(exc).__name__
+    return [RunResult(r.run, r.settings, "error", f"error: the worker failed: {text}") for r in batch]
+
+
+# -- the local pool ------------------------------------------------------------------------------------
+
+_POOL_REF: AppRef | None = None
+_POOL_OPTIONS: RunOptions | None = None
+
+
+def _pool_init(ref: AppRef, options: RunOptions) -> None:
+    """A pool worker: Ctrl+C in the terminal is for the parent (which stops the pool); import the app now."""
+    global _POOL_REF, _POOL_OPTIONS
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    _POOL_REF, _POOL_OPTIONS = ref, options
+    loaded(ref)
+
+
+def _pool_task(batch: list[Run]) -> list[RunResult]:
+    assert _POOL_REF is not None and _POOL_OPTIONS is not None
+    try:
+        return run_batch(_POOL_REF, batch, _POOL_OPTIONS)
+    except Exception as exc:  # noqa: BLE001 - the app could not even be imported
+        return _failed_batch(batch, exc)
+
+
+def _run_pool(ref: AppRef, work: list[list[Run]], options: RunOptions, workers: int, on_results: Callable[[list[RunResult]], None]) -> None:
+    import multiprocessing as mp
+
+    # fork shares the parent's imported app at no cost; a parent with threads (Dask, a GUI) spawns
+    method = "fork" if sys.platform.startswith("linux") and threading.active_count() == 1 else "spawn"
+    pool = mp.get_context(method).Pool(workers, initializer=_pool_init, initargs=(ref, options))
+    try:
+        it = pool.imap_unordered(_pool_task, work)
+        for _ in range(len(work)):
+            while True:
+                try:
+                    out = it.next(timeout=0.25)
+                    break
+                except mp.TimeoutError:
+                    continue
+            on_results(out)
+        pool.close()
+    except BaseException:
+        pool.terminate()
+        raise
+    finally:
+        pool.join()
+
+
+# -- Dask ----------------------------------------------------------------------------------------------
+
+
+def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Executor, on_results: Callable[[list[RunResult]], None]) -> None:
+    try:
+        import logging
+
+        from distributed import Client, LocalCluster, as_completed
+    except ImportError:
+        raise RuntimeError(DASK_HINT) from None
+    cluster = None
+    if ex.scheduler:
+        client = Client(ex.scheduler, timeout="20s")
+        payload = ref.with_archive()  # the workers may be on other machines
+    else:
+        cluster = LocalCluster(
+            n_workers=max(ex.workers, 1), threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
+        )
+        client = Client(cluster)
+        payload = ref
+    futures: list[Any] = []
+    try:
+        ref_future = client.scatter(payload, broadcast=True)
+        futures = [client.submit(run_batch, ref_future, batch, options, pure=False) for batch in work]
+        batch_of = {f.key: batch for f, batch in zip(futures, work)}
+        for fut in as_completed(futures):
+            try:
+                out = fut.result()
+            except Exception as exc:  # noqa: BLE001 - a worker died, the app could not be imported, ...
+                out = _failed_batch(batch_of[fut.key], exc)
+            on_results(out)
+    finally:
+        for f in futures:
+            f.cancel()
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+# -- the whole sweep -----------------------------------------------------------------------------------
+
+
+def execute(
+    ref: AppRef,
+    runs: Sequence[Run],
+    options: RunOptions,
+    ex: Executor,
+    *,
+    progress: Progress | None = None,
+) -> tuple[list[RunResult], int | None]:
+    """Run every run; returns the results (by run number) and the signal that stopped the sweep, if one did."""
+    results: list[RunResult] = []
+
+    def on_results(out: list[RunResult]) -> None:
+        results.extend(out)
+        if progress is not None:
+            progress.update(out)
+
+    work = batches(runs, ex.workers)
+    stopper = _StopOnSignal()
+    try:
+        with stopper:
+            if ex.dask or ex.scheduler:
+                _run_dask(ref, work, options, ex, on_results)
+            elif ex.workers == 0:
+                for batch in work:
+                    on_results(run_batch(ref, batch, options))
+            else:
+                _run_pool(ref, work, options, min(ex.workers, len(work)), on_results)
+    except _Stop:
+        pass
+    except KeyboardInterrupt:  # before the handlers were in place
+        stopper.signum = stopper.signum or signal.SIGINT
+    finally:
+        if progress is not None:
+            progress.close()
+    results.sort(key=lambda r: r.run)
+    return results, stopper.signum
