@@ -154,6 +154,7 @@ def _parser(title: str) -> argparse.ArgumentParser:
     p.add_argument("--vars", metavar="a,b,q", help="headless: the variables to write (default: every numeric variable)")
     p.add_argument("--every", type=int, default=1, metavar="N", help="headless: write a row every N steps (default 1)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="replace a variable's initial value (repeatable)")
+    p.add_argument("--sweep", action="store_true", help="run many headless runs over parameter values (--sweep --help lists its options)")
     return p
 
 
@@ -208,6 +209,11 @@ def main(
     traceback: a served app stops its server, a headless run keeps the rows written so
     far. The status is then 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
     """
+    args = list(sys.argv[1:] if argv is None else argv)
+    if "--sweep" in args:  # many headless runs: ejsrl.app.sweep has its own options and signal handling
+        from ejsrl.app.sweep import app_sweep
+
+        return app_sweep(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, argv=args)
     stop = _StopSignals()
     status = 1
     with stop:
