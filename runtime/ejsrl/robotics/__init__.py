@@ -4,6 +4,7 @@ Names follow Corke's Robotics Toolbox: ``Robot.fkine``, ``jacob0``, ``ikine``, `
 Everything takes and returns NumPy arrays, SI units and radians.
 
 - :class:`Link`, :class:`Robot`: models and their kinematics and dynamics.
+- :func:`load_urdf`: a ``Robot`` from a URDF file (:class:`ETSLink` links, meshes to draw).
 - :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``planar``, ``rrr``, ``scara``.
 - :mod:`trajectory`: cubic, quintic, LSPB, synchronous/asynchronous, splines, 4-3-4, Cartesian.
 - :mod:`transforms`: rotations, transforms, RPY/Euler, angle-axis, quaternions (wxyz).
@@ -13,14 +14,17 @@ Everything takes and returns NumPy arrays, SI units and radians.
 from __future__ import annotations
 
 from . import transforms
-from .link import Link, PrismaticDH, PrismaticMDH, RevoluteDH, RevoluteMDH
+from .link import ETSLink, Link, PrismaticDH, PrismaticMDH, RevoluteDH, RevoluteMDH
 from .robot import Robot
+from .urdf import load_urdf
 
 from . import models  # noqa: E402  (models need Robot)
 from . import ik, trajectory  # noqa: E402
 
 __all__ = [
     "Link",
+    "ETSLink",
+    "load_urdf",
     "RevoluteDH",
     "PrismaticDH",
     "RevoluteMDH",

@@ -112,6 +112,8 @@ def _joint(P: Params, i: int, qi: Scalar) -> tuple[Scalar, Scalar, Scalar]:
 
 def frames(P: Params, q: Sequence[Scalar], base: Frame) -> list[Frame]:
     """Frames 0..n in the world (frame 0 is ``base``), each ``(x, y, z, p)``."""
+    if getattr(P, "ets", False):  # elementary-transform links (URDF arms): see ._ets
+        return P.frames(q, base)
     x, y, z, p = base
     out = [base]
     for i in range(P.n):
@@ -207,6 +209,8 @@ def rne(P: Params, q: Sequence[Scalar], qd: Sequence[Scalar], qdd: Sequence[Scal
     """Rigid-body joint forces by recursive Newton-Euler, link quantities in link frames
     (the recursion of :func:`._dynamics.rne_rigid_single`). ``a0``: base acceleration
     (``-gravity``) in the base frame."""
+    if getattr(P, "ets", False):  # elementary-transform links (URDF arms): see ._ets
+        return P.rne(q, qd, qdd, a0)
     n = P.n
     w: Vec = [0.0, 0.0, 0.0]
     wd: Vec = [0.0, 0.0, 0.0]

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["Link", "RevoluteDH", "PrismaticDH", "RevoluteMDH", "PrismaticMDH"]
+__all__ = ["Link", "ETSLink", "RevoluteDH", "PrismaticDH", "RevoluteMDH", "PrismaticMDH"]
 
 Array = NDArray[np.float64]
 
@@ -188,3 +188,45 @@ def RevoluteMDH(d: float = 0.0, a: float = 0.0, alpha: float = 0.0, **kw: Any) -
 def PrismaticMDH(theta: float = 0.0, a: float = 0.0, alpha: float = 0.0, **kw: Any) -> Link:
     """Prismatic joint, modified DH."""
     return Link(a, alpha, 0.0, theta, sigma=1, mdh=True, **kw)
+
+
+class ETSLink(Link):
+    """A link given by elementary transforms: a constant transform, then the joint motion.
+
+    ``A_i(q) = origin @ Rz(theta) @ Tz(d)`` with ``theta = q + offset`` (revolute) or
+    ``d = q + offset`` (prismatic): the joint turns about, or slides along, the z axis of
+    its own frame i, which sits at the joint (as in modified DH, of which this is the
+    generalisation: MDH is ``origin = Rx(alpha) Tx(a)``). URDF joints, whose axis may
+    point anywhere, are brought to this form by :mod:`.urdf` (each link frame is turned so
+    that the joint axis is its z axis).
+
+    Args:
+        origin: ``T_{i-1}_joint`` (4, 4): the joint's frame in the previous link frame at
+            ``q = 0`` (before the joint moves).
+        sigma, offset, qlim, m, r, I, Jm, G, B, Tc, name: as for :class:`Link`; ``r`` and
+            ``I`` are in frame i.
+        d: fixed slide along z after the rotation (revolute joints only).
+    """
+
+    def __init__(self, origin: ArrayLike | None = None, *, sigma: int | str = 0, d: float = 0.0,
+                 theta: float = 0.0, **kw: Any) -> None:
+        kw.pop("mdh", None)
+        super().__init__(0.0, 0.0, d, theta, sigma=sigma, mdh=True, **kw)
+        T = np.eye(4) if origin is None else np.array(origin, dtype=float).reshape(4, 4)
+        T.flags.writeable = False
+        self.origin = T
+
+    def A(self, q: float) -> Array:
+        """Link transform ``T_{i-1}_i`` (4, 4) for joint value ``q``."""
+        return self.origin @ super().A(q)
+
+    def copy(self) -> "ETSLink":
+        """An independent copy."""
+        return ETSLink(self.origin, sigma=self.sigma, d=self.d, theta=self.theta, offset=self.offset,
+                       qlim=self.qlim, m=self.m, r=self.r.copy(), I=self.I.copy(), Jm=self.Jm, G=self.G,
+                       B=self.B, Tc=self.Tc.copy(), name=self.name)
+
+    def __repr__(self) -> str:
+        kind = "Prismatic" if self.isprismatic else "Revolute"
+        t = np.round(self.origin[:3, 3], 5).tolist()
+        return f"ETSLink({kind}, origin t={t}, offset={self.offset:.4g}, m={self.m:.4g}, name={self.name!r})"

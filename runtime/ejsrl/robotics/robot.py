@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from . import _dynamics, _kernels, _kinematics
-from .link import Link
+from .link import ETSLink, Link
 
 __all__ = ["Robot"]
 
@@ -82,6 +82,16 @@ class Robot:
         mdh = {link.mdh for link in self.links}
         if len(mdh) != 1:
             raise ValueError("all links must use the same DH convention (standard or modified)")
+        ets = {isinstance(link, ETSLink) for link in self.links}
+        if len(ets) != 1:
+            raise ValueError("links must be all ETSLink (elementary transforms) or all DH links; "
+                             "write a DH link as ETSLink(origin=Rx(alpha) @ Tx(a), d=d)")
+        #: True for an arm of :class:`ETSLink` (e.g. loaded from a URDF file)
+        self.ets = ets.pop()
+        #: per link frame 0..n, the geometry to draw (set by ``load_urdf``; None: automatic)
+        self.visuals: list[list[Any]] | None = None
+        #: the joints' names (URDF), else ``["q1", ...]``
+        self.joint_names: list[str] = [link.name or f"q{j + 1}" for j, link in enumerate(self.links)]
         self.name = name
         self.manufacturer = manufacturer
         self.base = np.eye(4) if base is None else base  # type: ignore[assignment]
@@ -150,6 +160,8 @@ class Robot:
             if link.isprismatic:
                 d = link.qlim[1] + link.offset if link.qlim is not None else link.offset
             total += abs(link.a) + abs(d)
+            if self.ets:
+                total += float(np.linalg.norm(link.origin[:3, 3]))
         return float(total + np.linalg.norm(self.tool[:3, 3]))
 
     def link_lengths(self) -> Array:
@@ -184,6 +196,8 @@ class Robot:
         self._theta = np.array([k.theta for k in L])
         self._offset = np.array([k.offset for k in L])
         self._prism = np.array([k.isprismatic for k in L])
+        if self.ets:
+            self._origins = np.array([k.origin for k in L])  # (n, 4, 4)
         self._m = np.array([k.m for k in L])
         self._r = np.array([k.r for k in L])
         self._I = np.array([k.I for k in L])
@@ -244,7 +258,12 @@ class Robot:
         k = self._kernels.get(key)
         if k is None:
             if self._kparams is None:
-                self._kparams = _kernels.Params(self)
+                if self.ets:
+                    from . import _ets
+
+                    self._kparams = _ets.Params(self)
+                else:
+                    self._kparams = _kernels.Params(self)
             k = self._kernels[key] = _kernels.build(self._kparams, key)
         return k
 
@@ -270,10 +289,11 @@ class Robot:
 
     def _A(self, q: Array) -> Array:
         self._params()
-        return _kinematics.dh_transforms(
+        A = _kinematics.dh_transforms(
             q, self._a, self._alpha, self._d, self._theta, self._offset, self._prism, self.mdh,
             ca=self._ca, sa=self._sa,
         )
+        return self._origins @ A if self.ets else A
 
     def _q(self, q: ArrayLike) -> Array:
         q = np.asarray(q, dtype=float)
@@ -549,6 +569,8 @@ class Robot:
 
     # ----------------------------------------------------------------- display
     def __repr__(self) -> str:
+        if self.ets:
+            return self._repr_ets()
         conv = "modified DH" if self.mdh else "standard DH"
         head = f"{self.name}: {self.n} joints ({''.join('P' if k.isprismatic else 'R' for k in self.links)}), {conv}"
         rows = [f"{'j':>2} | {'theta':>12} | {'d':>12} | {'a':>9} | {'alpha':>9} | {'qlim (deg or m)':>19}"]
@@ -564,6 +586,32 @@ class Robot:
             else:
                 lim = f"[{np.degrees(k.qlim[0]):.0f}, {np.degrees(k.qlim[1]):.0f}]"
             rows.append(f"{j:>2} | {theta:>12} | {d:>12} | {k.a:>9.5g} | {np.degrees(k.alpha):>8.4g}° | {lim:>19}")
+        extra = []
+        if not self._base_is_eye:
+            extra.append(f"base t = {np.round(self.base[:3, 3], 4).tolist()}")
+        if not self._tool_is_eye:
+            extra.append(f"tool t = {np.round(self.tool[:3, 3], 4).tolist()}")
+        if self.poses:
+            extra.append("poses: " + ", ".join(self.poses))
+        return "\n".join([head, *rows, *extra])
+
+    def _repr_ets(self) -> str:
+        from .transforms import tr2rpy
+
+        head = f"{self.name}: {self.n} joints ({''.join('P' if k.isprismatic else 'R' for k in self.links)}), " \
+               "elementary transforms: A_i = origin_i Rz(q) (R) or origin_i Tz(q) (P)"
+        rows = [f"{'j':>2} | {'joint':<22} | {'origin xyz (m)':>28} | {'origin rpy (deg)':>22} | {'qlim (deg or m)':>17}"]
+        rows.append("-" * len(rows[0]))
+        for j, k in enumerate(self.links, start=1):
+            xyz = ", ".join(f"{v:.4g}" for v in k.origin[:3, 3])
+            rpy = ", ".join(f"{v:.4g}" for v in np.degrees(tr2rpy(k.origin)))
+            if k.qlim is None:
+                lim = "-"
+            elif k.isprismatic:
+                lim = f"[{k.qlim[0]:.3g}, {k.qlim[1]:.3g}]"
+            else:
+                lim = f"[{np.degrees(k.qlim[0]):.0f}, {np.degrees(k.qlim[1]):.0f}]"
+            rows.append(f"{j:>2} | {self.joint_names[j - 1][:22]:<22} | {xyz:>28} | {rpy:>22} | {lim:>17}")
         extra = []
         if not self._base_is_eye:
             extra.append(f"base t = {np.round(self.base[:3, 3], 4).tolist()}")

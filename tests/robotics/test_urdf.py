@@ -1,0 +1,124 @@
+"""URDF arms: ``load_urdf`` against Pinocchio loading the same files (recorded in
+fixtures/urdf_pinocchio.json by fixtures/make_urdf_pinocchio.py), and what the loader
+reads from the file (limits, friction, tool, visuals)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from ejsrl.robotics import load_urdf
+from ejsrl.robotics.urdf import URDFError
+from testkit import EXAMPLES
+from testkit.robotics import FIXTURES
+
+UR5 = EXAMPLES / "urdf_arm" / "ur5" / "ur5.urdf"
+TEST_ARM = FIXTURES / "urdf_test_arm.urdf"
+REF = json.loads((FIXTURES / "urdf_pinocchio.json").read_text())
+ROOT = EXAMPLES.parent
+
+
+def _arm(name: str):
+    arm = REF["arms"][name]
+    robot = load_urdf(ROOT / arm["urdf"], tip=arm["tip"])
+    rows = arm["rows"]
+    cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
+    return robot, cols
+
+
+@pytest.mark.parametrize("name", ["ur5", "test_arm"])
+@pytest.mark.parametrize("fast", [True, False])
+def test_urdf_arm_matches_pinocchio(name: str, fast: bool) -> None:
+    robot, c = _arm(name)
+    robot._fast = fast
+    assert robot.n == REF["arms"][name]["nv"]
+    np.testing.assert_allclose(robot.gravity, REF["arms"][name]["gravity"])
+    for i in range(len(c["q"])):
+        q, qd, qdd = c["q"][i], c["qd"][i], c["qdd"][i]
+        np.testing.assert_allclose(robot.fkine(q), c["T"][i], atol=1e-12, rtol=0)
+        np.testing.assert_allclose(robot.jacob0(q), c["J"][i], atol=1e-12, rtol=0)
+        np.testing.assert_allclose(robot.rne(q, qd, qdd, friction=False), c["tau"][i], atol=1e-12, rtol=0)
+        np.testing.assert_allclose(robot.inertia(q), c["M"][i], atol=1e-12, rtol=0)
+        # Pinocchio's ABA has no joint friction: cancel ours (URDF damping and friction)
+        tau = c["tau2"][i] - robot.friction(qd)
+        np.testing.assert_allclose(robot.accel(q, qd, tau), c["accel"][i], atol=1e-11, rtol=1e-12)
+    # batches give the same answers
+    np.testing.assert_allclose(robot.fkine(c["q"]), c["T"], atol=1e-12, rtol=0)
+    np.testing.assert_allclose(robot.rne(c["q"], c["qd"], c["qdd"], friction=False), c["tau"], atol=1e-12, rtol=0)
+    np.testing.assert_allclose(robot.inertia(c["q"]), c["M"], atol=1e-12, rtol=0)
+
+
+def test_urdf_ur5_reads_limits_names_tool_and_meshes() -> None:
+    robot = load_urdf(UR5, tip="tool0")
+    assert robot.name == "ur5"
+    assert robot.joint_names == ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
+                                 "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
+    np.testing.assert_allclose(robot.qlim[:, 2], [-np.pi, np.pi], atol=1e-10)
+    np.testing.assert_allclose(robot.qlim[:, 0], [-2 * np.pi, 2 * np.pi], atol=1e-10)
+    # the tool0 frame: 0.0823 m beyond wrist 3 (the UR5's published d6) along its own z
+    T = robot.fkine(np.zeros(6))
+    W = robot.fkine_all(np.zeros(6))[-1]
+    np.testing.assert_allclose(np.linalg.norm(T[:3, 3] - W[:3, 3]), 0.0823, atol=1e-12)
+    # at q = 0 the arm lies along x of the ROS base_link: x = a2 + a3, y = d4 + d6, z = d1 - d5
+    # with the UR5's published DH lengths (a2 0.425, a3 0.39225, d1 0.089159, d4 0.10915, d5 0.09465, d6 0.0823)
+    np.testing.assert_allclose(T[:3, 3], [0.425 + 0.39225, 0.10915 + 0.0823, 0.089159 - 0.09465], atol=1e-12)
+    assert len(robot.visuals) == 7 and all(len(v) == 1 for v in robot.visuals)
+    assert [v.filename.rsplit("/", 1)[-1] for vs in robot.visuals for v in vs] == [
+        "base.stl", "shoulder.stl", "upperarm.stl", "forearm.stl", "wrist1.stl", "wrist2.stl", "wrist3.stl"]
+    parts = robot.visuals[2][0].trimeshes()
+    assert parts and parts[0].vertices.shape[1] == 3
+    np.testing.assert_allclose(robot.visuals[2][0].rgba, [0.75, 0.76, 0.78, 1.0])
+
+
+def test_urdf_reads_friction_continuous_joints_and_fixed_branches() -> None:
+    robot = load_urdf(TEST_ARM)  # default tip: the deepest leaf, "tcp"
+    assert robot.tip == "tcp"
+    assert robot.joint_names == ["j1", "j2", "j3", "j4", "j5"]
+    assert [k.isprismatic for k in robot.links] == [False, False, True, False, False]
+    assert robot.links[3].qlim is None  # continuous
+    np.testing.assert_allclose(robot.links[2].qlim, [0.0, 0.3])
+    assert robot.links[1].B == 0.5
+    np.testing.assert_allclose(robot.links[1].Tc, [0.1, -0.1])
+    # link 2 carries l2, the plate and the sensor (fixed joints): 2.5 + 0.7 + 0.4 kg
+    assert robot.links[1].m == pytest.approx(3.6, abs=1e-12)
+    # visuals: a cylinder on link 1, a box and the sensor's sphere on link 2
+    assert [v.kind for v in robot.visuals[1]] == ["cylinder"]
+    assert sorted(v.kind for v in robot.visuals[2]) == ["box", "sphere"]
+
+
+def test_urdf_jacobian_and_ik_work_on_an_urdf_arm() -> None:
+    robot = load_urdf(TEST_ARM)
+    q = np.array([0.3, -0.4, 0.1, 0.7, -0.2])
+    J = robot.jacob0(q)
+    eps = 1e-6
+    for j in range(robot.n):  # linear rows against finite differences of fkine
+        dq = np.zeros(5)
+        dq[j] = eps
+        dp = (robot.fkine(q + dq)[:3, 3] - robot.fkine(q - dq)[:3, 3]) / (2 * eps)
+        np.testing.assert_allclose(J[:3, j], dp, atol=1e-8)
+    ur5 = load_urdf(UR5, tip="tool0")
+    q = np.array([0.2, -1.0, 1.2, -0.5, 0.8, 0.3])
+    T = ur5.fkine(q)
+    sol = ur5.ikine(T, q0=q + 0.1)
+    assert sol.success
+    np.testing.assert_allclose(ur5.fkine(sol.q), T, atol=1e-9)
+
+
+def test_urdf_errors_name_the_problem(tmp_path) -> None:
+    with pytest.raises(URDFError, match="no link named 'tol0'.*tool0"):
+        load_urdf(UR5, tip="tol0")
+    bad = tmp_path / "floating.urdf"
+    bad.write_text('<robot name="f"><link name="a"/><link name="b"/>'
+                   '<joint name="free" type="floating"><parent link="a"/><child link="b"/></joint></robot>')
+    with pytest.raises(URDFError, match="joint 'free' is of type 'floating'"):
+        load_urdf(bad)
+    missing = tmp_path / "mesh.urdf"
+    missing.write_text('<robot name="m"><link name="a"/><link name="b"><visual><geometry>'
+                       '<mesh filename="package://nowhere/m.stl"/></geometry></visual></link>'
+                       '<joint name="j" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>'
+                       '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint></robot>')
+    with pytest.raises(URDFError, match="mesh file 'package://nowhere/m.stl' not found"):
+        load_urdf(missing)
+    assert load_urdf(missing, load_visuals=False).n == 1
