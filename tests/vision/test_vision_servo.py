@@ -11,12 +11,15 @@ from ejsrl.robotics import models
 from ejsrl.robotics.transforms import r2t, rotx, roty, rotz, transl
 from ejsrl.vision import (
     CameraModel,
+    ServoMonitor,
     eih_joint_velocities,
     ibvs_velocity,
     integrate_twist,
     interaction_matrix,
     match_points,
+    pbvs_velocity,
     susan_corners,
+    theta_u,
     to_gray,
     twist_transform,
 )
@@ -175,3 +178,99 @@ def test_puma_eye_in_hand_converges_through_its_jacobian():
 def test_interaction_matrix_rejects_points_behind(bad):
     with pytest.raises(ValueError, match="positive"):
         interaction_matrix([[0, 0]], [bad])
+
+
+# -- PBVS, theta u and the servo monitor -------------------------------------------------------
+
+# four coplanar points (a 0.2 m square) in the world, seen by cameras looking down -z
+SQUARE = np.array([[-0.1, -0.1, 0.0], [0.1, -0.1, 0.0], [0.1, 0.1, 0.0], [-0.1, 0.1, 0.0]])
+T_DESIRED = r2t(rotx(np.pi), [0.0, 0.0, 0.5])
+
+
+@pytest.mark.parametrize("angle", [0.0, 1e-9, 0.4, 2.0, np.pi - 1e-7, np.pi])
+def test_theta_u_is_the_rotation_vector(angle, rng):
+    from scipy.spatial.transform import Rotation
+
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    rv = angle * axis
+    R = Rotation.from_rotvec(rv).as_matrix()
+    got = theta_u(R)
+    if angle > np.pi - 1e-6:  # at pi, u and -u are the same rotation
+        assert min(np.linalg.norm(got - rv), np.linalg.norm(got + rv)) < 1e-6
+    else:
+        np.testing.assert_allclose(got, rv, atol=1e-9)
+
+
+def _simulate(T_start, law, *, lam=1.0, dt=0.02, seconds=8.0, monitor=None):
+    """A free-flying camera servoed on the exact projections of SQUARE (fixed correspondences)."""
+    s_star = CAM.project(SQUARE, T_DESIRED)
+    T = T_start
+    path, errs, warnings = [T[:3, 3].copy()], [], []
+    for _ in range(int(seconds / dt)):
+        s = CAM.project(SQUARE, T)
+        Z = CAM.world_to_camera(SQUARE, T)[:, 2]
+        if monitor is not None:
+            warnings += monitor.check(s, Z)
+        errs.append(float(np.abs(s - s_star).max()))
+        if law == "ibvs":
+            v = ibvs_velocity(s, s_star, Z, lam, camera=CAM)
+        else:  # PBVS from the pose PnP estimates from the same pixels
+            T_c_obj = CAM.estimate_pose(SQUARE, s)
+            T_d_obj = np.linalg.inv(T_DESIRED)
+            v = pbvs_velocity(T_c_obj @ np.linalg.inv(T_d_obj), lam)
+        T = integrate_twist(T, v, dt)
+        path.append(T[:3, 3].copy())
+    return T, np.array(path), np.array(errs), warnings
+
+
+def test_pbvs_from_pnp_converges_on_a_straight_line():
+    T_start = T_DESIRED @ transl(0.08, -0.05, -0.15) @ r2t(rotz(1.2) @ rotx(0.15))
+    T, path, errs, _ = _simulate(T_start, "pbvs")
+    pos, ang = _pose_error(T, T_DESIRED)
+    assert pos < 1e-4 and ang < 0.05  # e^-8 of 0.16 m and 70 degrees
+    # the camera centre moves on the straight line from start to goal (the law's signature)
+    a, b = path[0], T_DESIRED[:3, 3]
+    d = b - a
+    off = np.linalg.norm(np.cross(path - a, d), axis=1) / np.linalg.norm(d)
+    assert off.max() < 1e-3
+    # the pose error decays exponentially at rate lambda = 1/s: after 2 s about e^-2 of it is left
+    k = int(2.0 / 0.02)
+    assert np.linalg.norm(path[k] - b) == pytest.approx(np.exp(-2.0) * np.linalg.norm(a - b), rel=0.05)
+
+
+def test_ibvs_at_180_degrees_retreats_and_the_monitor_says_so_while_pbvs_converges():
+    T_start = T_DESIRED @ r2t(rotz(np.pi))  # the classic case: a half turn about the optical axis
+    monitor = ServoMonitor(CAM.width, CAM.height, 4)
+    T, path, errs, warnings = _simulate(T_start, "ibvs", monitor=monitor, seconds=3.0)
+    depth = path[:, 2]  # the camera looks down -z at the square on z = 0: height = depth
+    first = depth[: int(0.8 / 0.02)]
+    assert np.all(np.diff(first) > 0) and np.all(np.diff(first, 2) > 0)  # it backs away, ever faster
+    assert first[-1] > 5 * depth[0] and depth[-1] > 1e3  # to "infinity" within seconds
+    assert errs[-1] > 0.4 * errs[0]  # the image shrinks to a point: the error never goes
+    assert len(warnings) == 1 and "retreating" in warnings[0] and "PBVS" in warnings[0]
+    # PBVS from the same start turns about the optical axis and arrives
+    T, path, errs, _ = _simulate(T_start, "pbvs")
+    assert _pose_error(T, T_DESIRED)[1] < 0.1 and errs[-1] < 0.1  # e^-8 of 180 degrees
+    assert np.ptp(path[:, 2]) < 1e-6  # without moving along the axis
+
+
+def test_a_converging_ibvs_run_gives_no_warning():
+    T_start = T_DESIRED @ transl(0.03, 0.02, -0.1) @ r2t(rotz(0.5))
+    monitor = ServoMonitor(CAM.width, CAM.height, 4)
+    T, path, errs, warnings = _simulate(T_start, "ibvs", monitor=monitor)
+    assert errs[-1] < 0.05 and warnings == []
+
+
+def test_the_monitor_warns_once_when_features_leave_the_image_and_again_after_they_return():
+    m = ServoMonitor(320, 240, 4)
+    inside = np.array([[100, 100], [200, 100], [200, 150], [100, 150]], float)
+    assert m.check(inside, [0.5] * 4) == []
+    out = inside + [150, 0]  # two corners past the right border
+    first = m.check(out, [0.5] * 4)
+    assert len(first) == 1 and "leaving the image" in first[0] and "2 of 4" in first[0]
+    assert m.check(out, [0.5] * 4) == []  # once, not every step
+    assert m.check(inside[:3]) == []  # three found: still leaving (already said)
+    assert m.check(inside, [0.5] * 4) == []
+    again = m.check(inside[:3])  # a corner lost after they came back: a new warning
+    assert len(again) == 1 and "3 of 4" in again[0]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from ejsrl.vision._susan import SUSAN_MASK, susan, susan_corners, susan_edges, usan_area
 from ejsrl.vision.camera import CameraModel, intrinsics_from_fov, look_at, pose_from_rvec
-from ejsrl.vision.calibration import Calibration, calibrate_camera, calibrate_chessboard, chessboard_points, find_chessboard
+from ejsrl.vision.calibration import Calibration, calibrate_camera, calibrate_chessboard, chessboard_points, draw_chessboard, find_chessboard
 from ejsrl.vision.color import (
     adjust_brightness_contrast,
     adjust_gamma,
@@ -71,6 +71,7 @@ from ejsrl.vision.geometry import affine_matrix, crop, flip, perspective_matrix,
 from ejsrl.vision.pipeline import STEPS, Pipeline, PipelineResult
 from ejsrl.vision import servo as _servo
 from ejsrl.vision.servo import (
+    ServoMonitor,
     camera_twist_to_world,
     eih_joint_velocities,
     feature_error,
@@ -78,7 +79,9 @@ from ejsrl.vision.servo import (
     integrate_twist,
     interaction_matrix,
     match_points,
+    pbvs_velocity,
     skew,
+    theta_u,
     twist_transform,
 )
 
@@ -122,6 +125,6 @@ __all__ = [
     "intrinsics_from_fov",
     "look_at",
     "pose_from_rvec",
-    "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "find_chessboard",
+    "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "draw_chessboard", "find_chessboard",
     *_servo.__all__,
 ]

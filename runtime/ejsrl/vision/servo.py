@@ -1,4 +1,4 @@
-"""Image-based visual servoing (IBVS) with point features, eye-in-hand included.
+"""Visual servoing with point features: image-based (IBVS), position-based (PBVS), eye-in-hand.
 
 The control law of the EjsRL paper (equations 1-3):
 
@@ -11,6 +11,16 @@ camera frame (x right, y down, z forward; metres/s and rad/s).
 
 For a camera carried by an arm (eye-in-hand), ``eih_joint_velocities`` maps that twist to
 joint rates through the arm's world-frame Jacobian and the tool-to-camera transform.
+
+PBVS (``pbvs_velocity``) servos on the pose instead: from the desired camera pose seen
+from the current one (for example by PnP, ``CameraModel.estimate_pose``) it commands the
+classic law of Chaumette and Hutchinson (2006), ``v = -lambda R^T t``, ``w = -lambda theta u``
+with ``(R, t)`` the current camera's pose in the desired camera frame: a straight-line path
+of the camera centre, and no retreat.
+
+``ServoMonitor`` watches a running servo and words what a student should be told: the
+features leaving the image, or the camera retreating without bound (point IBVS at a
+rotation near 180 degrees about the optical axis, the classic case of Chaumette 1998).
 """
 
 from __future__ import annotations
@@ -30,6 +40,9 @@ __all__ = [
     "eih_joint_velocities",
     "integrate_twist",
     "match_points",
+    "theta_u",
+    "pbvs_velocity",
+    "ServoMonitor",
 ]
 
 Array = NDArray[np.float64]
@@ -197,3 +210,103 @@ def match_points(points: ArrayLike, reference: ArrayLike) -> Array:
     out = np.full_like(r, np.nan)
     out[rows] = p[cols]
     return out
+
+
+def theta_u(R: ArrayLike) -> Array:
+    """The rotation vector ``theta u`` (3,) of a rotation matrix (axis times angle, angle in [0, pi]).
+
+    Accurate near 0 and near pi (where the axis comes from the symmetric part of R).
+    """
+    Rm = np.asarray(R, dtype=np.float64).reshape(3, 3)
+    c = np.clip((np.trace(Rm) - 1.0) / 2.0, -1.0, 1.0)
+    th = float(np.arccos(c))
+    w = np.array([Rm[2, 1] - Rm[1, 2], Rm[0, 2] - Rm[2, 0], Rm[1, 0] - Rm[0, 1]])
+    if th < 1e-8:
+        return 0.5 * w
+    if np.pi - th > 1e-4:
+        return th * w / (2.0 * np.sin(th))
+    # near pi: R ~ 2 u u^T - I; take the best column of (R + I) / 2 for u, its sign from w
+    B = 0.5 * (Rm + np.eye(3))
+    u = B[:, int(np.argmax(np.diag(B)))]
+    u = u / np.linalg.norm(u)
+    if np.dot(u, w) < 0:
+        u = -u
+    return th * u
+
+
+def pbvs_velocity(T_camera_desired: ArrayLike, lam: float = 0.5) -> Array:
+    """The classic PBVS camera twist (6,) in the current camera frame (Chaumette and Hutchinson 2006).
+
+    ``T_camera_desired`` (4, 4): the desired camera pose expressed in the current camera's
+    frame (with an object seen by PnP: ``T_camera_object @ inv(T_desired_object)``). With
+    ``(R, t)`` the current camera's pose in the desired frame (the inverse), the law is
+    ``v = -lam R^T t`` and ``w = -lam theta u(R)``: the error (t, theta u) decays
+    exponentially and the camera centre moves on a straight line. Returns
+    (vx, vy, vz, wx, wy, wz) in m/s and rad/s.
+    """
+    T = np.asarray(T_camera_desired, dtype=np.float64).reshape(4, 4)
+    if not np.isfinite(T).all():
+        raise ValueError("pbvs_velocity: T_camera_desired must be a finite 4 x 4 pose")
+    Rcd, tcd = T[:3, :3], T[:3, 3]
+    R = Rcd.T  # the current camera in the desired frame: R = Rcd^T, t = -Rcd^T tcd
+    t = -R @ tcd
+    return np.concatenate([-float(lam) * (R.T @ t), -float(lam) * theta_u(R)])
+
+
+class ServoMonitor:
+    """Watches a servo loop step by step and words the warnings a student should see.
+
+    ``width``, ``height``: the image size in pixels; ``n_points``: how many features the
+    loop needs; ``margin``: pixels from the border counted as leaving the image;
+    ``retreat_factor``: warn when the mean depth of the features exceeds this multiple of
+    its value at the first check (the camera retreating, as point IBVS does for rotations
+    near 180 degrees about the optical axis).
+
+    ``check(pixels, Z)`` returns the warnings that start at this step (each is given once,
+    and again only after its condition has cleared); show them with ``alert``.
+    ``reset()`` forgets the history (call it when the loop restarts).
+    """
+
+    def __init__(self, width: int, height: int, n_points: int, *, margin: float = 2.0, retreat_factor: float = 2.0) -> None:
+        self.width, self.height, self.n_points = int(width), int(height), int(n_points)
+        self.margin = float(margin)
+        self.retreat_factor = float(retreat_factor)
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the starting depth and the warnings given."""
+        self.Z0: float | None = None
+        self._last_Z: float | None = None
+        self.active: set[str] = set()
+
+    def check(self, pixels: ArrayLike, Z: ArrayLike | None = None) -> list[str]:
+        """The new warnings at this step: ``pixels`` (N, 2) the features found (x, y), ``Z`` their depths (m)."""
+        p = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
+        now: dict[str, str] = {}
+        m = self.margin
+        inside = np.isfinite(p).all(axis=1) & (p[:, 0] >= m) & (p[:, 0] <= self.width - 1 - m) & (p[:, 1] >= m) & (p[:, 1] <= self.height - 1 - m)
+        if len(p) < self.n_points or not inside.all():
+            seen = int(inside.sum())
+            now["leaving"] = (
+                f"Features are leaving the image: {seen} of {self.n_points} inside it. The servo cannot "
+                "see the whole target; move it back into view (a smaller gain or another start)."
+            )
+        if Z is not None and len(p) == self.n_points:
+            z = np.asarray(Z, dtype=np.float64).reshape(-1)
+            zm = float(np.mean(z)) if len(z) and np.isfinite(z).all() else float("nan")
+            if np.isfinite(zm):
+                if self.Z0 is None:
+                    self.Z0 = zm
+                growing = self._last_Z is not None and zm > self._last_Z
+                self._last_Z = zm
+                if zm > self.retreat_factor * self.Z0 and (growing or "retreat" in self.active):
+                    now["retreat"] = (
+                        f"The camera is retreating: the features are {zm:.2f} m away, {zm / self.Z0:.1f} times "
+                        f"their {self.Z0:.2f} m at the start, and still moving away. Point-feature IBVS does this "
+                        "for rotations near 180 degrees about the optical axis (without bound at 180); "
+                        "try PBVS, or start closer to the goal's orientation."
+                    )
+        new = [text for key, text in now.items() if key not in self.active]
+        keep = self.active & {"retreat"} if Z is None or len(p) != self.n_points else set()
+        self.active = set(now) | keep
+        return new
