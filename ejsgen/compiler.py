@@ -461,6 +461,10 @@ class Compiler:
         self.compile_blocks()
         self.compile_custom(defs)
         self.compile_evolution()
+        if self.spec.fmus:
+            from ejsgen._fmu import compile_fmus
+
+            compile_fmus(self)
         view_lines = ViewCompiler(self).compile(self.checked.view)
         if self.spec.model.programs:
             from ejsgen._programs import compile_programs

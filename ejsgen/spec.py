@@ -27,6 +27,7 @@ __all__ = [
     "CodeEvolutionPage",
     "Program",
     "Simulation",
+    "Fmu",
     "GUI_ELEMENT_MODELS",
     "SCENE_ELEMENT_MODELS",
     "ODE_METHODS",
@@ -426,6 +427,27 @@ class Simulation(Strict):
     """Width of the control panel in pixels (default: the browser's choice, about 320)."""
 
 
+class Fmu(Strict):
+    """A Functional Mock-up Unit (FMI 2.0 or 3.0, e.g. exported from Simulink) computing part of the model."""
+
+    file: str
+    """The FMU, relative to the spec: an .fmu file, or a folder holding an unpacked FMU whose sources/ the build compiles."""
+    kind: Literal["co_simulation", "model_exchange"] | None = None
+    """co_simulation (the FMU steps itself, doStep) or model_exchange (an ODE page integrates its states); default: co_simulation if the FMU has it."""
+    step: NumOrExpr | None = None
+    """Co-simulation: the communication step (an expression); default: one doStep per model step."""
+    ode: str | int | None = None
+    """Model exchange: the ODE page integrating its states (the page's name or its index in evolution); default: the first ODE page."""
+    inputs: dict[str, NumOrExpr] = Field(default_factory=dict)
+    """FMU input variable: expression giving its value (sent at every communication point, or every evaluation of the rates)."""
+    outputs: dict[str, str] = Field(default_factory=dict)
+    """FMU output variable: the model variable (or array element, 'tau[0]') that receives its value."""
+    parameters: dict[str, Union[bool, float, int, str]] = Field(default_factory=dict)
+    """FMU parameter: expression giving its value when the FMU is instantiated (at start and reset); tunable ones are sent again when it changes."""
+    start: dict[str, Union[bool, float, int]] = Field(default_factory=dict)
+    """FMU variable: constant start value (e.g. of a state)."""
+
+
 class Spec(Strict):
     """A whole ``.ejs.yaml`` file."""
 
@@ -447,3 +469,5 @@ class Spec(Strict):
     """The view: a list of one-key mappings kind: {properties}."""
     simulation: Simulation = Field(default_factory=Simulation)
     """Simulation settings."""
+    fmus: dict[str, Fmu] = Field(default_factory=dict)
+    """Functional Mock-up Units by name, co-simulated with the model (FMPy: pip install 'ejsgen[fmu]')."""

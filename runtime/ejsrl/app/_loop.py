@@ -366,6 +366,8 @@ class App(Controller):
         thread = self._loop_thread
         if thread is not None and thread is not threading.current_thread():
             thread.join(timeout=5.0)
+        with self.lock:
+            self.model._ejs_close()  # free what the model holds outside Python (its FMU instances)
 
     # -- serving ----------------------------------------------------------------------------------
     def serve(

@@ -244,6 +244,7 @@ class ModelBase:
         self._ejs_overrides = dict(overrides or {})
         self._ejs_pages: list[Any] = []
         self._ejs_programs: Any = None
+        self._ejs_fmus: Any = None  # the FMUs of this run (ejsrl.fmi.Fmus), made at each reset
         if self.PROGRAMS:
             from ejsrl.sim.programs import Programs
 
@@ -265,9 +266,13 @@ class ModelBase:
         """The evolution pages (``CodePage`` / ``OdePage``), freshly built."""
         return []
 
+    def _fmus(self) -> list[Any]:
+        """The spec's FMUs (``ejsrl.fmi.FmuDef``), freshly declared."""
+        return []
+
     def _ejs_evolves(self) -> bool:
-        """Whether a step can change anything: the model has evolution pages or robot programs."""
-        return bool(self._ejs_pages) or bool(self.PROGRAMS)
+        """Whether a step can change anything: the model has evolution pages, robot programs or FMUs."""
+        return bool(self._ejs_pages) or bool(self.PROGRAMS) or self._ejs_fmus is not None
 
     # -- lifecycle ------------------------------------------------------------------------
     def _ejs_reset(self, keep: Callable[[], None] | None = None) -> None:
@@ -281,6 +286,7 @@ class ModelBase:
             keep()
         self._ejs_pages = self._evolution()
         self._init()
+        self._ejs_start_fmus()
         self._fixed_relations()
         if self._ejs_programs is not None:
             self._ejs_programs.reset()
@@ -329,12 +335,34 @@ class ModelBase:
         Returns True if an event with ``stop: true`` fired.
         """
         stop = False
+        fmus = self._ejs_fmus
+        if fmus is not None:
+            fmus.before_step()
         for page in self._ejs_pages:
             stop = page.run() or stop
+        if fmus is not None:
+            fmus.after_step()
         if self._ejs_programs is not None:
             self._ejs_programs.advance()
         self._fixed_relations()
         return stop
+
+    def _ejs_start_fmus(self) -> None:
+        """Free the last run's FMUs and instantiate the spec's afresh (after ``init``, so
+        their parameters may come from it); model-exchange FMUs join their ODE page."""
+        self._ejs_close()
+        defs = self._fmus()
+        if defs:
+            from ejsrl.fmi import Fmus
+
+            self._ejs_fmus = Fmus(self, defs)
+            self._ejs_fmus.start(self._ejs_pages)
+
+    def _ejs_close(self) -> None:
+        """Free what the model holds outside Python (its FMU instances); the app calls it when it stops."""
+        if self._ejs_fmus is not None:
+            self._ejs_fmus.close()
+            self._ejs_fmus = None
 
     def _ejs_restart_solvers(self) -> None:
         for page in self._ejs_pages:

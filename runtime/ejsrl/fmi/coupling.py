@@ -1,0 +1,337 @@
+"""FMUs inside a model: the spec's ``fmus:`` section at run time.
+
+A generated app declares its FMUs as ``Model.FMUS = [FmuDef(...), ...]``; the model
+(``ejsrl.sim.model.ModelBase``) makes an :class:`Fmus` at every reset (so a reset
+re-instantiates each FMU) and calls it around each step:
+
+- **co-simulation**: at a communication point (the model's time reached the FMU's), the
+  inputs are read from the model and held; after the evolution pages the FMU advances by
+  ``doStep`` to the model's new time (one step, or as many communication steps of
+  ``step`` as fit) and its outputs are written into the model variables. The model's
+  pages thus see the outputs of the last communication point during a step, as a
+  Simulink block with a sample time does (zero-order hold both ways).
+- **model exchange**: the FMU's continuous states are appended to the state of an ODE
+  page, so one solver integrates both: at each evaluation of the rates the FMU gets the
+  time, its states and its inputs, its outputs go into the model variables (the page's
+  rates may use them), and its derivatives join the page's rates. After each step the
+  FMU is told the step was accepted; events it asks for (step or time events, a sign
+  change of an event indicator) are handled then, at the end of the step.
+
+A failing FMU call raises :class:`~ejsrl.sim.model.UserCodeError` with the FMU's own
+log messages and the spec line of the FMU, so the app pauses and shows it (a headless
+run exits non-zero with it).
+"""
+
+from __future__ import annotations
+
+import math
+import weakref
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ejsrl.fmi._instance import FmuError, FmuInstance, read_description, unpacked
+from ejsrl.sim.model import UserCodeError
+
+__all__ = ["FmuDef", "Fmus", "FmuRun"]
+
+_EPS = 1e-9
+
+
+@dataclass
+class FmuDef:
+    """One FMU as the spec declares it (the generated app's ``Model.FMUS``).
+
+    ``file``: the ``.fmu`` relative to the app folder; ``kind``: ``"co_simulation"`` or
+    ``"model_exchange"``; ``inputs``/``outputs``/``parameters``: FMU variable names, in
+    the order of the values that ``read_inputs()`` and ``read_parameters()`` (methods of
+    the model) return and ``write_outputs(values)`` takes; ``tunable``: the parameters that
+    may change during a run (sent again when their value changes); ``start``: constant
+    start values by FMU variable; ``step()``: the communication step (None: one
+    ``doStep`` per model step); ``ode``: the index of the evolution page that integrates
+    a model-exchange FMU; ``where``: the spec location of the entry.
+    """
+
+    name: str
+    file: str
+    kind: str
+    inputs: tuple[str, ...] = ()
+    read_inputs: Callable[[], Sequence[Any]] | None = None
+    outputs: tuple[str, ...] = ()
+    write_outputs: Callable[[Sequence[Any]], None] | None = None
+    parameters: tuple[str, ...] = ()
+    read_parameters: Callable[[], Sequence[Any]] | None = None
+    tunable: tuple[str, ...] = ()
+    start: dict[str, Any] = field(default_factory=dict)
+    step: Callable[[], float] | None = None
+    ode: int | None = None
+    where: str = ""
+
+
+class FmuRun:
+    """One FMU during one run of the model (from a reset to the next)."""
+
+    def __init__(self, model: Any, spec: FmuDef, base_dir: Path) -> None:
+        self.model = model
+        self.spec = spec
+        self.path = base_dir / spec.file
+        self.calls = 0
+        self.inst: FmuInstance | None = None
+        self.t = 0.0
+        self.held: list[Any] | None = None
+        self.params: list[Any] = []
+        self.x = np.zeros(0)
+        self.z = np.zeros(0)
+        self.next_event: float | None = None
+        self.page: Any = None
+        self._n_model = 0
+
+    # -- errors ----------------------------------------------------------------------------
+    def _fail(self, exc: FmuError) -> UserCodeError:
+        return UserCodeError(str(exc), self.spec.where)
+
+    def guarded(self, fn: Callable[[], Any]) -> Any:
+        try:
+            return fn()
+        except FmuError as exc:
+            raise self._fail(exc) from None
+
+    # -- start -----------------------------------------------------------------------------
+    def start(self, t0: float, pages: Sequence[Any]) -> None:
+        spec = self.spec
+        if not self.path.exists():
+            raise UserCodeError(f"FMU '{spec.name}': the file {spec.file} is missing from the app folder", spec.where)
+        folder = unpacked(self.path)
+        md = read_description(folder)
+        self.inst = self.guarded(lambda: FmuInstance(folder, md, spec.kind, spec.name))
+        self.t = float(t0)
+        self.params = list(spec.read_parameters()) if spec.read_parameters else []
+
+        def before() -> None:
+            if spec.start:
+                self.inst.set_values(list(spec.start), list(spec.start.values()), "setting start values")  # type: ignore[union-attr]
+            if spec.parameters:
+                self.inst.set_values(spec.parameters, self.params, "setting parameters")  # type: ignore[union-attr]
+
+        self.guarded(lambda: self.inst.initialize(self.t, before, self._send_inputs))  # type: ignore[union-attr]
+        self.calls += 1
+        if spec.kind == "model_exchange":
+            self.x = self.guarded(self.inst.get_states)
+            self.z = self.guarded(self.inst.event_indicators)
+            self.page = self._couple(pages)
+        self._receive_outputs()
+
+    def _send_inputs(self) -> None:
+        spec = self.spec
+        if spec.inputs and spec.read_inputs is not None:
+            values = spec.read_inputs()
+            self.inst.set_values(spec.inputs, values, "setting inputs")  # type: ignore[union-attr]
+
+    def _receive_outputs(self) -> None:
+        spec = self.spec
+        if spec.outputs and spec.write_outputs is not None:
+            values = self.guarded(lambda: self.inst.get_values(spec.outputs))  # type: ignore[union-attr]
+            spec.write_outputs(values)
+
+    def _send_tunable(self) -> None:
+        """Send the tunable parameters whose value changed since they were last sent."""
+        spec = self.spec
+        if not spec.tunable or spec.read_parameters is None:
+            return
+        now = list(spec.read_parameters())
+        changed = [k for k, (a, b) in enumerate(zip(now, self.params)) if spec.parameters[k] in spec.tunable and a != b]
+        if changed:
+            self.guarded(lambda: self.inst.set_values([spec.parameters[k] for k in changed], [now[k] for k in changed], "setting parameters"))  # type: ignore[union-attr]
+            for k in changed:
+                self.params[k] = now[k]
+
+    # -- co-simulation ------------------------------------------------------------------------
+    def before_step(self, t: float) -> None:
+        """Sample and send the inputs if the model is at a communication point."""
+        if self.spec.kind != "co_simulation" or self.held is not None:
+            return
+        if t >= self.t - _EPS * max(1.0, abs(self.t)):
+            self._send_tunable()
+            self.guarded(self._send_inputs)
+            self.held = []
+
+    def after_step(self, t_new: float) -> None:
+        """Co-simulation: advance the FMU to the model's time; model exchange: finish the step."""
+        if self.spec.kind == "model_exchange":
+            self._me_after_step(t_new)
+            return
+        if self.held is None:
+            return
+        step = self.spec.step
+        inst = self.inst
+        assert inst is not None
+        if step is None:
+            h = t_new - self.t
+            if h <= 0:
+                return
+            self.guarded(lambda: inst.do_step(self.t, h))
+            self.calls += 1
+            self.t = t_new
+        else:
+            H = float(step())
+            if not (H > 0 and math.isfinite(H)):
+                raise UserCodeError(f"FMU '{self.spec.name}': the communication step must be a positive number, not {H!r}", self.spec.where)
+            if t_new < self.t + H - _EPS * max(1.0, abs(t_new)):
+                return  # not yet at the next communication point: inputs stay held
+            while t_new >= self.t + H - _EPS * max(1.0, abs(t_new)):
+                self.guarded(lambda: inst.do_step(self.t, H))
+                self.calls += 1
+                self.t += H
+        self.held = None
+        self._receive_outputs()
+
+    # -- model exchange -------------------------------------------------------------------------
+    def _couple(self, pages: Sequence[Any]) -> Any:
+        """Append the FMU's states to the ODE page ``spec.ode``: one solver integrates both."""
+        from ejsrl.sim.model import OdePage
+        from ejsrl.sim.ode import EventDef, OdeIntegrator
+
+        spec = self.spec
+        if spec.ode is None or not (0 <= spec.ode < len(pages)) or not isinstance(pages[spec.ode], OdePage):
+            raise UserCodeError(f"FMU '{spec.name}': model exchange needs an ODE page to integrate its states", spec.where)
+        page = pages[spec.ode]
+        state0, load0, integ = page.state, page.load, page.integrator
+        rates0 = integ.rates
+        inst = self.inst
+        assert inst is not None
+        run = self
+
+        def state() -> tuple[float, np.ndarray]:
+            t, y = state0()
+            run._n_model = len(y)
+            return t, np.concatenate((y, run.x))
+
+        def load(t: float, y: np.ndarray) -> None:
+            n = run._n_model
+            load0(t, y[:n])
+            run.x = np.array(y[n:], dtype=float)
+
+        def rates(t: float, y: np.ndarray) -> np.ndarray:
+            n = run._n_model
+            load0(t, y[:n])
+            run._me_evaluate(t, y[n:])
+            dy = rates0(t, y[:n])
+            dx = run.guarded(inst.derivatives)
+            run.calls += 1
+            return np.concatenate((np.asarray(dy, dtype=float), dx))
+
+        def wrap_event(ev: Any) -> Any:
+            def when(t: float, y: np.ndarray) -> float:
+                return ev.when(t, y[: run._n_model])
+
+            def action(t: float, y: np.ndarray) -> np.ndarray | None:
+                new = ev.action(t, y[: run._n_model].copy())
+                return None if new is None else np.concatenate((np.asarray(new, dtype=float), y[run._n_model :]))
+
+            return EventDef(ev.name, when, ev.direction, action, ev.stop)
+
+        page.state, page.load = state, load
+        page.integrator = OdeIntegrator(
+            rates,
+            integ.method,
+            tolerance=integ.tolerance,
+            max_step=None if math.isinf(integ.max_step) else integ.max_step,
+            events=[wrap_event(e) for e in integ.events],
+        )
+        page.names = tuple(page.names) + (f"the states of FMU '{spec.name}'",)
+        return page
+
+    def _me_evaluate(self, t: float, x: np.ndarray) -> None:
+        """Give the FMU the time, its states and the inputs; write its outputs into the model."""
+        inst = self.inst
+        assert inst is not None
+        self.guarded(lambda: inst.set_time(t))
+        if inst.nx:
+            self.guarded(lambda: inst.set_states(x))
+        self.guarded(self._send_inputs)
+        self._receive_outputs()
+
+    def _me_after_step(self, t_new: float) -> None:
+        inst = self.inst
+        assert inst is not None
+        self._send_tunable()
+        self._me_evaluate(t_new, self.x)
+        enter = self.guarded(inst.completed_step)
+        self.calls += 1
+        z = self.guarded(inst.event_indicators)
+        crossed = bool(np.any(np.sign(z) != np.sign(self.z))) if len(z) else False
+        timed = self.next_event is not None and t_new >= self.next_event - _EPS * max(1.0, abs(t_new))
+        self.z = z
+        if enter or crossed or timed:
+            self.guarded(inst.enter_event_mode)
+            changed, self.next_event = self.guarded(inst.event_update)
+            self.guarded(inst.enter_continuous_time_mode)
+            if changed:
+                self.x = self.guarded(inst.get_states)
+                if self.page is not None:
+                    self.page.restart()
+            self.z = self.guarded(inst.event_indicators)
+            self._receive_outputs()
+        self.t = t_new
+
+    def free(self) -> None:
+        if self.inst is not None:
+            self.inst.free()
+
+
+class Fmus:
+    """The model's FMUs during one run; freed at the next reset and when the app stops."""
+
+    def __init__(self, model: Any, defs: Sequence[FmuDef], base_dir: Path | None = None) -> None:
+        base = Path(base_dir) if base_dir is not None else app_folder(model)
+        self.runs = [FmuRun(model, d, base) for d in defs]
+        self.model = model
+        self._finalizer = weakref.finalize(self, _free_all, list(self.runs))
+
+    def start(self, pages: Sequence[Any]) -> None:
+        t0 = self.model._ejs_time() or 0.0
+        for run in self.runs:
+            run.start(t0, pages)
+
+    def before_step(self) -> None:
+        t = self.model._ejs_time() or 0.0
+        for run in self.runs:
+            run.before_step(t)
+
+    def after_step(self) -> None:
+        t = self.model._ejs_time() or 0.0
+        for run in self.runs:
+            run.after_step(t)
+
+    @property
+    def calls(self) -> int:
+        """FMI calls of the main kinds so far (doStep, derivatives, completed steps)."""
+        return sum(r.calls for r in self.runs)
+
+    def close(self) -> None:
+        """Free every FMU instance (and unload its binary)."""
+        self._finalizer()
+
+    @property
+    def closed(self) -> bool:
+        return not self._finalizer.alive
+
+
+def app_folder(model: Any) -> Path:
+    """Where the app's files are: its controller's ``base_dir`` (the app folder, or where a
+    ``.pyz`` extracted them), else the folder of the module defining the model."""
+    base = getattr(model._ejs_ctl, "base_dir", None)
+    if base is not None:
+        return Path(base)
+    import sys
+
+    module = sys.modules.get(type(model).__module__)
+    return Path(getattr(module, "__file__", ".")).resolve().parent
+
+
+def _free_all(runs: list[FmuRun]) -> None:
+    for run in runs:
+        run.free()
