@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from ejsrl.vision._util import as_gray
 from ejsrl.vision.camera import CameraModel, pose_from_rvec
 
-__all__ = ["Calibration", "chessboard_points", "find_chessboard", "calibrate_camera", "calibrate_chessboard"]
+__all__ = ["Calibration", "chessboard_points", "find_chessboard", "draw_chessboard", "calibrate_camera", "calibrate_chessboard"]
 
 Array = NDArray[np.float64]
 
@@ -90,14 +90,19 @@ def find_chessboard(img: ArrayLike, pattern: Sequence[int], *, refine: bool = Tr
     """The inner corners (N, 2) (x, y) of a chessboard in an image, row by row, or None if not all are found.
 
     ``refine``: sub-pixel refinement (``cornerSubPix``, 11 x 11 window clipped to the
-    square size). Needs a white margin around the board, as OpenCV's detector does.
+    square size). Needs a white margin around the board, as OpenCV's detector does. Tries
+    OpenCV's default flags, then without histogram normalisation, then plain thresholds.
     """
     cols, rows = _pattern(pattern)
     gray = as_gray(img)
     if gray.size == 0:
         raise ValueError("img is empty")
-    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
-    ok, corners = cv2.findChessboardCorners(gray, (cols, rows), flags=flags)
+    ok, corners = False, None
+    # OpenCV's default flags first; histogram normalisation fails on some images (dark borders)
+    for flags in (cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE, cv2.CALIB_CB_ADAPTIVE_THRESH, 0):
+        ok, corners = cv2.findChessboardCorners(gray, (cols, rows), flags=flags)
+        if ok and corners is not None:
+            break
     if not ok or corners is None:
         return None
     if refine:
@@ -109,6 +114,21 @@ def find_chessboard(img: ArrayLike, pattern: Sequence[int], *, refine: bool = Tr
         criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 100, 1e-4)
         corners = cv2.cornerSubPix(gray, corners, (win, win), (-1, -1), criteria)
     return corners.reshape(-1, 2).astype(np.float64)
+
+
+def draw_chessboard(img: ArrayLike, pattern: Sequence[int], corners: ArrayLike | None) -> NDArray[np.uint8]:
+    """A copy of ``img`` as RGB with the corners (N, 2) found by :func:`find_chessboard` drawn
+    (OpenCV's coloured rows joined by lines); unchanged if ``corners`` is None."""
+    from ejsrl.vision._util import as_rgb
+
+    cols, rows = _pattern(pattern)
+    out = as_rgb(img).copy()
+    if corners is None:
+        return out
+    pts = np.asarray(corners, dtype=np.float32).reshape(-1, 1, 2)
+    if len(pts) != cols * rows:
+        raise ValueError(f"pattern {cols} x {rows} has {cols * rows} corners, got {len(pts)}")
+    return cv2.drawChessboardCorners(out, (cols, rows), pts, True)
 
 
 def calibrate_camera(

@@ -308,24 +308,45 @@ class CameraModel:
         n = self.normalized(pixels)
         return n @ self.K[:2, :2].T + self.K[:2, 2]
 
-    def _remap(self, img: ArrayLike, source_of: Any, interpolation: str) -> NDArray:
+    def _remap(self, img: ArrayLike, source_of: Any, interpolation: str, K_source: ArrayLike | None = None) -> NDArray:
         import cv2
 
         arr = np.asarray(img)
         if arr.ndim not in (2, 3) or arr.shape[0] == 0 or arr.shape[1] == 0:
             raise ValueError(f"img must be a non-empty H x W or H x W x C image, got shape {arr.shape}")
-        if arr.shape[:2] != (self.height, self.width):
+        if K_source is not None:
+            Ks = np.asarray(K_source, dtype=np.float64)
+            if Ks.shape != (3, 3) or not np.all(np.isfinite(Ks)):
+                raise ValueError(f"K_source must be a finite 3 x 3 matrix, got {Ks.tolist()}")
+            # output pixel -> ideal normalised coordinates -> pixel of the source pinhole image
+            inner = source_of
+            Kinv = np.linalg.inv(self.K)
+
+            def source_of(px: Array) -> Array:  # noqa: F811 - same role, other source camera
+                n = (np.column_stack([inner(px), np.ones(len(px))]) @ Kinv.T)[:, :2]
+                uvw = np.column_stack([n, np.ones(len(n))]) @ Ks.T
+                return uvw[:, :2] / uvw[:, 2:3]
+
+            source_of.__name__ = f"{inner.__name__}:{Ks.tobytes().hex()}"
+        elif arr.shape[:2] != (self.height, self.width):
             raise ValueError(
                 f"img is {arr.shape[1]} x {arr.shape[0]} pixels but the camera is {self.width} x {self.height}"
             )
         modes = {"linear": cv2.INTER_LINEAR, "nearest": cv2.INTER_NEAREST, "cubic": cv2.INTER_CUBIC}
         if interpolation not in modes:
             raise ValueError(f"interpolation must be one of {sorted(modes)}, got {interpolation!r}")
-        if not self.distorted:
+        if not self.distorted and K_source is None:
             return arr.copy()
-        v, u = np.mgrid[0 : self.height, 0 : self.width]
-        src = source_of(np.column_stack([u.ravel(), v.ravel()]).astype(np.float64))
-        maps = np.nan_to_num(src, nan=-1e6).astype(np.float32).reshape(self.height, self.width, 2)
+        # the maps depend only on the camera: keep the last ones (a lab distorts every frame)
+        key = (source_of.__name__, self.width, self.height, self.K.tobytes(), self.distortion.tobytes())
+        cache = self.__dict__.setdefault("_remap_cache", {})
+        maps = cache.get(key)
+        if maps is None:
+            v, u = np.mgrid[0 : self.height, 0 : self.width]
+            src = source_of(np.column_stack([u.ravel(), v.ravel()]).astype(np.float64))
+            maps = np.nan_to_num(src, nan=-1e6).astype(np.float32).reshape(self.height, self.width, 2)
+            cache.clear()
+            cache[key] = maps
         return cv2.remap(np.ascontiguousarray(arr), maps[..., 0], maps[..., 1], modes[interpolation], borderMode=cv2.BORDER_CONSTANT)
 
     def undistort(self, img: ArrayLike, *, interpolation: str = "linear") -> NDArray:
@@ -335,13 +356,17 @@ class CameraModel:
         """
         return self._remap(img, self.distort_points, interpolation)
 
-    def distort(self, img: ArrayLike, *, interpolation: str = "linear") -> NDArray:
-        """The inverse of :meth:`undistort`: an ideal (pinhole) image (H, W[, C]) as this lens would see it.
+    def distort(self, img: ArrayLike, *, interpolation: str = "linear", K_source: ArrayLike | None = None) -> NDArray:
+        """The inverse of :meth:`undistort`: an ideal (pinhole) image as this lens would see it.
 
         Use it to give a rendered image this camera's distortion; a scene point at ideal
-        pixel p appears at ``distort_points(p)``.
+        pixel p appears at ``distort_points(p)``. ``img`` is (H, W[, C]) at this camera's
+        resolution, taken with its K; or, with ``K_source``, a pinhole image of any size
+        taken from the same pose with intrinsics ``K_source`` (e.g. rendered with a margin
+        around the frame, so that barrel distortion does not pull black borders in). The
+        result is always this camera's size; pixels with no source are black.
         """
-        return self._remap(img, self.undistort_points, interpolation)
+        return self._remap(img, self.undistort_points, interpolation, K_source)
 
     # -- pose from points (PnP) -------------------------------------------------------------
     def estimate_pose(self, P_object: ArrayLike, pixels: ArrayLike, *, method: str = "sqpnp") -> Array:
