@@ -461,6 +461,10 @@ class Compiler:
         self.compile_blocks()
         self.compile_custom(defs)
         self.compile_evolution()
+        if self.spec.metrics:
+            from ejsgen._metrics import compile_metrics
+
+            compile_metrics(self)
         if self.spec.fmus:
             from ejsgen._fmu import compile_fmus
 

@@ -469,5 +469,7 @@ class Spec(Strict):
     """The view: a list of one-key mappings kind: {properties}."""
     simulation: Simulation = Field(default_factory=Simulation)
     """Simulation settings."""
+    metrics: dict[str, Expr] = Field(default_factory=dict)
+    """Per-run results of a sweep (ejsgen sweep): name: expression, evaluated on the state at the end of each run; each is a column of the sweep's summary."""
     fmus: dict[str, Fmu] = Field(default_factory=dict)
     """Functional Mock-up Units by name, co-simulated with the model (FMPy: pip install 'ejsgen[fmu]')."""
