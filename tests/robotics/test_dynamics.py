@@ -132,7 +132,7 @@ def test_friction_follows_the_toolbox_sign_convention():
 
 @pytest.mark.parametrize("name", ["rrr", "mdh5"])
 def test_unforced_frictionless_arm_conserves_energy(name):
-    robot = ALL_MODELS[name]().nofriction()
+    robot = ALL_MODELS[name]().nofriction(viscous=True)
     robot._params()
     n = robot.n
     q0 = robot.qr if hasattr(robot, "qr") else np.full(n, 0.3)

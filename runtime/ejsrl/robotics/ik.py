@@ -1,4 +1,4 @@
-"""Inverse kinematics: numerical (Levenberg-Marquardt) and closed form (Puma type).
+"""Inverse kinematics: closed-form seeds polished by Levenberg-Marquardt, and closed form (Puma type).
 
 Both answer with an :class:`IKSolution`: ``q``, ``success``, ``iterations``, ``residual``
 (norm of the weighted pose error) and ``reason`` when it fails.
@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import _ik_closed
 from .transforms import tr2angvec_vec
 
 if TYPE_CHECKING:
@@ -78,95 +79,316 @@ def ikine(
     joint_limits: bool = True,
     seed: int | None = 0,
     lam: float = 1e-3,
+    closed_form: bool = True,
 ) -> IKSolution:
-    """Numerical inverse kinematics by damped least squares (Levenberg-Marquardt).
+    """Inverse kinematics: closed-form seeds where the arm has them, polished and
+    otherwise searched by damped least squares (Levenberg-Marquardt).
 
-    Solves ``robot.fkine(q) == T`` (tool and base included). Each iteration solves
-    ``(J^T W J + (E + lam) I) dq = J^T W e`` with ``E = e^T W e / 2`` (Sugihara's damping:
-    quadratic convergence near the solution), accepts steps that reduce E and otherwise
-    raises the damping. Joint values are kept inside ``qlim``. A search that has not
-    converged after ``ilimit`` iterations restarts from a random seed within the limits,
-    up to ``slimit`` searches.
+    Solves ``robot.fkine(q) == T`` (tool and base included) to ``tol`` in position (m)
+    and orientation (rad), each measured as the norm of its part of the pose error.
+
+    - Arms with a closed form (Puma 560 type, Universal Robots type, 7R S-R-S arms such
+      as the PA-10; see :mod:`._ik_closed`): all solutions are computed, moved into the
+      joint limits by whole turns, and tried nearest to ``q0`` first; each is checked by
+      forward kinematics and polished by a few LM steps if needed (near singularities).
+      For a 7R arm joint 3 is the free angle: first ``q0``'s, then a sweep of its range.
+      A pose no configuration reaches is rejected at once; one reached only outside the
+      joint limits after a short search from the nearest solutions.
+    - Other arms, or when ``mask`` is given or ``closed_form=False``: LM iterations
+      ``(J^T W J + (E + lam) I) dq = J^T W e`` with ``E = e^T W e / 2`` (Sugihara's
+      damping), steps accepted when they reduce E (damping halved) and otherwise damped
+      10x harder; joint values clamped to ``qlim``. A search that has not converged
+      after ``ilimit`` iterations restarts from a random configuration within the
+      limits, up to ``slimit`` searches. A position farther from the base than the arm's
+      reach (the sum of its links' lengths) is rejected at once.
 
     Args:
         T: goal pose ``T_world_tool`` (4, 4).
-        q0: initial guess (n,); default the middle of the joint ranges.
+        q0: initial guess / preferred configuration (n,); default the middle of the
+            joint ranges.
         mask: (6,) weights on ``[x y z rx ry rz]``; for arms with fewer than 6 joints pass
             e.g. ``[1, 1, 0, 0, 0, 1]`` (planar x, y and yaw). Unweighted axes are ignored
             by the success test.
         tol: position (m) and orientation (rad) error below which the search succeeds.
         joint_limits: respect ``qlim`` (default True).
         seed: seed of the random restarts (reproducible by default).
+        closed_form: use the arm's closed-form solutions as seeds (default True).
     """
     n = robot.n
     Tg = np.asarray(T, dtype=float)
-    W = np.ones(6) if mask is None else np.asarray(mask, dtype=float).reshape(6)
-    lim = robot.qlim
-    finite = np.isfinite(lim)
-    lo = np.where(finite[0], lim[0], -np.pi)
-    hi = np.where(finite[1], lim[1], np.pi)
-    if not joint_limits:
-        lim = np.vstack((np.full(n, -np.inf), np.full(n, np.inf)))
-    qmin, qmax = lim.tolist()
+    full = mask is None
+    W = _FULL if full else np.asarray(mask, dtype=float).reshape(6)
+    prob = _Problem(_setup(robot, joint_limits), Tg, W, tol, lam)
+    lo, hi = prob.lo, prob.hi
     if q0 is None:
-        q = (0.5 * (lo + hi)).tolist()
+        q = prob.mid
     else:
-        q = np.clip(np.asarray(q0, dtype=float).reshape(n), lim[0], lim[1]).tolist()
+        q = np.clip(np.asarray(q0, dtype=float).reshape(n), prob.qmin, prob.qmax).tolist()
+    if closed_form and (full or bool(np.all(W == 1.0))) and prob.finite_goal():
+        cf = prob.setup.closed
+        if cf is not None:
+            return _ikine_closed(prob, cf, Tg, q, ilimit)
+    if prob.out_of_reach():
+        return prob.fail(q, 0, 0, f"pose out of reach: the position is farther from the base than the arm's "
+                         f"reach ({prob.setup.reach:.4g} m)")
     rng = np.random.default_rng(seed)
-    # One generated pass gives the pose and the Jacobian; the damped step is another.
-    pose_jacob = robot._kernel(("pose_jacob0",)).single
-    lm_step = robot._kernel(("lm_step",)).single
-    w = W.tolist()
-    pidx = [k for k in range(3) if w[k] > 0]
-    ridx = [k for k in range(3, 6) if w[k] > 0]
-    goal = Tg[:3, :].tolist()
-
-    def evaluate(qv: list[float]) -> tuple[list[float], tuple, float]:
-        v = pose_jacob(*qv)
-        e = _pose_error_rows(goal, v)
-        return e, v[16:], 0.5 * sum(wk * ek * ek for wk, ek in zip(w, e))
-
-    def converged(e: list[float]) -> bool:
-        return all(abs(e[k]) < tol for k in pidx) and all(abs(e[k]) < tol for k in ridx)
-
     total = 0
-    best_q, best_E, best_e = list(q), np.inf, [np.inf] * 6
+    best = None
     for search in range(1, slimit + 1):
-        e, J, E = evaluate(q)
-        damp = lam
-        for _ in range(ilimit):
-            if converged(e):
-                break
-            total += 1
-            dq = lm_step(*J, *e, *w, E + damp)
-            if joint_limits:
-                qn = [min(max(qi + di, a), b) for qi, di, a, b in zip(q, dq, qmin, qmax)]
+        q, e, E, it, ok = prob.lm(q, ilimit)
+        total += it
+        if ok:
+            return prob.success(q, e, E, total, search)
+        if best is None or E < best[2]:
+            best = (q, e, E)
+        q = rng.uniform(lo, hi).tolist()
+    return prob.fail(best[0], total, slimit, "no solution within tolerance after {s} searches ({err}): the pose may be "
+                     "out of reach or outside the joint limits", e=best[1], E=best[2])
+
+
+_FULL = np.ones(6)
+
+
+def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref: list[float],
+                  ilimit: int) -> IKSolution:
+    """:func:`ikine` for an arm with a closed form (see there)."""
+    tried = 0
+    total = 0
+    found = False
+    outside: list[list[float]] = []
+    sweep: list[float] | None = None
+    q3 = None
+    while True:
+        inside = 0
+        for s, _ in cf.candidates(Tg, q_ref, q3):
+            found = True
+            qs = prob.into_limits(s, q_ref)
+            if qs is None:
+                outside.append(s)
+                continue
+            inside += 1
+            tried += 1
+            q, e, E, it, ok = prob.polish(qs, ilimit)
+            total += it
+            if ok:
+                return prob.success(q, e, E, total, tried)
+        if not found:
+            # no configuration reaches the pose: a few LM steps give the closest approach
+            q, e, E, it, _ = prob.lm(q_ref, min(ilimit, 10))
+            return prob.fail(q, it, 1, "pose out of reach: no configuration of the arm reaches it ({err})", e=e, E=E)
+        if inside or cf.kind != "srs":
+            break
+        if sweep is None:
+            sweep = _q3_sweep(prob, q_ref)
+        if not sweep:
+            break
+        q3 = sweep.pop(0)  # 7R: no solution within the limits at this q3, try another
+    # reachable only outside the limits (or a singular family the seeds missed): short
+    # LM searches from the nearest solutions clamped into the limits
+    best = None
+    outside.sort(key=lambda s: sum((a - b) ** 2 for a, b in zip(prob.clamp(s), q_ref)))
+    for s in outside[:2]:
+        tried += 1
+        q, e, E, it, ok = prob.lm(prob.clamp(s), min(ilimit, 10))
+        total += it
+        if ok:
+            return prob.success(q, e, E, total, tried)
+        if best is None or E < best[2]:
+            best = (q, e, E)
+    if best is None:
+        q, e, E, it, _ = prob.lm(q_ref, min(ilimit, 10))
+        best = (q, e, E)
+        total += it
+    return prob.fail(best[0], total, tried, "the pose is reachable only outside the joint limits ({err})",
+                     e=best[1], E=best[2])
+
+
+def _q3_sweep(prob: "_Problem", q_ref: list[float]) -> list[float]:
+    """Values of joint 3 to try on a 7R arm, nearest to ``q_ref`` first."""
+    lo, hi = prob.lo[2], prob.hi[2]
+    grid = [lo + (hi - lo) * (k + 0.5) / 16 for k in range(16)]
+    grid.sort(key=lambda v: abs(v - q_ref[2]))
+    return grid
+
+
+_TWO_PI = 2.0 * math.pi
+
+
+class _Setup:
+    """What every IK call on one arm needs (cached with its generated kernels): limits as
+    floats, the kernels, the closed-form solver and the reach."""
+
+    def __init__(self, robot: "Robot", joint_limits: bool) -> None:
+        n = self.n = robot.n
+        self.robot = robot
+        lim = robot.qlim
+        finite = np.isfinite(lim)
+        self.lo = np.where(finite[0], lim[0], -np.pi).tolist()
+        self.hi = np.where(finite[1], lim[1], np.pi).tolist()
+        self.mid = [0.5 * (a + b) for a, b in zip(self.lo, self.hi)]
+        if not joint_limits:
+            lim = np.vstack((np.full(n, -np.inf), np.full(n, np.inf)))
+        self.joint_limits = joint_limits
+        self.qmin, self.qmax = lim.tolist()
+        self.pose_jacob = robot._kernel(("pose_jacob0",)).single
+        self.fk = robot._kernel(("fkine",)).single
+        self.lm_step = robot._kernel(("lm_step",)).single
+        self.closed = _ik_closed.solver(robot)
+        self.base_inv = np.linalg.inv(robot.base)
+        self.reach = self._reach()
+
+    def _reach(self) -> float:
+        """Upper bound on the distance from the base origin to the tool point (m): the sum
+        of the links' ``sqrt(a^2 + d^2)`` (largest ``d`` for a prismatic joint)."""
+        r = self.robot
+        total = 0.0
+        for j in range(self.n):
+            if r._prism[j]:
+                lo, hi = self.qmin[j] + r._offset[j], self.qmax[j] + r._offset[j]
+                dmax = max(abs(lo), abs(hi))
             else:
-                qn = [qi + di for qi, di in zip(q, dq)]
-            en, Jn, En = evaluate(qn)
-            if En < E:
+                dmax = abs(r._d[j])
+            total += math.hypot(r._a[j], dmax)
+            if r.ets:  # an ETSLink's constant transform (URDF arms) moves the joint too
+                total += float(np.linalg.norm(r.links[j].origin[:3, 3]))
+        return total + float(np.linalg.norm(r.tool[:3, 3]))
+
+
+def _setup(robot: "Robot", joint_limits: bool) -> _Setup:
+    robot._params()
+    key = ("ik_setup", joint_limits)
+    s = robot._kernels.get(key)
+    if s is None:
+        s = robot._kernels[key] = _Setup(robot, joint_limits)
+    return s
+
+
+class _Problem:
+    """One inverse-kinematics problem on Python floats: the goal and weights, with the
+    arm's :class:`_Setup` (limits, generated kernels)."""
+
+    def __init__(self, setup: _Setup, Tg: Array, W: Array, tol: float, lam: float) -> None:
+        self.setup = setup
+        self.n = setup.n
+        self.lo, self.hi, self.mid = setup.lo, setup.hi, setup.mid
+        self.qmin, self.qmax = setup.qmin, setup.qmax
+        self.joint_limits = setup.joint_limits
+        self.pose_jacob, self.fk, self.lm_step = setup.pose_jacob, setup.fk, setup.lm_step
+        self.Tg = Tg
+        self.goal = Tg[:3, :].tolist()
+        self.w = W.tolist()
+        self.pidx = [k for k in range(3) if self.w[k] > 0]
+        self.ridx = [k for k in range(3, 6) if self.w[k] > 0]
+        self.tol = tol
+        self.lam = lam
+
+    def finite_goal(self) -> bool:
+        return math.isfinite(sum(self.goal[0]) + sum(self.goal[1]) + sum(self.goal[2]))
+
+    # ------------------------------------------------------------------ errors
+    def _E(self, e: list[float]) -> float:
+        return 0.5 * sum(wk * ek * ek for wk, ek in zip(self.w, e))
+
+    def errors(self, e: list[float]) -> tuple[float, float]:
+        """Norms of the (weighted-in) position and orientation errors."""
+        return (math.sqrt(sum(e[k] * e[k] for k in self.pidx)), math.sqrt(sum(e[k] * e[k] for k in self.ridx)))
+
+    def converged(self, e: list[float]) -> bool:
+        pe, re = self.errors(e)
+        return pe < self.tol and re < self.tol
+
+    def evaluate(self, q: list[float]) -> tuple[list[float], tuple, float]:
+        v = self.pose_jacob(*q)
+        e = _pose_error_rows(self.goal, v)
+        return e, v[16:], self._E(e)
+
+    # ------------------------------------------------------------------ joint values
+    def clamp(self, q: list[float]) -> list[float]:
+        return [min(max(v, a), b) for v, a, b in zip(q, self.qmin, self.qmax)]
+
+    def into_limits(self, q: list[float], ref: list[float]) -> list[float] | None:
+        """``q`` with each angle moved by whole turns into the limits, nearest to ``ref``;
+        None if a joint cannot be."""
+        out = []
+        for v, r, a, b in zip(q, ref, self.qmin, self.qmax):
+            v = v + _TWO_PI * round((r - v) / _TWO_PI)  # nearest to the reference
+            if v < a or v > b:
+                best = None
+                for k in (-2, -1, 1, 2):
+                    u = v + k * _TWO_PI
+                    if a - 1e-12 <= u <= b + 1e-12 and (best is None or abs(u - r) < abs(best - r)):
+                        best = u
+                if best is None:
+                    return None
+                v = min(max(best, a), b)
+            out.append(v)
+        return out
+
+    # ------------------------------------------------------------------ searches
+    def lm(self, q: list[float], ilimit: int) -> tuple[list[float], list[float], float, int, bool]:
+        """One LM search from ``q``: ``(q, e, E, iterations, converged)``."""
+        e, J, E = self.evaluate(q)
+        damp = self.lam
+        it = 0
+        w = self.w
+        lm_step = self.lm_step
+        clamp = self.joint_limits
+        while not self.converged(e):
+            if it >= ilimit:
+                return q, e, E, it, False
+            it += 1
+            try:
+                dq = lm_step(*J, *e, *w, E + damp)
+            except (ZeroDivisionError, OverflowError, ValueError):
+                dq = None
+            if dq is not None:
+                qn = [a + b for a, b in zip(q, dq)]
+                if clamp:
+                    qn = self.clamp(qn)
+                en, Jn, En = self.evaluate(qn)
+            if dq is not None and En < E:
                 q, e, J, E = qn, en, Jn, En
                 damp = max(damp * 0.5, 1e-9)
             else:
                 damp *= 10.0
                 if damp > 1e6:
-                    break
-        if E < best_E:
-            best_q, best_E, best_e = list(q), E, list(e)
-        if converged(e):
-            pos_err = max((abs(e[k]) for k in pidx), default=0.0)
-            rot_err = max((abs(e[k]) for k in ridx), default=0.0)
-            return IKSolution(q=np.array(q), success=True, iterations=total, searches=search,
-                              residual=float(np.sqrt(2 * E)), pos_error=pos_err, rot_error=rot_err)
-        q = rng.uniform(lo, hi).tolist()
-    pos_err = float(np.sqrt(sum(best_e[k] ** 2 for k in pidx)))
-    rot_err = float(np.sqrt(sum(best_e[k] ** 2 for k in ridx)))
-    return IKSolution(
-        q=np.array(best_q), success=False, iterations=total, searches=slimit, residual=float(np.sqrt(2 * best_E)),
-        reason=f"no solution within tolerance after {slimit} searches (best position error {pos_err:.3g} m, "
-        f"orientation error {rot_err:.3g} rad): the pose may be out of reach or outside the joint limits",
-        pos_error=pos_err, rot_error=rot_err,
-    )
+                    return q, e, E, it, False
+        return q, e, E, it, True
+
+    def polish(self, q: list[float], ilimit: int) -> tuple[list[float], list[float], float, int, bool]:
+        """Check a closed-form candidate by forward kinematics; LM steps if it misses."""
+        e = _pose_error_rows(self.goal, self.fk(*q))
+        if self.converged(e):
+            return q, e, self._E(e), 0, True
+        return self.lm(q, ilimit)
+
+    # ------------------------------------------------------------------ reach
+    def out_of_reach(self) -> bool:
+        """True when the goal position is farther from the base than the arm's reach."""
+        if len(self.pidx) < 3:
+            return False
+        reach = self.setup.reach
+        if not math.isfinite(reach):
+            return False
+        p = self.setup.base_inv @ self.Tg[:, 3]
+        return math.sqrt(p[0] ** 2 + p[1] ** 2 + p[2] ** 2) > reach * (1.0 + 1e-9) + 1e-12
+
+    # ------------------------------------------------------------------ answers
+    def success(self, q: list[float], e: list[float], E: float, iterations: int, searches: int) -> IKSolution:
+        pe, re = self.errors(e)
+        return IKSolution(q=np.array(q), success=True, iterations=iterations, searches=searches,
+                          residual=math.sqrt(2 * E), pos_error=pe, rot_error=re)
+
+    def fail(self, q: list[float], iterations: int, searches: int, reason: str,
+             e: list[float] | None = None, E: float | None = None) -> IKSolution:
+        if e is None:
+            e = _pose_error_rows(self.goal, self.fk(*q))
+            E = self._E(e)
+        pe, re = self.errors(e)
+        err = f"best position error {pe:.3g} m, orientation error {re:.3g} rad"
+        return IKSolution(q=np.array(q), success=False, iterations=iterations, searches=searches,
+                          residual=math.sqrt(2 * E), reason=reason.format(s=searches, err=err),
+                          pos_error=pe, rot_error=re)
 
 
 def _pose_error_rows(goal: list[list[float]], v: tuple) -> list[float]:
@@ -198,105 +420,71 @@ def _pose_error_rows(goal: list[list[float]], v: tuple) -> list[float]:
 
 
 # ---------------------------------------------------------------------------- closed form
-_PUMA_ALPHA = np.array([np.pi / 2, 0.0, -np.pi / 2, np.pi / 2, -np.pi / 2, 0.0])
-
-
-def _check_puma(robot: "Robot") -> None:
-    ok = (
-        robot.n == 6
-        and not robot.mdh
-        and not robot._prism.any()
-        and np.allclose(robot._alpha, _PUMA_ALPHA)
-        and np.allclose(robot._a[[0, 3, 4, 5]], 0.0)
-        and np.allclose(robot._d[[1, 4]], 0.0)
-    )
-    if not ok:
+def _puma_solver(robot: "Robot") -> _ik_closed.ClosedForm:
+    cf = _ik_closed.solver(robot)
+    if cf is None or cf.kind != "puma":
         raise ValueError(
             f"{robot.name}: ikine_a needs a Puma-type 6R arm (standard DH, alpha = [90, 0, -90, 90, -90, 0] deg, "
             "a1 = a4 = a5 = a6 = 0, d2 = d5 = 0, spherical wrist); use ikine() for this arm"
         )
+    return cf
 
 
-def _wrap(a: Array | float) -> Array:
+def _wrap(a: Array) -> Array:
     return (np.asarray(a) + np.pi) % (2 * np.pi) - np.pi
 
 
 def ikine_a_all(robot: "Robot", T: ArrayLike) -> tuple[Array, list[str]]:
-    """All closed-form solutions of a Puma-type arm: ``(k, 6)`` joint values (k <= 8) and
-    their configuration strings (see :func:`ikine_a`). Joint limits are not applied."""
-    robot._params()
-    _check_puma(robot)
-    a2, a3 = robot._a[1], robot._a[2]
-    d1, d3, d4, d6 = robot._d[0], robot._d[2], robot._d[3], robot._d[5]
-    T06 = np.linalg.inv(robot.base) @ np.asarray(T, dtype=float) @ np.linalg.inv(robot.tool)
-    pw = T06[:3, 3] - d6 * T06[:3, 2]  # wrist centre
-    px, py, pz = pw[0], pw[1], pw[2] - d1
-    rho2 = px * px + py * py
-    sols: list[Array] = []
-    confs: list[str] = []
-    if rho2 < d3 * d3:
-        return np.empty((0, 6)), []
-    rho = np.sqrt(rho2)
-    phi = np.arctan2(py, px)
-    L3 = np.hypot(a3, d4)
-    beta = np.arctan2(d4, a3)
-    for arm in ("l", "r"):
-        delta = np.arcsin(d3 / rho)
-        th1 = phi + delta if arm == "r" else phi + np.pi - delta
-        c1, s1 = np.cos(th1), np.sin(th1)
-        X = px * c1 + py * s1
-        Y = pz
-        K = (X * X + Y * Y - a2 * a2 - a3 * a3 - d4 * d4) / (2 * a2)
-        if abs(K) > L3 * (1 + 1e-12):
-            continue
-        g = np.arccos(np.clip(K / L3, -1.0, 1.0))
-        for elbow in ("u", "d"):
-            th3 = -beta + (g if elbow == "u" else -g)
-            c3, s3 = np.cos(th3), np.sin(th3)
-            u = a2 + a3 * c3 - d4 * s3
-            v = a3 * s3 + d4 * c3
-            th2 = np.arctan2(Y, X) - np.arctan2(v, u)
-            q123 = np.array([th1, th2, th3, 0.0, 0.0, 0.0]) - robot._offset
-            A = robot._A(q123)
-            R03 = (A[0] @ A[1] @ A[2])[:3, :3]
-            R = R03.T @ T06[:3, :3]  # = Rz(th4) Ry(-th5) Rz(th6)
-            sb = np.hypot(R[0, 2], R[1, 2])
-            for wrist in ("n", "f"):
-                if sb < 1e-12:  # wrist singular: only th4 + th6 is determined
-                    th4 = 0.0
-                    th5 = 0.0 if R[2, 2] > 0 else np.pi
-                    th6 = np.arctan2(R[1, 0], R[0, 0]) if R[2, 2] > 0 else np.arctan2(-R[1, 0], -R[0, 0])
-                    if wrist == "f":
-                        th4, th6 = th4 + np.pi, th6 + np.pi
-                        th5 = -th5
-                else:
-                    sgn = 1.0 if wrist == "n" else -1.0
-                    th5 = -np.arctan2(sgn * sb, R[2, 2])  # Euler Y angle is -th5
-                    th4 = np.arctan2(sgn * R[1, 2], sgn * R[0, 2])
-                    th6 = np.arctan2(sgn * R[2, 1], -sgn * R[2, 0])
-                theta = np.array([th1, th2, th3, th4, th5, th6])
-                sols.append(_wrap(theta - robot._offset))
-                confs.append(arm + elbow + wrist)
-    return (np.array(sols) if sols else np.empty((0, 6))), confs
+    """All closed-form solutions of a Puma-type arm: ``(k, 6)`` joint values (k <= 8, each
+    angle in [-pi, pi)) and their configuration strings (see :func:`ikine_a`). Joint
+    limits are not applied."""
+    cf = _puma_solver(robot)
+    sols, confs = cf.solve(np.asarray(T, dtype=float), [0.0] * 6)
+    return (_wrap(np.array(sols)) if sols else np.empty((0, 6))), confs
 
 
-def ikine_a(robot: "Robot", T: ArrayLike, config: str = "lun") -> IKSolution:
+def _config(config: str) -> str:
+    """Robotics Toolbox's ``config_validate``: one letter of each pair, the first by default."""
+    c = config.lower()
+    bad = set(c) - set("lrudnf")
+    if bad:
+        raise ValueError(f"ikine_a: unknown configuration letter(s) {''.join(sorted(bad))!r} in {config!r}; "
+                         "use l/r (left/right arm), u/d (elbow up/down), n/f (wrist not flipped/flipped)")
+    out = ""
+    for pair in ("lr", "ud", "nf"):
+        if pair[0] in c and pair[1] in c:
+            raise ValueError(f"ikine_a: configuration {config!r} has both {pair[0]!r} and {pair[1]!r}")
+        out += pair[1] if pair[1] in c else pair[0]
+    return out
+
+
+def ikine_a(robot: "Robot", T: ArrayLike, config: str = "lun", *, tol: float = 1e-10) -> IKSolution:
     """Closed-form inverse kinematics of a Puma-type 6R arm with a spherical wrist.
 
-    ``config`` picks one of the 8 solutions with three letters (any order): ``l``/``r``
-    shoulder branch (left/right arm), ``u``/``d`` elbow up/down, ``n``/``f`` wrist
-    no-flip/flip (``n``: the Euler angle ``-q5`` of the wrist is taken in [0, pi]).
-    ``success`` is False when the pose is out of reach; limits are reported in ``reason``
-    but not enforced.
+    ``config`` picks one of the 8 solutions with up to three letters (any order), as
+    Robotics Toolbox's ``Puma560.ikine_a``: ``l``/``r`` left/right-handed arm, ``u``/``d``
+    elbow up/down, ``n``/``f`` wrist not flipped/flipped (``n``: ``q5 <= 0``); a missing
+    pair defaults to ``l``, ``u``, ``n``. Angles are in [-pi, pi).
+
+    ``success`` is True only when the solution reaches the pose to ``tol`` (position, m,
+    and orientation, rad, by forward kinematics); otherwise ``reason`` says why (out of
+    reach, or the residual). Joint limits are not enforced: a solution outside them
+    succeeds with ``reason`` saying so.
     """
+    want = _config(config)
     sols, confs = ikine_a_all(robot, T)
-    want = {c for c in config.lower()}
     for q, c in zip(sols, confs):
-        if set(c) <= want | set(c) and set(c) >= (want & set("lrudnf")):
-            err = pose_error(T, robot.fkine(q))
-            lim = robot.qlim
-            inside = bool(np.all((q >= lim[0] - 1e-12) & (q <= lim[1] + 1e-12)))
-            return IKSolution(q=q, success=True, iterations=0, residual=float(np.linalg.norm(err)),
-                              reason="" if inside else "solution outside the joint limits",
-                              pos_error=float(np.linalg.norm(err[:3])), rot_error=float(np.linalg.norm(err[3:])))
-    return IKSolution(q=np.full(6, np.nan), success=False, reason=f"pose out of reach for configuration {config!r}")
+        if c != want:
+            continue
+        err = pose_error(T, robot.fkine(q))
+        pe, re = float(np.linalg.norm(err[:3])), float(np.linalg.norm(err[3:]))
+        res = float(np.linalg.norm(err))
+        if not (pe < tol and re < tol):
+            return IKSolution(q=q, success=False, residual=res, pos_error=pe, rot_error=re,
+                              reason=f"the {want!r} solution misses the pose (position error {pe:.3g} m, "
+                              f"orientation error {re:.3g} rad, tolerance {tol:g})")
+        lim = robot.qlim
+        inside = bool(np.all((q >= lim[0] - 1e-12) & (q <= lim[1] + 1e-12)))
+        return IKSolution(q=q, success=True, iterations=0, residual=res,
+                          reason="" if inside else "solution outside the joint limits", pos_error=pe, rot_error=re)
+    return IKSolution(q=np.full(6, np.nan), success=False, reason=f"pose out of reach for configuration {want!r}")

@@ -362,16 +362,17 @@ class Robot:
 
     # ----------------------------------------------------------------- inverse kinematics
     def ikine(self, T: ArrayLike, q0: ArrayLike | None = None, **kw: Any) -> Any:
-        """Numerical inverse kinematics (Levenberg-Marquardt); see :func:`ejsrl.robotics.ik.ikine`."""
+        """Inverse kinematics: closed-form seeds where the arm has them, polished and otherwise
+        searched by Levenberg-Marquardt; see :func:`ejsrl.robotics.ik.ikine`."""
         from .ik import ikine
 
         return ikine(self, T, q0, **kw)
 
-    def ikine_a(self, T: ArrayLike, config: str = "lun") -> Any:
+    def ikine_a(self, T: ArrayLike, config: str = "lun", **kw: Any) -> Any:
         """Closed-form inverse kinematics of a Puma-type arm; see :func:`ejsrl.robotics.ik.ikine_a`."""
         from .ik import ikine_a
 
-        return ikine_a(self, T, config)
+        return ikine_a(self, T, config, **kw)
 
     # ----------------------------------------------------------------- dynamics
     def payload(self, mass: float, r: ArrayLike = (0.0, 0.0, 0.0), I: ArrayLike | None = None) -> None:  # noqa: E741
@@ -402,12 +403,14 @@ class Robot:
         return -G * (self._B * G * qd + coul)
 
     def nofriction(self, *, coulomb: bool = True, viscous: bool = False) -> "Robot":
-        """A copy without Coulomb friction (and without viscous friction unless ``viscous``)."""
+        """A copy with friction removed, as Robotics Toolbox's ``nofriction``: ``coulomb``
+        zeroes the Coulomb friction ``Tc``, ``viscous`` the viscous friction ``B`` (by
+        default only Coulomb friction goes)."""
         links = [k.copy() for k in self.links]
         for k in links:
             if coulomb:
                 k.Tc = np.zeros(2)
-            if not viscous:
+            if viscous:
                 k.B = 0.0
         r = Robot(links, name=self.name + " (no friction)", base=self.base, tool=self.tool,
                   gravity=self.gravity, poses=self.poses, manufacturer=self.manufacturer)
