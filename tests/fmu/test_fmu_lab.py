@@ -1,0 +1,83 @@
+"""Lab 8, the paper's figure 13 with its joint drives in an FMU, run headless.
+
+References: the paper's set points themselves; the same model written as one plain ODE
+spec (tests/fmu/specs/motor_control_ode.ejs.yaml: the drives in Python, their states as
+ODE states), whose trajectory the FMU lab must follow to 1e-6; FMPy's own validation of
+the FMU the build compiled from the lab's C sources.
+"""
+
+from __future__ import annotations
+
+import zipfile
+
+import numpy as np
+import pytest
+from testkit import ROOT, run_app
+from testkit.labs import headless, settle_time, vector
+
+SET_POINTS = np.array([np.pi / 2, np.pi / 3, -np.pi / 4])
+SPEC = "paper/fmu_motor_control"
+
+
+@pytest.fixture(scope="module")
+def lab(built):
+    return built(SPEC)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    from ejsgen.cli import build
+
+    return build(ROOT / "tests" / "fmu" / "specs" / "motor_control_ode.ejs.yaml", tmp_path_factory.mktemp("ref") / "ref")
+
+
+def test_the_built_lab_ships_an_fmu_compiled_from_the_labs_sources_that_fmpy_validates(lab):
+    from fmpy import platform
+    from fmpy.validation import validate_fmu
+
+    fmu = lab / "fmu_motor_control" / "joint_drives.fmu"
+    assert fmu.is_file()
+    with zipfile.ZipFile(fmu) as zf:
+        names = set(zf.namelist())
+    assert f"binaries/{platform}/joint_drives.so" in names
+    assert "sources/joint_drives.c" in names
+    assert validate_fmu(str(fmu)) == []
+
+
+def test_the_arm_reaches_the_papers_set_points_within_6_s_to_a_hundredth_of_a_radian(lab):
+    d = headless(lab, 6.0, vars="t,q,tau", every=25)
+    q = vector(d, "q", 3)  # the CSV names the joint vector's elements q[0], q[1], q[2]
+    assert d["t"][-1] == pytest.approx(6.0)
+    np.testing.assert_allclose(q[-1], SET_POINTS, atol=0.01)
+    for j in range(3):  # and it got there well before the end
+        assert settle_time(d["t"], q[:, j], SET_POINTS[j], band=0.02) < 3.0
+    assert np.abs(vector(d, "tau", 3)[5]).max() > 1.0  # the FMU's torques drove it
+
+
+def test_the_fmu_labs_trajectory_matches_the_same_model_as_a_plain_ode_spec(lab, reference):
+    names = "t,q,qd,tau,V"
+    a = headless(lab, 3.0, vars=names, every=10)
+    b = headless(reference, 3.0, vars=names, every=10)
+    assert len(a["t"]) == len(b["t"]) > 50
+    for key in b:
+        np.testing.assert_allclose(a[key], b[key], rtol=0, atol=1e-6, err_msg=key)
+    assert np.ptp(a["q[1]"]) > 1.0  # a real motion, not two arms at rest
+
+
+def test_set_changes_an_fmu_parameter_from_the_command_line(lab):
+    base = headless(lab, 2.0, vars="t,q", every=5)
+    no_d = headless(lab, 2.0, vars="t,q", every=5, sets={"Kd": "0"})
+    over_base = np.max(vector(base, "q", 3) / SET_POINTS, axis=0) - 1
+    over_no_d = np.max(vector(no_d, "q", 3) / SET_POINTS, axis=0) - 1
+    assert np.all(over_no_d > over_base + 0.01)  # without the derivative term the joints overshoot more
+
+
+def test_a_failing_fmu_call_stops_a_headless_run_with_the_fmus_message_and_the_spec_line(lab):
+    r = run_app(lab, "--headless", "--duration", "1", "--csv", "-", "--set", "i_max=20", timeout=120)
+    assert r.returncode != 0
+    spec = (ROOT / "examples" / f"{SPEC}.ejs.yaml").read_text().splitlines()
+    line = next(k for k, text in enumerate(spec, 1) if text.strip() == "drives:")
+    assert f"fmu_motor_control.ejs.yaml:{line}:" in r.stderr
+    assert "exceeds the amplifier's limit i_max = 20 A" in r.stderr  # the FMU's own log message
+    rows = r.stdout.strip().splitlines()
+    assert 2 <= len(rows) < 250  # it ran until the current grew past the limit, then stopped
