@@ -293,7 +293,7 @@ class ServoMonitor:
             )
         if Z is not None and len(p) == self.n_points:
             z = np.asarray(Z, dtype=np.float64).reshape(-1)
-            zm = float(np.mean(z)) if len(z) and np.isfinite(z).all() else float("nan")
+            zm = float(np.mean(z)) if len(z) and np.isfinite(z).all() and (z > 0).all() else float("nan")
             if np.isfinite(zm):
                 if self.Z0 is None:
                     self.Z0 = zm
