@@ -75,6 +75,7 @@ _MODEL_LINKS = {
     "SeriesEl": ("series", "plot-series"),
     "CodePage": ("code page", "code-pages"),
     "Ode": ("ODE", "ode-pages"),
+    "Fmu": ("FMU", "fmus"),
 }
 
 
@@ -327,6 +328,7 @@ def _sections() -> dict[str, Callable[[], str]]:
         "evolution-pages": lambda: "`ode:` page\n\n" + field_table(spec.OdePage) + "\n`code:` page\n\n" + field_table(spec.CodeEvolutionPage),
         "program": lambda: field_table(spec.Program),
         "simulation": lambda: field_table(spec.Simulation),
+        "fmu": lambda: field_table(spec.Fmu),
         "view-elements": lambda: _kinds_table(spec.GUI_ELEMENT_MODELS, {"scene": "The 3D world: a list of 3D elements (see [3D elements](#3d-elements))."}),
         "view-properties": lambda: _per_kind(spec.GUI_ELEMENT_MODELS),
         "plot-series": lambda: field_table(spec.SeriesEl),
@@ -341,7 +343,7 @@ def _sections() -> dict[str, Callable[[], str]]:
 #: the names of the generated sections, each of which language.md must hold once
 SECTIONS: tuple[str, ...] = (
     "top-level", "variable", "model", "code-page", "ode", "ode-methods", "events", "evolution-pages",
-    "program", "simulation", "view-elements", "view-properties", "plot-series", "scene-elements",
+    "program", "simulation", "fmu", "view-elements", "view-properties", "plot-series", "scene-elements",
     "scene-common", "scene-properties", "prelude", "reserved",
 )
 
