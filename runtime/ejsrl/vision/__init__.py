@@ -10,6 +10,16 @@ from __future__ import annotations
 
 from ejsrl.vision._susan import SUSAN_MASK, susan, susan_corners, susan_edges, usan_area
 from ejsrl.vision.camera import CameraModel, intrinsics_from_fov, look_at, pose_from_rvec
+from ejsrl.vision.matching import (
+    Features,
+    detect_features,
+    epipolar_distances,
+    find_essential,
+    find_fundamental,
+    find_homography,
+    match_features,
+    recover_pose,
+)
 from ejsrl.vision.stereo import StereoRectification, depth_from_disparity, disparity, stereo_rectify, triangulate
 from ejsrl.vision.calibration import Calibration, calibrate_camera, calibrate_chessboard, chessboard_points, draw_chessboard, find_chessboard
 from ejsrl.vision.color import (
@@ -126,6 +136,8 @@ __all__ = [
     "intrinsics_from_fov",
     "look_at",
     "pose_from_rvec",
+    "Features", "detect_features", "match_features", "find_homography", "find_fundamental", "find_essential",
+    "recover_pose", "epipolar_distances",
     "StereoRectification", "stereo_rectify", "disparity", "depth_from_disparity", "triangulate",
     "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "draw_chessboard", "find_chessboard",
     *_servo.__all__,
