@@ -11,18 +11,17 @@ import pytest
 
 from ejsrl.robotics import load_urdf
 from ejsrl.robotics.urdf import URDFError
-from testkit import EXAMPLES
+from ejsrl.robotics import models
 from testkit.robotics import FIXTURES
 
-UR5 = EXAMPLES / "urdf_arm" / "ur5" / "ur5.urdf"
+UR5 = models.UR5_URDF  # the installed copy
 TEST_ARM = FIXTURES / "urdf_test_arm.urdf"
 REF = json.loads((FIXTURES / "urdf_pinocchio.json").read_text())
-ROOT = EXAMPLES.parent
 
 
 def _arm(name: str):
     arm = REF["arms"][name]
-    robot = load_urdf(ROOT / arm["urdf"], tip=arm["tip"])
+    robot = models.ur5_urdf() if name == "ur5" else load_urdf(TEST_ARM, tip=arm["tip"])
     rows = arm["rows"]
     cols = {k: np.array([r[k] for r in rows]) for k in rows[0]}
     return robot, cols
@@ -51,8 +50,8 @@ def test_urdf_arm_matches_pinocchio(name: str, fast: bool) -> None:
 
 
 def test_urdf_ur5_reads_limits_names_tool_and_meshes() -> None:
-    robot = load_urdf(UR5, tip="tool0")
-    assert robot.name == "ur5"
+    robot = models.ur5_urdf()
+    assert robot.name == "UR5" and robot.tip == "tool0"
     assert robot.joint_names == ["shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint",
                                  "wrist_1_joint", "wrist_2_joint", "wrist_3_joint"]
     np.testing.assert_allclose(robot.qlim[:, 2], [-np.pi, np.pi], atol=1e-10)

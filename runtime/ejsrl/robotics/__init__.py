@@ -20,6 +20,7 @@ from .urdf import load_urdf
 
 from . import models  # noqa: E402  (models need Robot)
 from . import ik, trajectory  # noqa: E402
+from .trajectory import mstraj  # noqa: E402
 
 __all__ = [
     "Link",
@@ -32,6 +33,7 @@ __all__ = [
     "Robot",
     "models",
     "trajectory",
+    "mstraj",
     "transforms",
     "ik",
 ]

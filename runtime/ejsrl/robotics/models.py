@@ -1,4 +1,4 @@
-"""A library of arms, each a short declaration of its DH links.
+"""A library of arms, each a short declaration of its DH links (and one from its URDF file).
 
 Every model has named poses ``qz`` (all zeros) and ``qr`` (a ready pose), in
 ``robot.poses`` and as attributes, and ``link_lengths()`` / ``reach`` for drawing.
@@ -7,13 +7,18 @@ Sources are stated per model; dynamics not published for an arm are marked appro
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from .link import Link, PrismaticDH, RevoluteDH
 from .robot import Robot
 from .transforms import trotx
 
-__all__ = ["puma560", "stanford", "pa10", "ur5", "planar", "rrr", "scara"]
+__all__ = ["puma560", "stanford", "pa10", "ur5", "ur5_urdf", "UR5_URDF", "planar", "rrr", "scara"]
+
+#: the UR5 URDF file shipped with ejsrl (with its STL meshes; see NOTICE.md beside it)
+UR5_URDF = Path(__file__).resolve().parent / "data" / "ur5" / "ur5.urdf"
 
 pi = np.pi
 deg = pi / 180.0
@@ -125,6 +130,22 @@ def ur5() -> Robot:
     ]
     return Robot(L, name="UR5", manufacturer="Universal Robots",
                  poses={"qz": np.zeros(6), "qr": np.array([180, 0, 0, 0, 90, 0]) * deg})
+
+
+def ur5_urdf() -> Robot:
+    """Universal Robots UR5 from its URDF description (ros-industrial ``ur_description``, BSD;
+    see ``data/ur5/NOTICE.md``): link meshes, limits and inertias as the file gives them,
+    ``fkine`` to the ``tool0`` flange frame. Needs ``pip install yourdfpy``.
+
+    The ROS ``base_link`` is the arm's base turned half a turn about z from the DH model
+    :func:`ur5`, and the joint zero positions follow the URDF."""
+    from .urdf import load_urdf
+
+    robot = load_urdf(UR5_URDF, tip="tool0", name="UR5")
+    robot.manufacturer = "Universal Robots"
+    robot.addconfiguration("qz", np.zeros(6))
+    robot.addconfiguration("qr", np.array([0.0, -90.0, 90.0, -90.0, -90.0, 0.0]) * deg)
+    return robot
 
 
 def planar(n: int = 2, a: float = 1.0, m: float = 1.0, *, vertical: bool = False) -> Robot:

@@ -8,7 +8,8 @@ it). Times are in s, joint values in rad (or m for prismatic joints).
 Planners: :func:`cubic`, :func:`quintic` (= :func:`jtraj`), :func:`lspb` (trapezoidal
 velocity), :func:`synchronous`, :func:`asynchronous`, :func:`spline` (via points),
 :func:`poly434` / :func:`path434` with :func:`synchro` (the EjsRL 4-3-4 planner), and
-:func:`ctraj` (Cartesian straight line with SLERP orientation).
+:func:`ctraj` (Cartesian straight line with SLERP orientation), and :func:`mstraj`
+(multi-segment through via points with blends, as the Robotics Toolbox's).
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ __all__ = [
     "synchro",
     "path434",
     "ctraj",
+    "mstraj",
 ]
 
 Array = NDArray[np.float64]
@@ -449,3 +451,6 @@ def ctraj(T0: ArrayLike, T1: ArrayLike, T: float = 1.0, *, profile: str = "quint
     s = prof.q[:, 0]
     poses = np.array([_interp(T0, T1, float(si)) for si in s])
     return CartesianTrajectory(T0=T0, T1=T1, profile=prof, t=prof.t, s=s, poses=poses)
+
+
+from ._mstraj import mstraj  # noqa: E402  (it builds a Trajectory)

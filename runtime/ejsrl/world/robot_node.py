@@ -7,8 +7,9 @@ frame in its parent (the ``base`` expression of the spec, or the element's
 ``model.fkine_all``: ``"<robot>.link0"`` (the base, fkine_all index 0) to
 ``"<robot>.link<n>"``. Each link node's ``T_parent_local`` is ``fkine_all(q)[i]`` (so it
 includes the model's own ``base``), and its ``parts()`` are the link's geometry in the link
-frame: either the mesh file given for that link, or automatic geometry made from the DH
-parameters (a rod for each of the link's ``d`` and ``a`` offsets, a cylinder for each
+frame: either the mesh file given for that link, the model's own geometry
+(``model.visuals``: a URDF's meshes and primitives, see ``ejsrl.robotics.load_urdf``), or
+automatic geometry made from the DH parameters (a rod for each of the link's ``d`` and ``a`` offsets, a cylinder for each
 joint axis, a base plate and a tool flange), sized from ``model.reach``.
 
 So each frame only the link poses change: the renderer (``World.triangles``), the browser
@@ -33,7 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ejsrl.world.scene import Frame, Group, MeshNode, Node, Part, World
 
-__all__ = ["RobotNode", "LinkNode", "LinkShape", "link_name", "robot_geometry", "remove_subtree"]
+__all__ = ["RobotNode", "LinkNode", "LinkShape", "link_name", "robot_geometry", "model_visuals", "remove_subtree"]
 
 Array = NDArray[np.float64]
 
@@ -93,12 +94,17 @@ def robot_geometry(model: Any) -> tuple[list[list[Part]], list[list[LinkShape]]]
     alphas = [float(link.alpha) for link in model.links]
     prismatic = [bool(link.isprismatic) for link in model.links]
     mdh = bool(model.mdh)
+    ets = bool(getattr(model, "ets", False))
     rods: list[list[tuple[Array, Array]]] = [[] for _ in range(n + 1)]
     housings: list[list[tuple[int, bool]]] = [[] for _ in range(n + 1)]  # (joint index, prismatic)
     for i in range(1, n + 1):
         a, d = lengths[i - 1]
         al = alphas[i - 1]
-        if not mdh:
+        if ets:  # elementary transforms: a rod from frame i-1 to the joint, then the slide on z_i
+            rods[i - 1].append((np.zeros(3), np.array(model.links[i - 1].origin[:3, 3], dtype=float)))
+            rods[i].append((np.array([0.0, 0.0, -d]), np.zeros(3)))
+            housings[i].append((i, prismatic[i - 1]))
+        elif not mdh:
             p_prev = np.array([-a, -d * np.sin(al), -d * np.cos(al)])
             corner = np.array([-a, 0.0, 0.0])
             rods[i].append((p_prev, corner))
@@ -154,6 +160,57 @@ def robot_geometry(model: Any) -> tuple[list[list[Part]], list[list[LinkShape]]]
     return parts, shapes
 
 
+def model_visuals(model: Any) -> tuple[list[list[Part]], list[list[LinkShape]]]:
+    """The model's own geometry (``model.visuals``, e.g. a URDF's meshes): parts per link
+    frame 0..n, and for collisions one capsule around each piece (along its longest
+    principal axis, radius the largest distance of a vertex from that axis)."""
+    visuals = model.visuals
+    n = int(model.n)
+    if len(visuals) != n + 1:
+        raise ValueError(f"{getattr(model, 'name', 'robot')}: visuals must list n + 1 = {n + 1} link frames, "
+                         f"got {len(visuals)}")
+    parts: list[list[Part]] = []
+    shapes: list[list[LinkShape]] = []
+    for pieces in visuals:
+        ps: list[Part] = []
+        sh: list[LinkShape] = []
+        for vis in pieces:
+            rgba = getattr(vis, "rgba", None)
+            for m in vis.trimeshes():
+                rgb = m.metadata.get("rgb")
+                if rgb is None and rgba is not None:
+                    rgb = np.asarray(rgba, dtype=float)[:3]
+                ps.append(Part(m.vertices, m.faces, rgb))
+                cap = _capsule(np.asarray(m.vertices, dtype=float))
+                if cap is not None:
+                    sh.append(cap)
+        parts.append(ps)
+        shapes.append(sh)
+    return parts, shapes
+
+
+def _capsule(V: Array) -> LinkShape | None:
+    """A capsule that holds the points V (k, 3): its axis is their longest principal axis."""
+    if len(V) < 2:
+        return None
+    c = V.mean(axis=0)
+    _, _, Vt = np.linalg.svd(V - c, full_matrices=False)
+    u = Vt[0]
+    t = (V - c) @ u
+    radial = np.linalg.norm((V - c) - np.outer(t, u), axis=1)
+    r = float(radial.max())
+    # shorten the segment by the radius at each end where the points allow it
+    lo, hi = float(t.min()), float(t.max())
+    if hi - lo > 2 * r:
+        lo, hi = lo + r, hi - r
+    else:
+        lo = hi = 0.5 * (lo + hi)
+    # the capsule must still cover every point: grow the radius to the farthest one
+    tc = np.clip(t, lo, hi)
+    r = float(np.linalg.norm((V - c) - np.outer(tc, u), axis=1).max())
+    return LinkShape("capsule", p0=c + lo * u, p1=c + hi * u, radius=max(r, 1e-6))
+
+
 def _tz(z: float) -> Array:
     T = np.eye(4)
     T[2, 3] = z
@@ -166,8 +223,11 @@ def _geometry_key(model: Any) -> tuple:
     return (
         len(links),
         tuple((float(k.a), float(k.d), float(k.alpha), bool(k.isprismatic),
-               None if k.qlim is None else tuple(np.asarray(k.qlim, dtype=float).tolist())) for k in links),
+               None if k.qlim is None else tuple(np.asarray(k.qlim, dtype=float).tolist()),
+               tuple(np.asarray(getattr(k, "origin", np.eye(4)), dtype=float)[:3].round(12).ravel().tolist()))
+              for k in links),
         tuple(np.asarray(model.tool, dtype=float)[:3, 3].round(12).tolist()),
+        id(getattr(model, "visuals", None)),
     )
 
 
@@ -316,6 +376,8 @@ class RobotNode(Group):
 
     def _link_geometry(self, model: Any) -> tuple[list[list[Part]], list[list[LinkShape]]]:
         n = int(model.n)
+        if self.mesh_parts is None and getattr(model, "visuals", None):
+            return model_visuals(model)
         auto_parts, auto_shapes = robot_geometry(model)
         if self.mesh_parts is None:
             return auto_parts, auto_shapes
