@@ -1,7 +1,8 @@
 """``--plot out.png``: a summary column against one or two parameters (matplotlib, imported lazily).
 
 One parameter: the column against it. Two: one curve per value of the second parameter
-when it takes a few values, else points coloured by the column. Failed runs are left out.
+when it takes a few values (at most 8), else points coloured by the column. By default the
+parameter with the most values is along x. Failed runs are left out.
 """
 
 from __future__ import annotations
@@ -53,7 +54,12 @@ def plot_summary(summary: Table, params: Sequence[str], out: str | Path, *, y: s
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    xs = [s.strip() for s in x.split(",")] if x else list(params)[:2]
+    if x:
+        xs = [s.strip() for s in x.split(",")]
+    else:  # the parameter with the most values along x, the next one as curves
+        present = [p for p in params if p in summary.columns]
+        counts = {p: len(set(summary.to_pydict()[p])) for p in present}
+        xs = sorted(present, key=lambda p: -counts[p])[:2]
     if not xs:
         raise PlotError("the sweep has no parameter to plot against (give --grid, --values or --table)")
     for name in xs:
