@@ -163,3 +163,15 @@ def test_ikine_without_closed_form_still_solves():
     targets = p.fkine(random_q(p, rng, 100))
     ok = sum(p.ikine(T, closed_form=False).success for T in targets)
     assert ok >= 99
+
+
+@pytest.mark.parametrize(("make", "joint"), [(models.puma560, 1), (models.ur5, 2), (models.pa10, 3)])
+def test_ikine_with_joint_offsets_on_a_moved_base_and_tool(make, joint):
+    robot = with_base_tool(make())
+    robot.links[joint].offset = 0.3
+    robot.links[0].offset = -0.2
+    rng = np.random.default_rng(17)
+    for T in robot.fkine(random_q(robot, rng, 100)):
+        sol = robot.ikine(T)
+        assert sol.success, sol.reason
+        assert _reached(robot, T, sol.q)

@@ -35,6 +35,7 @@ import numpy as np
 Rot = tuple  # 9 floats, row-major
 
 _PI = math.pi
+_TWO_PI = 2.0 * math.pi
 _SING = 1e-9  # |sin| below which a wrist or shoulder is treated as singular
 
 
@@ -60,9 +61,18 @@ def _tmul(A: Rot, B: Rot) -> Rot:
 
 
 def _chain(thetas: Sequence[float], cs: Sequence[tuple[float, float]]) -> Rot:
-    R = _rzrx(thetas[0], *cs[0])
-    for th, c in zip(thetas[1:], cs[1:]):
-        R = _mul(R, _rzrx(th, *c))
+    """``Rz(th0) Rx(alpha0) Rz(th1) Rx(alpha1) ...``; a zero alpha merges two z turns."""
+    th = thetas[0]
+    R = None
+    for k in range(len(thetas)):
+        c = cs[k]
+        if c[1] == 0.0 and c[0] == 1.0 and k + 1 < len(thetas):
+            th += thetas[k + 1]
+            continue
+        A = _rzrx(th, c[0], c[1])
+        R = A if R is None else _mul(R, A)
+        if k + 1 < len(thetas):
+            th = thetas[k + 1]
     return R
 
 
@@ -83,17 +93,23 @@ def _acos2(x: float) -> float | None:
 def wrist(M: Rot, c1: tuple[float, float], c2: tuple[float, float], a_ref: float) -> list[tuple[float, float, float]]:
     """The two solutions ``(a, b, c)`` of ``M = Rz(a) Rx(alpha1) Rz(b) Rx(alpha2) Rz(c)``
     (a spherical wrist; ``c1``, ``c2`` are cos and sin of alpha1 and alpha2, both alphas
-    ±90 deg or any value with nonzero sine). Ordered ``b >= 0`` first. When the first and
-    last axes align (``sin b = 0``) only ``a + c`` (or ``a - c``) is determined: ``a`` is
-    then ``a_ref``."""
+    ±90 deg or any value with nonzero sine). When the first and last axes align
+    (``sin b = 0``) only ``a + c`` (or ``a - c``) is determined: ``a`` is then ``a_ref``."""
     ca1, sa1 = c1
     ca2, sa2 = c2
     cb = (ca1 * ca2 - M[8]) / (sa1 * sa2)
     cb = 1.0 if cb > 1.0 else (-1.0 if cb < -1.0 else cb)
     if ca1 == 0.0 and ca2 == 0.0:
-        # alphas ±90 deg: |sin b| is the horizontal part of M's last column, accurate where
-        # acos is not (b near 0 or pi, the wrist singularity)
-        b0 = math.atan2(math.hypot(M[2], M[5]), cb)
+        # alphas ±90 deg: M[:, 2] = (cos a, sin a) s2 sin b and M[2, :2] = s1 sin b (cos c, -sin c),
+        # so |sin b| is exact where acos is not (b near 0 or pi, the wrist singularity)
+        sb = math.hypot(M[2], M[5])
+        b0 = math.atan2(sb, cb)
+        if sb > 1e-6:
+            out = []
+            for sign in (1.0, -1.0):
+                k, kc = sign * sa2, sign * sa1
+                out.append((math.atan2(k * M[5], k * M[2]), sign * b0, math.atan2(-kc * M[7], kc * M[6])))
+            return out
     else:
         b0 = math.acos(cb)
     out = []
@@ -160,6 +176,8 @@ class ClosedForm:
         self.cs = list(zip(robot._ca.tolist(), robot._sa.tolist()))
         self.cs = [(0.0 if abs(c) < 1e-12 else c, 0.0 if abs(s) < 1e-12 else s) for c, s in self.cs]
         self.offset = robot._offset.tolist()
+        self.has_offset = any(self.offset)
+        self._family = getattr(self, "_" + kind)
         self.base_inv = None if robot._base_is_eye else np.linalg.inv(robot.base)
         self.tool_inv = None if robot._tool_is_eye else np.linalg.inv(robot.tool)
 
@@ -177,13 +195,17 @@ class ClosedForm:
         ``q3``: joint 3 of a 7R arm (default ``q_ref``'s)."""
         R, p = _pose_arm(self, T)
         off = self.offset
+        if not self.has_offset:
+            ref = q_ref if isinstance(q_ref, list) else list(q_ref)
+            if self.kind == "srs":
+                return self._srs(R, p, ref, ref[2] if q3 is None else q3)
+            return self._family(R, p, ref)
         ref = [q + o for q, o in zip(q_ref, off)]
         if self.kind == "srs":
             gen = self._srs(R, p, ref, ref[2] if q3 is None else q3 + off[2])
         else:
-            gen = getattr(self, "_" + self.kind)(R, p, ref)
-        for th, label in gen:
-            yield [t - o for t, o in zip(th, off)], label
+            gen = self._family(R, p, ref)
+        return (([t - o for t, o in zip(th, off)], label) for th, label in gen)
 
     def _wrist_centre(self, R: Rot, p: list[float]) -> list[float]:
         """Flange position minus the last link's ``d`` along the last joint's axis."""
@@ -229,7 +251,9 @@ class ClosedForm:
         cs = self.cs
         for _, th1, th2, th3, label in branches:
             R03 = _chain([th1, th2, th3], cs[:3])
-            M = _mul(_tmul(R03, R), _rzrx(0.0, cs[5][0], -cs[5][1]))  # Rx(-alpha6)
+            M = _tmul(R03, R)
+            if cs[5][1] != 0.0:
+                M = _mul(M, _rzrx(0.0, cs[5][0], -cs[5][1]))  # Rx(-alpha6)
             for a, b, c in _nearest(wrist(M, cs[3], cs[4], ref[3]), ref[3:6]):
                 # Robotics Toolbox: wrist "n" when the Euler angle -q5 is in [0, pi] (alpha4 > 0)
                 flip = (b > 0) == (cs[3][1] > 0)
@@ -345,7 +369,9 @@ class ClosedForm:
         branches.sort(key=_first)
         for _, th1, th2, th4, label in branches:
             R04 = _chain([th1, th2, th3, th4], cs[:4])
-            M = _mul(_tmul(R04, R), _rzrx(0.0, cs[6][0], -cs[6][1]))
+            M = _tmul(R04, R)
+            if cs[6][1] != 0.0:
+                M = _mul(M, _rzrx(0.0, cs[6][0], -cs[6][1]))  # Rx(-alpha7)
             for a, b, c in _nearest(wrist(M, cs[4], cs[5], ref[4]), ref[4:7]):
                 yield [th1, th2, th3, th4, a, b, c], label + ("n" if b >= 0 else "f")
 
@@ -355,8 +381,11 @@ def _first(x: tuple) -> float:
 
 
 def _dist(th: Sequence[float], ref: Sequence[float]) -> float:
-    """Squared distance between angles, each difference wrapped to [-pi, pi)."""
-    return sum(((a - b + _PI) % (2 * _PI) - _PI) ** 2 for a, b in zip(th, ref))
+    """Squared distance between three angles, each difference wrapped to [-pi, pi)."""
+    a = (th[0] - ref[0] + _PI) % _TWO_PI - _PI
+    b = (th[1] - ref[1] + _PI) % _TWO_PI - _PI
+    c = (th[2] - ref[2] + _PI) % _TWO_PI - _PI
+    return a * a + b * b + c * c
 
 
 def _nearest(sols: list[tuple[float, float, float]], ref: Sequence[float]) -> list[tuple[float, float, float]]:

@@ -124,13 +124,13 @@ def ikine(
         q = prob.mid
     else:
         q = np.clip(np.asarray(q0, dtype=float).reshape(n), prob.qmin, prob.qmax).tolist()
+    if prob.out_of_reach():
+        return prob.fail(q, 0, 0, f"pose out of reach: the position is farther from the base than the arm's "
+                         f"reach ({prob.setup.reach:.4g} m)")
     if closed_form and (full or bool(np.all(W == 1.0))) and prob.finite_goal():
         cf = prob.setup.closed
         if cf is not None:
             return _ikine_closed(prob, cf, Tg, q, ilimit)
-    if prob.out_of_reach():
-        return prob.fail(q, 0, 0, f"pose out of reach: the position is farther from the base than the arm's "
-                         f"reach ({prob.setup.reach:.4g} m)")
     rng = np.random.default_rng(seed)
     total = 0
     best = None
@@ -147,6 +147,9 @@ def ikine(
 
 
 _FULL = np.ones(6)
+_FULL_W = [1.0] * 6
+_PIDX = [0, 1, 2]
+_RIDX = [3, 4, 5]
 
 
 def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref: list[float],
@@ -172,10 +175,9 @@ def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref:
             total += it
             if ok:
                 return prob.success(q, e, E, total, tried)
-        if not found:
-            # no configuration reaches the pose: a few LM steps give the closest approach
-            q, e, E, it, _ = prob.lm(q_ref, min(ilimit, 10))
-            return prob.fail(q, it, 1, "pose out of reach: no configuration of the arm reaches it ({err})", e=e, E=E)
+        if not found:  # no configuration reaches the pose, with or without limits
+            return prob.fail(q_ref, 0, 0, "pose out of reach: no configuration of the arm reaches it "
+                             "(errors at q0: {err}; closed_form=False searches for the closest approach)")
         if inside or cf.kind != "srs":
             break
         if sweep is None:
@@ -234,7 +236,7 @@ class _Setup:
         self.fk = robot._kernel(("fkine",)).single
         self.lm_step = robot._kernel(("lm_step",)).single
         self.closed = _ik_closed.solver(robot)
-        self.base_inv = np.linalg.inv(robot.base)
+        self.base_inv_rows = None if robot._base_is_eye else np.linalg.inv(robot.base)[:3].tolist()
         self.reach = self._reach()
 
     def _reach(self) -> float:
@@ -276,9 +278,12 @@ class _Problem:
         self.pose_jacob, self.fk, self.lm_step = setup.pose_jacob, setup.fk, setup.lm_step
         self.Tg = Tg
         self.goal = Tg[:3, :].tolist()
-        self.w = W.tolist()
-        self.pidx = [k for k in range(3) if self.w[k] > 0]
-        self.ridx = [k for k in range(3, 6) if self.w[k] > 0]
+        if W is _FULL:
+            self.w, self.pidx, self.ridx = _FULL_W, _PIDX, _RIDX
+        else:
+            self.w = W.tolist()
+            self.pidx = [k for k in range(3) if self.w[k] > 0]
+            self.ridx = [k for k in range(3, 6) if self.w[k] > 0]
         self.tol = tol
         self.lam = lam
 
@@ -287,10 +292,14 @@ class _Problem:
 
     # ------------------------------------------------------------------ errors
     def _E(self, e: list[float]) -> float:
+        if self.w is _FULL_W:
+            return 0.5 * (e[0] * e[0] + e[1] * e[1] + e[2] * e[2] + e[3] * e[3] + e[4] * e[4] + e[5] * e[5])
         return 0.5 * sum(wk * ek * ek for wk, ek in zip(self.w, e))
 
     def errors(self, e: list[float]) -> tuple[float, float]:
         """Norms of the (weighted-in) position and orientation errors."""
+        if self.pidx is _PIDX and self.ridx is _RIDX:
+            return (math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
         return (math.sqrt(sum(e[k] * e[k] for k in self.pidx)), math.sqrt(sum(e[k] * e[k] for k in self.ridx)))
 
     def converged(self, e: list[float]) -> bool:
@@ -370,8 +379,13 @@ class _Problem:
         reach = self.setup.reach
         if not math.isfinite(reach):
             return False
-        p = self.setup.base_inv @ self.Tg[:, 3]
-        return math.sqrt(p[0] ** 2 + p[1] ** 2 + p[2] ** 2) > reach * (1.0 + 1e-9) + 1e-12
+        g = self.goal
+        x, y, z = g[0][3], g[1][3], g[2][3]
+        B = self.setup.base_inv_rows
+        if B is not None:
+            x, y, z = (B[0][0] * x + B[0][1] * y + B[0][2] * z + B[0][3], B[1][0] * x + B[1][1] * y + B[1][2] * z + B[1][3],
+                       B[2][0] * x + B[2][1] * y + B[2][2] * z + B[2][3])
+        return math.sqrt(x * x + y * y + z * z) > reach * (1.0 + 1e-9) + 1e-12
 
     # ------------------------------------------------------------------ answers
     def success(self, q: list[float], e: list[float], E: float, iterations: int, searches: int) -> IKSolution:
