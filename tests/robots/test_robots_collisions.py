@@ -158,7 +158,10 @@ def test_collisions_from_model_code_in_a_built_app(tmp_path) -> None:
 
 
 def test_one_check_of_a_seven_joint_arm_among_ten_objects_takes_under_two_milliseconds() -> None:
-    from bench.robots_collision import build_cell, sweep
+    from testkit import bench_module
+
+    bench = bench_module("robots_collision")
+    build_cell, sweep = bench.build_cell, bench.sweep
 
     sync, wf, m = build_cell()
     qs = sweep(200)

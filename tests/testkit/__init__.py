@@ -35,3 +35,15 @@ def run_app(app_dir: Path, *args: str, timeout: float = 300) -> subprocess.Compl
     """Run a built app's ``app.py`` with arguments; returns the finished process."""
     env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
     return subprocess.run([sys.executable, str(app_dir / "app.py"), *args], capture_output=True, text=True, timeout=timeout, env=env)
+
+
+def bench_module(name: str):
+    """Import ``bench/<name>.py`` by its path: the checkout itself stays off ``sys.path``."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(f"bench_{name}", ROOT / "bench" / f"{name}.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up while the class is made
+    spec.loader.exec_module(module)
+    return module
