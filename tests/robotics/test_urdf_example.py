@@ -13,6 +13,7 @@ import pytest
 import trimesh
 
 from ejsrl.robotics import models
+from ejsrl.view.elements import Folder, Slider
 from testkit import run_app
 from testkit.robotics import FIXTURES
 from testkit.robots import load_built
@@ -43,7 +44,10 @@ def test_urdf_example_runs_headless_and_its_tool_pose_is_pinocchios(app_dir) -> 
 def test_urdf_example_draws_the_urdf_meshes_at_the_link_frames(app_dir) -> None:
     app = load_built(app_dir)
     q = np.array(REF[1]["q"])
-    app.model.q_deg = np.degrees(q)
+    sliders = {el.bind: el for folder in app.view if isinstance(folder, Folder) for el in folder.children
+               if isinstance(el, Slider)}
+    for j in range(6):  # as a student drags the sliders (the fixed relations run after each)
+        app.apply_control(sliders[f"q_deg[{j}]"], float(np.degrees(q[j])))
     app.frame()
     assert app.error is None
     robot = models.ur5_urdf()
@@ -68,7 +72,7 @@ def test_urdf_example_demo_follows_the_mstraj_path(app_dir) -> None:
     app = load_built(app_dir)
     app.model.demo = True
     for _ in range(5):
-        app.step()
+        app.step_once()
     assert app.error is None
     np.testing.assert_allclose(app.model.q_deg, app.model.path[5])
     np.testing.assert_allclose(app.world.T_world("ur5.link6"),

@@ -4,6 +4,7 @@ Names follow Corke's Robotics Toolbox: ``Robot.fkine``, ``jacob0``, ``ikine``, `
 Everything takes and returns NumPy arrays, SI units and radians.
 
 - :class:`Link`, :class:`Robot`: models and their kinematics and dynamics.
+- :class:`SE3`, :class:`SO3`: pose and rotation values (composition ``*``, ``inv``, ``interp``...).
 - :func:`load_urdf`: a ``Robot`` from a URDF file (:class:`ETSLink` links, meshes to draw).
 - :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``planar``, ``rrr``, ``scara``.
 - :mod:`trajectory`: cubic, quintic, LSPB, synchronous/asynchronous, splines, 4-3-4, Cartesian.
@@ -17,6 +18,7 @@ from . import transforms
 from .link import ETSLink, Link, PrismaticDH, PrismaticMDH, RevoluteDH, RevoluteMDH
 from .robot import Robot
 from .urdf import load_urdf
+from .pose import SE3, SO3
 
 from . import models  # noqa: E402  (models need Robot)
 from . import ik, trajectory  # noqa: E402
@@ -26,6 +28,8 @@ __all__ = [
     "Link",
     "ETSLink",
     "load_urdf",
+    "SE3",
+    "SO3",
     "RevoluteDH",
     "PrismaticDH",
     "RevoluteMDH",
