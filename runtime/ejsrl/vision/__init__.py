@@ -10,6 +10,11 @@ from __future__ import annotations
 
 from ejsrl.vision._susan import SUSAN_MASK, susan, susan_corners, susan_edges, usan_area
 from ejsrl.vision.camera import CameraModel, intrinsics_from_fov, look_at, pose_from_rvec
+from ejsrl.vision.colorspace import delta_e, lab_to_rgb, lab_to_xyz, rgb_to_lab, rgb_to_xyz, xyz_to_lab, xyz_to_rgb
+from ejsrl.vision.flow import flow_magnitude, optical_flow, warp_by_flow
+from ejsrl.vision.scale import collapse_laplacian_pyramid, dog_filter, gaussian_pyramid, laplacian_pyramid, log_blobs, log_filter
+from ejsrl.vision.segmentation import distance_transform, skeleton, split_touching, watershed
+from ejsrl.vision.shape import ellipse_from_moments, hu_moments
 from ejsrl.vision.matching import (
     Features,
     detect_features,
@@ -136,6 +141,11 @@ __all__ = [
     "intrinsics_from_fov",
     "look_at",
     "pose_from_rvec",
+    "rgb_to_xyz", "xyz_to_rgb", "xyz_to_lab", "lab_to_xyz", "rgb_to_lab", "lab_to_rgb", "delta_e",
+    "optical_flow", "flow_magnitude", "warp_by_flow",
+    "gaussian_pyramid", "laplacian_pyramid", "collapse_laplacian_pyramid", "log_filter", "dog_filter", "log_blobs",
+    "distance_transform", "watershed", "split_touching", "skeleton",
+    "hu_moments", "ellipse_from_moments",
     "Features", "detect_features", "match_features", "find_homography", "find_fundamental", "find_essential",
     "recover_pose", "epipolar_distances",
     "StereoRectification", "stereo_rectify", "disparity", "depth_from_disparity", "triangulate",
