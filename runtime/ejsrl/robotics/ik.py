@@ -357,7 +357,7 @@ class _Problem:
                 en, Jn, En = self.evaluate(qn)
             if dq is not None and En < E:
                 q, e, J, E = qn, en, Jn, En
-                damp = max(damp * 0.5, 1e-9)
+                damp = max(damp * 0.1, 1e-20)
             else:
                 damp *= 10.0
                 if damp > 1e6:
