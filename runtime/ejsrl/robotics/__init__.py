@@ -9,7 +9,8 @@ Everything takes and returns NumPy arrays, SI units and radians.
 - :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``planar``, ``rrr``, ``scara``.
 - :mod:`trajectory`: cubic, quintic, LSPB, synchronous/asynchronous, splines, 4-3-4, Cartesian.
 - :mod:`transforms`: rotations, transforms, RPY/Euler, angle-axis, quaternions (wxyz).
-- :mod:`ik`: ``ikine`` (Levenberg-Marquardt) and ``ikine_a`` (closed form, Puma type).
+- :mod:`ik`: ``ikine`` (closed-form seeds where the arm has them, Levenberg-Marquardt) and
+  ``ikine_a`` (closed form, Puma type).
 """
 
 from __future__ import annotations

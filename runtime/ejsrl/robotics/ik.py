@@ -33,12 +33,16 @@ class IKSolution:
 
     Attributes:
         q: (n,) joint values (the best found, even on failure).
-        success: True only when the (masked) position error is below ``tol`` m and the
-            orientation error below ``tol`` rad.
-        iterations: total iterations over all searches.
-        searches: number of starts used (1 + restarts).
+        success: True only when the (masked) position error norm is below ``tol`` m and
+            the orientation error (rotation angle) below ``tol`` rad, checked by forward
+            kinematics.
+        iterations: total Levenberg-Marquardt iterations over all searches (0 when a
+            closed-form solution was exact).
+        searches: number of starts used: closed-form candidates tried, or 1 + restarts
+            (0 when the pose was rejected before any search).
         residual: norm of the final weighted pose error.
         reason: why it failed ("" on success).
+        pos_error, rot_error: norms of the position (m) and orientation (rad) errors.
     """
 
     q: Array
