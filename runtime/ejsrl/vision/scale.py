@@ -42,9 +42,14 @@ def _float_gray(img: ArrayLike) -> Float:
 def gaussian_pyramid(img: ArrayLike, levels: int = 4) -> list[NDArray]:
     """``levels`` images: the input, then each blurred and halved (``cv2.pyrDown``), same dtype."""
     n = _levels(levels)
-    a = np.ascontiguousarray(np.asarray(img))
+    a = np.asarray(img)
     if a.ndim not in (2, 3) or a.size == 0:
         raise ValueError(f"img must be a non-empty (H, W) or (H, W, 3) image, got shape {a.shape}")
+    if a.dtype == np.bool_:
+        a = a.astype(np.uint8) * 255
+    if a.dtype not in (np.uint8, np.uint16, np.int16, np.float32, np.float64):
+        raise ValueError(f"img must be uint8, uint16, int16, float32 or float64, got {a.dtype}")
+    a = np.ascontiguousarray(a)
     out = [a]
     for _ in range(n - 1):
         if min(out[-1].shape[:2]) < 2:
