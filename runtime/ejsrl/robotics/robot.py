@@ -20,7 +20,7 @@ from typing import Any, Iterable
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from . import _dynamics, _kernels, _kinematics
+from . import _dynamics, _extras, _kernels, _kinematics
 from .link import ETSLink, Link
 
 __all__ = ["Robot"]
@@ -569,6 +569,71 @@ class Robot:
             raise np.linalg.LinAlgError(f"{self.name}: singular inertia matrix (a link chain without mass "
                                         "or armature); give the links mass or motor inertia")
         return out
+
+    # ----------------------------------------------------------------- more of the Toolbox
+    def hessian0(self, q: ArrayLike, J0: ArrayLike | None = None) -> Array:
+        """Manipulator Hessian in the world frame (n, 6, n) (or (m, n, 6, n)):
+        ``H[j, :, i]`` is the derivative of ``jacob0``'s column i with respect to ``q_j``."""
+        return _extras.hessian0(self, self._q(q), None if J0 is None else np.asarray(J0, dtype=float))
+
+    def jacob0_dot(self, q: ArrayLike, qd: ArrayLike, H: ArrayLike | None = None) -> Array:
+        """Rate of change of ``jacob0`` (6, n) at joint velocities ``qd``, so the tool's
+        spatial acceleration is ``J qdd + Jdot qd``."""
+        return _extras.jacob0_dot(self, self._q(q), qd, None if H is None else np.asarray(H, dtype=float))
+
+    def jacobm(self, q: ArrayLike, *, axes: str = "all") -> Array:
+        """Manipulability Jacobian (n, 1): the gradient of ``manipulability(q, axes=axes)``."""
+        return _extras.jacobm(self, self._q(q), axes)
+
+    def fdyn(self, T: float, q0: ArrayLike, Q: Any = None, Q_args: dict | None = None, qd0: ArrayLike | None = None,
+             solver: str = "RK45", solver_args: dict | None = None, dt: float | None = None) -> Any:
+        """Forward dynamics over ``T`` s from ``q0`` (and ``qd0``) under joint torques
+        ``Q(robot, t, q, qd)`` (zero if None): a ``(t, q, qd)`` named tuple, integrated by
+        scipy's ``solver`` (as the Toolbox's ``fdyn``; ``dt`` resamples on a uniform grid)."""
+        return _extras.fdyn(self, T, q0, Q, Q_args, qd0, solver, solver_args, dt)
+
+    def cinertia(self, q: ArrayLike) -> Array:
+        """Cartesian inertia (6, 6) ``J^-T M J^-1`` (world-frame geometric Jacobian)."""
+        return _extras.cinertia(self, self._q(q))
+
+    def itorque(self, q: ArrayLike, qdd: ArrayLike) -> Array:
+        """Inertia torques ``M(q) qdd`` (n,) or (m, n): RNE with zero velocity and gravity."""
+        return self.rne(q, None, qdd, gravity=np.zeros(3))
+
+    def gravjac(self, q: ArrayLike, *, gravity: ArrayLike | None = None) -> tuple[Array, Array]:
+        """Gravity torques from the centre-of-mass Jacobians and ``jacob0``: ``(tau, J)``."""
+        return _extras.gravjac(self, self._q(q), gravity)
+
+    def paycap(self, q: ArrayLike, w: ArrayLike, tlim: ArrayLike, *, frame: str = "base") -> tuple[Any, Any]:
+        """Static payload capacity ``(wmax, joint)`` along the wrench direction ``w``
+        within the joint torque limits ``tlim`` (see :func:`._extras.paycap`)."""
+        return _extras.paycap(self, self._q(q), w, tlim, frame)
+
+    def payload_capacity(self, q: ArrayLike, tau_m: ArrayLike, w: ArrayLike, frame: str = "base") -> Array:
+        """Per joint (m, n), the multiple of ``w`` that takes it to its torque limit (as the
+        Toolbox's ``payload_capacity``)."""
+        return _extras.payload_capacity(self, self._q(q), tau_m, w, frame)
+
+    def vellipse(self, q: ArrayLike, opt: str = "trans", *, centre: ArrayLike | str | None = None) -> Any:
+        """Velocity ellipsoid (``Ellipsoid``) of the tool for unit joint speed, ``J J^T``."""
+        return _extras.ellipse(self, self._q(q), opt, "velocity", centre)
+
+    def fellipse(self, q: ArrayLike, opt: str = "trans", *, centre: ArrayLike | str | None = None) -> Any:
+        """Force ellipsoid (``Ellipsoid``) of the tool for unit joint torque, ``(J J^T)^-1``."""
+        return _extras.ellipse(self, self._q(q), opt, "force", centre)
+
+    def collided(self, q: ArrayLike, shape: Any, T: ArrayLike | None = None, *, margin: float = 0.0,
+                 skip_base: bool = False) -> list[int]:
+        """Link frames (0 = base) that touch the ``ejsrl.world.collision.CollisionShape``
+        ``shape`` at world pose ``T`` (identity if None), or come within ``margin`` m. Links
+        are checked with the convex hulls of a URDF arm's meshes, else with the capsules and
+        cylinders of the automatic link geometry."""
+        return _extras.collided_links(self, self._q(q), shape, T, margin, skip_base)
+
+    def iscollided(self, q: ArrayLike, shape: Any, T: ArrayLike | None = None, *, margin: float = 0.0,
+                   skip_base: bool = False) -> bool:
+        """True if any link touches ``shape`` (see :meth:`collided`)."""
+        return bool(self.collided(q, shape, T, margin=margin, skip_base=skip_base))
 
     # ----------------------------------------------------------------- display
     def __repr__(self) -> str:
