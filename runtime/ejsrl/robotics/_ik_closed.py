@@ -300,30 +300,43 @@ class ClosedForm:
 
     def _ur_arm(self, R: Rot, o5: tuple[float, float, float], th1: float, th5: float, th6: float,
                 ref: list[float]) -> list[tuple]:
-        """UR joints 2-4 given 1, 5 and 6: ``(distance, q2, q3, q4, q6, label)`` sorted."""
+        """UR joints 2-4 given 1, 5 and 6: ``(distance, q2, q3, q4, q6, label)`` sorted.
+
+        ``R04 = R06 R46^T`` with ``R46 = Rz(q5) Rx(alpha5) Rz(q6)`` (alpha6 = 0): only its
+        x and z columns are needed, from R46's first and last rows."""
         a2, a3 = self.a[1], self.a[2]
         d1, d5 = self.d[0], self.d[4]
-        cs = self.cs
+        (ca1, sa1), _, _, _, (ca5, sa5), _ = self.cs
         x5, y5, z5 = o5
-        # T14 = A1^-1 T06 (A5 A6)^-1: a planar 2R problem in frame 1's x-y plane
-        A1 = _rzrx(th1, *cs[0])
-        R56 = _mul(_rzrx(th5, *cs[4]), _rzrx(th6, *cs[5]))
-        R04 = _mul(R, (R56[0], R56[3], R56[6], R56[1], R56[4], R56[7], R56[2], R56[5], R56[8]))
-        R14 = _tmul(A1, R04)
-        # origin of frame 4 = origin of frame 5 - d5 z4, less frame 1's origin (0, 0, d1)
-        v = [x5 - d5 * R04[2], y5 - d5 * R04[5], z5 - d5 * R04[8] - d1]
-        X = A1[0] * v[0] + A1[3] * v[1] + A1[6] * v[2]
-        Y = A1[1] * v[0] + A1[4] * v[1] + A1[7] * v[2]
+        c1, s1 = math.cos(th1), math.sin(th1)
+        c5, s5 = math.cos(th5), math.sin(th5)
+        c6, s6 = math.cos(th6), math.sin(th6)
+        r0 = (c5 * c6 - s5 * ca5 * s6, -c5 * s6 - s5 * ca5 * c6, s5 * sa5)  # R46[0, :]
+        r2 = (sa5 * s6, sa5 * c6, ca5)  # R46[2, :]
+        x4 = (R[0] * r0[0] + R[1] * r0[1] + R[2] * r0[2], R[3] * r0[0] + R[4] * r0[1] + R[5] * r0[2],
+              R[6] * r0[0] + R[7] * r0[1] + R[8] * r0[2])
+        z4 = (R[0] * r2[0] + R[1] * r2[1] + R[2] * r2[2], R[3] * r2[0] + R[4] * r2[1] + R[5] * r2[2],
+              R[6] * r2[0] + R[7] * r2[1] + R[8] * r2[2])
+        # frame 1's x and y axes: A1 = Rz(q1) Rx(alpha1)
+        ex = (c1, s1, 0.0)
+        ey = (-s1 * ca1, c1 * ca1, sa1)
+        # origin of frame 4 = origin of frame 5 - d5 z4, less frame 1's origin (0, 0, d1):
+        # a planar 2R problem in frame 1's x-y plane
+        v0, v1, v2 = x5 - d5 * z4[0], y5 - d5 * z4[1], z5 - d5 * z4[2] - d1
+        X = ex[0] * v0 + ex[1] * v1
+        Y = ey[0] * v0 + ey[1] * v1 + ey[2] * v2
         c3 = _acos2((X * X + Y * Y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3))
         if c3 is None:
             return []
-        th234 = math.atan2(R14[3], R14[0])
+        th234 = math.atan2(ey[0] * x4[0] + ey[1] * x4[1] + ey[2] * x4[2], ex[0] * x4[0] + ex[1] * x4[1])
         elbows = []
+        base = math.atan2(Y, X)
         for el, th3 in (("u", c3), ("d", -c3)):
-            th2 = math.atan2(Y, X) - math.atan2(a3 * math.sin(th3), a2 + a3 * math.cos(th3))
+            th2 = base - math.atan2(a3 * math.sin(th3), a2 + a3 * math.cos(th3))
             th4 = _wrap(th234 - th2 - th3)
             elbows.append((_dist((th2, th3, th4), ref[1:4]), th2, th3, th4, th6, el))
-        elbows.sort(key=_first)
+        if elbows[1][0] < elbows[0][0]:
+            elbows.reverse()
         return elbows
 
     # ------------------------------------------------------------------ 7R S-R-S
