@@ -84,6 +84,16 @@ def check_settings(runs: Sequence[Run], types: dict[str, str]) -> None:
                 raise SweepDesignError(f"the parameter '{name}' has the name of a column of the summary ({', '.join(SUMMARY_COLUMNS)})")
 
 
+def check_variables(names: Sequence[str] | None, types: dict[str, str]) -> None:
+    """Refuse a ``--vars`` name that is not a variable (``SweepDesignError``, with a suggestion)."""
+    for n in names or ():
+        if n not in types:
+            import difflib
+
+            close = difflib.get_close_matches(n, list(types), n=1)
+            raise SweepDesignError(f"--vars: unknown variable '{n}'" + (f"; did you mean '{close[0]}'?" if close else ""))
+
+
 def sweep(
     app: str | Path | AppRef,
     *,
@@ -102,10 +112,13 @@ def sweep(
     scheduler: str | None = None,
     progress: Progress | None = None,
 ) -> SweepResult:
-    """Run a sweep of the built app in folder ``app`` (see the command line for the options)."""
+    """Run a sweep of the built app in folder ``app`` (see the command line for the options).
+
+    Raises ``SweepDesignError`` (a ``ValueError``) for a parameter or variable the model does not have."""
     ref = app if isinstance(app, AppRef) else app_ref(app)
     model_cls = loaded(ref).model_cls
     types = dict(model_cls.VARIABLES)
+    check_variables(variables, types)
     runs = design(types, grid=grid, values=values, table=table, samples=samples, seed=seed, sampling=sampling, fixed=fixed)
     check_settings(runs, types)
     options = RunOptions(float(duration), tuple(variables) if variables is not None else None, every)
@@ -208,12 +221,7 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     types = dict(model_cls.VARIABLES)
     names = [n.strip() for n in args.vars.split(",") if n.strip()] if args.vars else None
     try:
-        for n in names or ():
-            if n not in types:
-                import difflib
-
-                close = difflib.get_close_matches(n, list(types), n=1)
-                raise SweepDesignError(f"--vars: unknown variable '{n}'" + (f"; did you mean '{close[0]}'?" if close else ""))
+        check_variables(names, types)
         runs = design(
             types, grid=args.grid, values=args.values, table=args.table, samples=args.samples, seed=args.seed, sampling=args.sampling, fixed=args.set
         )
