@@ -57,7 +57,10 @@ def _mul(A: Rot, B: Rot) -> Rot:
 def _tmul(A: Rot, B: Rot) -> Rot:
     """``A^T @ B``."""
     a0, a1, a2, a3, a4, a5, a6, a7, a8 = A
-    return _mul((a0, a3, a6, a1, a4, a7, a2, a5, a8), B)
+    b0, b1, b2, b3, b4, b5, b6, b7, b8 = B
+    return (a0 * b0 + a3 * b3 + a6 * b6, a0 * b1 + a3 * b4 + a6 * b7, a0 * b2 + a3 * b5 + a6 * b8,
+            a1 * b0 + a4 * b3 + a7 * b6, a1 * b1 + a4 * b4 + a7 * b7, a1 * b2 + a4 * b5 + a7 * b8,
+            a2 * b0 + a5 * b3 + a8 * b6, a2 * b1 + a5 * b4 + a8 * b7, a2 * b2 + a5 * b5 + a8 * b8)
 
 
 def _chain(thetas: Sequence[float], cs: Sequence[tuple[float, float]]) -> Rot:
@@ -226,6 +229,7 @@ class ClosedForm:
             return
         phi = math.atan2(py, px)
         delta = math.asin(d3 / rho)
+        beta = math.atan2(a3, d4)
         branches = []
         for arm in ("l", "r"):
             th1 = phi + delta if arm == "r" else phi + _PI - delta
@@ -238,14 +242,14 @@ class ClosedForm:
             psi = _acos2((a2 * a2 - d4 * d4 - a3 * a3 + X * X + pz * pz) / (2.0 * a2 * r))
             if psi is None:
                 continue
+            gamma = math.atan2(pz, X)
             for elbow in ("u", "d"):
                 n2 = 1.0 if elbow == "u" else -1.0
                 if arm == "l":
                     n2 = -n2
-                th2 = math.atan2(pz, X) + n2 * psi
-                num = math.cos(th2) * X + math.sin(th2) * pz - a2
-                den = math.cos(th2) * pz - math.sin(th2) * X
-                th3 = math.atan2(a3, d4) - math.atan2(num, den)
+                th2 = gamma + n2 * psi
+                c2, s2 = math.cos(th2), math.sin(th2)
+                th3 = beta - math.atan2(c2 * X + s2 * pz - a2, c2 * pz - s2 * X)
                 branches.append((_dist((th1, th2, th3), ref), th1, th2, th3, arm + elbow))
         branches.sort(key=_first)
         cs = self.cs
