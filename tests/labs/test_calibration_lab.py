@@ -53,3 +53,16 @@ def test_a_board_outside_the_image_is_not_counted(built):
     d = headless(built(LAB), 3.0, vars="t,n_views,rms", sets={"tour": tour})
     assert list(d["n_views"]) == [0, 0, 1, 2]
     assert np.all(np.isnan(d["rms"]))
+
+
+def test_fronto_parallel_views_cannot_fix_the_focal_length(built):
+    """What the lab tells students to try: a board seen face-on in every view (no tilt) leaves
+    focal length and distance confounded (Zhang's degenerate case): fx is far off, although
+    the reprojection error stays small."""
+    tour = ("[[0, 0, 0.5, 0, 0, 0], [0.06, 0.04, 0.45, 0, 0, 0], [-0.06, -0.04, 0.55, 0, 0, 0],"
+            " [0.05, -0.05, 0.6, 0, 0, 20], [-0.05, 0.05, 0.42, 0, 0, -20]]")
+    d = headless(built(LAB), 5.0, vars="t,n_views,rms,K_est", sets={"tour": tour})
+    assert d["n_views"][-1] == 5
+    fx, fy, _, _ = _estimates(d, -1)
+    assert abs(fx - FX) / FX > 0.05 and abs(fy - FY) / FY > 0.05
+    assert d["rms"][-1] < 0.3
