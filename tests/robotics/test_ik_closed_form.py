@@ -175,3 +175,17 @@ def test_ikine_with_joint_offsets_on_a_moved_base_and_tool(make, joint):
         sol = robot.ikine(T)
         assert sol.success, sol.reason
         assert _reached(robot, T, sol.q)
+
+
+@pytest.mark.parametrize(("make", "joint", "straight"), [(models.puma560, 2, -1.5238183), (models.ur5, 2, 0.0),
+                                                         (models.pa10, 3, 0.0)])
+@pytest.mark.parametrize("dq", [0.0, 1e-7, 1e-4])
+def test_ikine_is_robust_at_and_near_a_straight_elbow(make, joint, straight, dq):
+    robot = make()
+    rng = np.random.default_rng(18)
+    Q = random_q(robot, rng, 50)
+    Q[:, joint] = straight + dq
+    for T in robot.fkine(Q):
+        sol = robot.ikine(T)
+        assert sol.success, sol.reason
+        assert _reached(robot, T, sol.q)
