@@ -46,7 +46,10 @@ DURATION = {
     "pid_dc_motor_control": 3.0,
     "multi_robot_eih": 6.0,
     "pick_and_place": 20.0,
+    "fmu_motor_control": 6.0,
 }
+#: the same model as a lab with FMUs, written as a plain ODE spec: the FMU overhead is the difference
+FMU_REFERENCE = {"fmu_motor_control": ROOT / "tests" / "fmu" / "specs" / "motor_control_ode.ejs.yaml"}
 
 #: labs that a button starts rather than Play: (the button's label, what it runs, for headless runs)
 START = {"pick_and_place": ("Run program", "pick_and_place")}
@@ -72,6 +75,45 @@ def headless_ratio(app_dir: Path, duration: float) -> float:
     if status != 0:
         raise RuntimeError(f"{app_dir.name}: headless run failed ({status})")
     return ((app.model._ejs_time() or 0.0) - start) / wall  # a lab may pause itself before the end
+
+
+def fmu_overhead(name: str, app_dir: Path, out_root: Path, steps: int = 1000) -> str:
+    """The cost of a lab's FMUs per model step: its step time against the same model as a plain
+    ODE spec (``FMU_REFERENCE``), FMI evaluations per step and the time of one evaluation."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+
+    def per_step(folder: Path) -> tuple[float, Any]:
+        app = load_app(folder)
+        for _ in range(20):  # warm up (first calls load the binary's pages)
+            app.model._ejs_step()
+        app.reset()
+        t0 = time.perf_counter()
+        for _ in range(steps):
+            app.model._ejs_step()
+        return (time.perf_counter() - t0) / steps, app
+
+    with_fmu, app = per_step(app_dir)
+    plain, _ = per_step(build(FMU_REFERENCE[name], out_root / f"{name}_plain_ode"))
+    fmus = app.model._ejs_fmus
+    calls = fmus.calls / steps
+    run = fmus.runs[0]
+    me = run.spec.kind == "model_exchange"
+    batches = []
+    for _ in range(5):  # the fastest of 5 batches: the least disturbed by other processes
+        t0 = time.perf_counter()
+        for _ in range(400):  # one evaluation as the solver makes it: time, states, inputs, outputs, derivatives
+            if me:
+                run._me_evaluate(app.model.t, run.x)
+                run.inst.derivatives()
+            else:
+                run.inst.get_values(run.spec.outputs)
+        batches.append((time.perf_counter() - t0) / 400)
+    one = min(batches)
+    app.stop()
+    return (f"   {name:26s} {1e6 * with_fmu:7.0f} us/step with the FMU, {1e6 * plain:7.0f} us/step as a plain ODE spec: "
+            f"FMU overhead {1e6 * (with_fmu - plain):6.0f} us/step ({100 * (with_fmu - plain) / plain:4.0f} %), "
+            f"{calls:.1f} FMI evaluations per step at {1e6 * one:5.1f} us each")
 
 
 class FrameTimer:
@@ -240,6 +282,11 @@ def main() -> int:
     for name in names:
         head[name] = headless_ratio(built[name], DURATION[name])
         print(f"   {name:26s} {head[name]:7.2f} x real time over {DURATION[name]:.0f} s   {'MET' if head[name] >= 1 else 'NOT MET'}")
+    fmu_labs = [name for name in names if name in FMU_REFERENCE]
+    if fmu_labs:
+        print("\n   FMU call overhead per model step (headless, model only):")
+        for name in fmu_labs:
+            print(fmu_overhead(name, built[name], out_root))
     if args.no_browser:
         return 0
 

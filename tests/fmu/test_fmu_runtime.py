@@ -100,7 +100,7 @@ def test_a_failing_fmu_call_pauses_the_app_with_the_fmus_own_message(cs_app):
                 break
         assert app.error is not None and not app.playing
         assert "joint 1: armature current" in app.error.message and "i_max = 5 A" in app.error.message
-        assert "fmi2DoStep" in app.error.message
+        assert "fmi2DoStep returned error: joint 1: armature current" in app.error.message
         assert app.error.where == "lab.ejs.yaml:15:3"  # the FMU's entry in the spec
     finally:
         app.stop()

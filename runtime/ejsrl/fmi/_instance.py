@@ -98,6 +98,7 @@ class FmuInstance:
         self._fmu: Any = None
         self._callbacks: Any = None
         self._freed = False
+        self._groups: dict[tuple[str, ...], dict[str, list[tuple[int, int]]]] = {}
         self._instantiate()
 
     # -- calls, each turning a failure into FmuError with the FMU's messages -----------------
@@ -109,8 +110,10 @@ class FmuInstance:
         try:
             return fn(*args)
         except Exception as exc:  # noqa: BLE001 - FMPy raises FMICallException or plain Exception
-            said = [m for m in self.log[start:] if not m.startswith("OK: ")]
-            raise FmuError(f"FMU '{self.name}': {what} failed ({exc})", said) from None
+            said = [m.split(": ", 1)[1] for m in self.log[start:] if not m.startswith("OK: ")]
+            status = getattr(exc, "status", None)
+            how = f"returned {_STATUS[status]}" if isinstance(status, int) and 0 <= status < len(_STATUS) else f"failed ({exc})"
+            raise FmuError(f"FMU '{self.name}': {what} {how}", said) from None
 
     def _logger_text(self, status: int, category: bytes | None, message: bytes | None) -> None:
         label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
@@ -157,10 +160,14 @@ class FmuInstance:
     # -- values by name -----------------------------------------------------------------------
     def _typed(self, names: Sequence[str]) -> dict[str, list[tuple[int, int]]]:
         """Value references grouped by type: type -> [(position in names, value reference)]."""
-        groups: dict[str, list[tuple[int, int]]] = {}
-        for k, n in enumerate(names):
-            v = self.vars[n]
-            groups.setdefault(v.type, []).append((k, v.valueReference))
+        key = tuple(names)
+        groups = self._groups.get(key)
+        if groups is None:
+            groups = {}
+            for k, n in enumerate(names):
+                v = self.vars[n]
+                groups.setdefault(v.type, []).append((k, v.valueReference))
+            self._groups[key] = groups
         return groups
 
     def set_values(self, names: Sequence[str], values: Sequence[Any], what: str = "setting values") -> None:
