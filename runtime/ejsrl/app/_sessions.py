@@ -59,9 +59,12 @@ MAX_DEFAULT_SESSIONS = 100
 
 def _token_script(token: str) -> str:
     """HTML that writes the session's address into the tab's address bar (no reload)."""
+    # viser's page adds ?websocket=<its websocket's address> when that address is not the
+    # page's host alone: dropped, since the page at /s/<token>/ connects there anyway
     js = (
         "var p=location.pathname.replace(/s\\/[A-Za-z0-9_-]+\\/?$/,'');if(p.slice(-1)!='/')p+='/';"
-        f"history.replaceState(null,'',p+'s/{token}/'+location.search+location.hash);"
+        "var q=location.search.replace(/^\\?/,'').split('&amp;').filter(function(x){return x&amp;&amp;!/^websocket=/.test(x)}).join('&amp;');"
+        f"history.replaceState(null,'',p+'s/{token}/'+(q?'?'+q:'')+location.hash);"
     )
     return f'<img style="display:none" alt="" src="data:," onerror="{js}">'
 

@@ -1,0 +1,180 @@
+"""Classroom serving in a real browser: two or three tabs on one served lab, each with its own simulation."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+
+from testkit.browser import wait_until
+from testkit.browser_lab import make_app
+
+
+@pytest.fixture
+def classroom():
+    """The browser lab served with a simulation per tab (at most 2 tabs); yields ``(app, url)``."""
+    app = make_app()
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
+    yield app, f"http://127.0.0.1:{server.get_port()}"
+    app.stop()
+    server.stop()
+
+
+def open_tab(context, url: str):
+    """A new tab on ``url``, once its panel is there and its address carries its session."""
+    page = front(context.new_page())
+    page.goto(url)
+    page.wait_for_selector("canvas", state="attached", timeout=45_000)
+    page.get_by_text("Length").first.wait_for(timeout=45_000)
+    wait_until(lambda: "/s/" in address(page), what="the tab's address to carry its session")
+    return page
+
+
+def front(page):
+    """``page`` as the tab in front (a loaded machine starves background tabs), slow actions allowed."""
+    page.bring_to_front()
+    page.set_default_timeout(90_000)
+    return page
+
+
+def address(page) -> str:
+    """What the address bar shows (``page.url`` misses ``history.replaceState``)."""
+    return page.evaluate("location.href")
+
+
+def session_of(app, page):
+    token = re.search(r"/s/([A-Za-z0-9_-]+)/", address(page)).group(1)
+    return app.classroom.sessions[token]
+
+
+@pytest.mark.browser
+def test_each_tab_drives_only_its_own_simulation(classroom, browser_context):
+    app, url = classroom
+    a = open_tab(browser_context, url)
+    b = open_tab(browser_context, url)
+    try:
+        sa, sb = session_of(app, a), session_of(app, b)
+        assert sa is not sb and sa.app.model is not sb.app.model
+
+        # a slider moved in tab A changes A's simulation; tab B's slider and model stay
+        front(a)
+        slider_a = a.get_by_role("slider").first
+        slider_a.focus()
+        slider_a.press("End")
+        wait_until(lambda: abs(sa.app.model.L - 2.0) < 1e-9, what="L == 2 in A's simulation")
+        front(b)
+        b.wait_for_timeout(500)
+        assert sb.app.model.L == 1.0
+        assert b.get_by_role("slider").first.get_attribute("aria-valuenow") == "1"
+
+        # Play in A plays A only: B's time stays 0 and its button still says Play
+        front(a)
+        a.get_by_role("button", name="Play").click()
+        a.get_by_role("button", name="Pause").wait_for()
+        wait_until(lambda: sa.app.model.t > 0.3, what="A's time to run")
+        assert sb.app.model.t == 0.0 and not sb.app.is_playing()
+        front(b)
+        b.get_by_role("button", name="Play").wait_for()
+
+        # a user-code error in B pauses B and shows there; A keeps playing and shows nothing
+        b.get_by_role("button", name="Break it").click()
+        b.locator("b", has_text="Error at pendulum.ejs.yaml:27:7").wait_for()
+        assert sb.app.error is not None and sa.app.error is None
+        t_a = sa.app.model.t
+        wait_until(lambda: sa.app.model.t > t_a + 0.2, what="A to keep playing after B's error")
+        front(a)
+        a.get_by_role("button", name="Pause").wait_for()
+        assert a.locator("b", has_text="Error at").count() == 0
+        assert a.locator(".mantine-Notification-title", has_text="Error at").count() == 0
+
+        # Step in B (after Reset) moves B alone by one step
+        front(b)
+        b.get_by_role("button", name="Reset").click()
+        wait_until(lambda: sb.app.error is None, what="B's Reset")
+        b.get_by_role("button", name="Step").click()
+        wait_until(lambda: abs(sb.app.model.t - 0.02) < 1e-9, what="one step in B")
+    finally:
+        a.close()
+        b.close()
+
+
+@pytest.mark.browser
+def test_a_reload_within_the_grace_period_keeps_the_session(classroom, browser_context):
+    app, url = classroom
+    a = open_tab(browser_context, url)
+    try:
+        session = session_of(app, a)
+        slider = a.get_by_role("slider").first
+        slider.focus()
+        slider.press("End")
+        a.get_by_role("button", name="Play").click()
+        wait_until(lambda: session.app.model.t > 0.5, what="the simulation to run")
+        a.get_by_role("button", name="Pause").click()
+        wait_until(lambda: not session.app.is_playing(), what="the pause")
+        t = session.app.model.t
+        points = len(session.view.panel.plots[0].buffer)
+        assert points > 10
+        before = address(a)
+
+        a.reload()
+        a.get_by_text("Length").first.wait_for(timeout=45_000)
+        wait_until(lambda: session.view is not None and session.client_id is not None, what="the session to be taken back")
+        assert address(a).split("?")[0] == before.split("?")[0]  # the same session address
+        assert session_of(app, a) is session and len(app.classroom.sessions) == 1
+        # what the student sees: the slider where they left it, the same time, the plot's points
+        wait_until(lambda: a.get_by_role("slider").first.get_attribute("aria-valuenow") == "2", what="the slider at 2")
+        a.get_by_text(f"{t:.6g}", exact=False).first.wait_for()
+        assert session.app.model.t == t and session.app.model.L == 2.0
+        assert len(session.view.panel.plots[0].buffer) >= points
+    finally:
+        a.close()
+
+
+@pytest.mark.browser
+def test_the_tab_after_the_last_place_is_told_the_lab_is_full(classroom, browser_context):
+    app, url = classroom
+    a = open_tab(browser_context, url)
+    b = open_tab(browser_context, url)
+    c = front(browser_context.new_page())
+    try:
+        c.goto(url)
+        c.get_by_text("This lab is full").first.wait_for(timeout=45_000)
+        assert c.get_by_text("Try again later", exact=False).first.is_visible()
+        assert c.get_by_text("Length").count() == 0  # no panel: no simulation was made for it
+        assert len(app.classroom.sessions) == 2
+        # the two students keep theirs
+        front(a)
+        a.get_by_role("button", name="Play").click()
+        wait_until(lambda: session_of(app, a).app.model.t > 0.2, what="A to play")
+    finally:
+        for p in (a, b, c):
+            p.close()
+
+
+@pytest.mark.browser
+def test_shared_serving_still_shares_one_simulation(browser_context):
+    app = make_app()
+    server = app.serve("127.0.0.1", 0, block=False)  # what --shared serves
+    url = f"http://127.0.0.1:{server.get_port()}"
+    a = b = None
+    try:
+        a = browser_context.new_page()
+        b = browser_context.new_page()
+        for p in (a, b):
+            front(p).goto(url)
+            p.get_by_text("Length").first.wait_for(timeout=45_000)
+        slider = front(a).get_by_role("slider").first
+        slider.focus()
+        slider.press("End")
+        wait_until(lambda: abs(app.model.L - 2.0) < 1e-9, what="L == 2")
+        front(b)
+        wait_until(lambda: b.get_by_role("slider").first.get_attribute("aria-valuenow") == "2", what="B's slider to follow A's")
+        front(a).get_by_role("button", name="Play").click()
+        front(b).get_by_role("button", name="Pause").wait_for()
+        assert "/s/" not in address(a)
+    finally:
+        for p in (a, b):
+            if p is not None:
+                p.close()
+        app.stop()
+        server.stop()
