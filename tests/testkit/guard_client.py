@@ -76,9 +76,10 @@ class Client:
 
     @classmethod
     async def open(cls, port: int, *, origin: str | None = None, host: str | None = None,
-                   camera: bool = True, server: Any = None) -> "Client":
-        # with ``host``, the Host header names it while the TCP connection still goes to 127.0.0.1
-        uri = f"ws://{host or f'127.0.0.1:{port}'}"
+                   camera: bool = True, server: Any = None, path: str = "") -> "Client":
+        # with ``host``, the Host header names it while the TCP connection still goes to 127.0.0.1;
+        # ``path``: the websocket's path (a classroom session's address, /s/<token>)
+        uri = f"ws://{host or f'127.0.0.1:{port}'}{path}"
         ws = await connect(uri, subprotocols=[SUBPROTOCOL], origin=origin, host="127.0.0.1", port=port,
                            max_size=None, open_timeout=10)
         client = cls(ws)
@@ -108,6 +109,28 @@ class Client:
     def values_of(self, uuid: str) -> list[Any]:
         """Every value this client was sent for the control ``uuid`` (what its UI showed)."""
         return [m["updates"]["value"] for m in self.seen("GuiUpdateMessage", uuid=uuid) if "value" in m["updates"]]
+
+    def texts(self) -> list[str]:
+        """The Markdown and HTML this client's panel was sent."""
+        out = []
+        for m in self.received:
+            if m.get("type") in ("GuiMarkdownMessage", "GuiHtmlMessage"):
+                out.append(str(m.get("props", {}).get("_markdown", m.get("props", {}).get("content", ""))))
+        return out
+
+    def uuid_of(self, kind: str, label: str) -> str:
+        """The uuid of the control of message type ``kind`` (e.g. GuiSliderMessage) labelled ``label``."""
+        for m in self.received:
+            if m.get("type") == kind and m.get("props", {}).get("label") == label:
+                return m["uuid"]
+        raise AssertionError(f"no {kind} labelled {label!r} was received")
+
+    def shown(self, kind: str, label: str) -> Any:
+        """The value the control of message type ``kind`` labelled ``label`` shows now."""
+        uuid = self.uuid_of(kind, label)
+        value = next(m.get("value") for m in self.received if m.get("uuid") == uuid and m.get("type") == kind)
+        updates = self.values_of(uuid)
+        return updates[-1] if updates else value
 
     def notifications(self) -> list[str]:
         return [f"{m['props']['title']}: {m['props']['body']}" for m in self.seen("NotificationShowMessage")]
