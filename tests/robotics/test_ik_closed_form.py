@@ -189,3 +189,31 @@ def test_ikine_is_robust_at_and_near_a_straight_elbow(make, joint, straight, dq)
         sol = robot.ikine(T)
         assert sol.success, sol.reason
         assert _reached(robot, T, sol.q)
+
+
+def test_ikine_says_when_a_reachable_pose_has_no_solution_within_the_limits():
+    p = models.puma560()
+    p.links[1].qlim = np.array([0.0, 0.1])
+    p.links[2].qlim = np.array([-0.1, 0.0])
+    T = models.puma560().fkine([0, -1.2, 0.8, 0, 0.5, 0])
+    sol = p.ikine(T)
+    assert not sol.success
+    assert "no solution within the joint limits" in sol.reason
+    lim = p.qlim
+    assert np.all(sol.q >= lim[0]) and np.all(sol.q <= lim[1])
+
+
+def test_ikine_searches_on_when_closed_form_seeds_do_not_polish(monkeypatch):
+    """The safety net: should no seed within the limits polish to tol, the LM search takes
+    over (simulated by a polish that always gives up)."""
+    from ejsrl.robotics import ik
+
+    def give_up(self, q, ilimit):
+        e = [1.0] * 6
+        return q, e, 3.0, 0, False
+
+    monkeypatch.setattr(ik._Problem, "polish", give_up)
+    p = models.puma560()
+    T = p.fkine([0.3, 0.4, -0.2, 0.5, -0.7, 1.0])
+    sol = p.ikine(T)
+    assert sol.success and _reached(p, T, sol.q)

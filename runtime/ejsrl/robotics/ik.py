@@ -97,11 +97,13 @@ def ikine(
       forward kinematics and polished by a few LM steps if needed (near singularities).
       For a 7R arm joint 3 is the free angle: first ``q0``'s, then a sweep of its range.
       A pose no configuration reaches is rejected at once; one reached only outside the
-      joint limits after a short search from the nearest solutions.
+      joint limits after a short search from the nearest solutions. Should no
+      candidate polish to ``tol`` (never seen in the tests), the LM search below
+      takes over from the best of them.
     - Other arms, or when ``mask`` is given or ``closed_form=False``: LM iterations
       ``(J^T W J + (E + lam) I) dq = J^T W e`` with ``E = e^T W e / 2`` (Sugihara's
-      damping), steps accepted when they reduce E (damping halved) and otherwise damped
-      10x harder; joint values clamped to ``qlim``. A search that has not converged
+      damping), steps accepted when they reduce E (the extra damping then divided by
+      10) and otherwise damped 10x harder; joint values clamped to ``qlim``. A search that has not converged
       after ``ilimit`` iterations restarts from a random configuration within the
       limits, up to ``slimit`` searches. A position farther from the base than the arm's
       reach (the sum of its links' lengths) is rejected at once.
@@ -134,7 +136,10 @@ def ikine(
     if closed_form and (full or bool(np.all(W == 1.0))) and prob.finite_goal():
         cf = prob.setup.closed
         if cf is not None:
-            return _ikine_closed(prob, cf, Tg, q, ilimit)
+            sol = _ikine_closed(prob, cf, Tg, q, ilimit)
+            if isinstance(sol, IKSolution):
+                return sol
+            q = sol  # candidates within the limits that did not polish: search from the best
     rng = np.random.default_rng(seed)
     total = 0
     best = None
@@ -157,11 +162,13 @@ _RIDX = [3, 4, 5]
 
 
 def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref: list[float],
-                  ilimit: int) -> IKSolution:
-    """:func:`ikine` for an arm with a closed form (see there)."""
+                  ilimit: int) -> IKSolution | list[float]:
+    """:func:`ikine` for an arm with a closed form (see there); the best candidate's
+    joints instead of an answer when candidates within the limits did not polish."""
     tried = 0
     total = 0
     found = False
+    best_inside: tuple[list[float], float] | None = None
     outside: list[list[float]] = []
     sweep: list[float] | None = None
     q3 = None
@@ -179,6 +186,8 @@ def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref:
             total += it
             if ok:
                 return prob.success(q, e, E, total, tried)
+            if best_inside is None or E < best_inside[1]:
+                best_inside = (q, E)
         if not found:  # no configuration reaches the pose, with or without limits
             return prob.fail(q_ref, 0, 0, "pose out of reach: no configuration of the arm reaches it "
                              "(errors at q0: {err}; closed_form=False searches for the closest approach)")
@@ -189,6 +198,8 @@ def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref:
         if not sweep:
             break
         q3 = sweep.pop(0)  # 7R: no solution within the limits at this q3, try another
+    if best_inside is not None:
+        return best_inside[0]
     # reachable only outside the limits (or a singular family the seeds missed): short
     # LM searches from the nearest solutions clamped into the limits
     best = None
@@ -205,8 +216,8 @@ def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref:
         q, e, E, it, _ = prob.lm(q_ref, min(ilimit, 10))
         best = (q, e, E)
         total += it
-    return prob.fail(best[0], total, tried, "the pose is reachable only outside the joint limits ({err})",
-                     e=best[1], E=best[2])
+    return prob.fail(best[0], total, tried, "the pose is reachable, but no solution within the joint limits was "
+                     "found ({err})", e=best[1], E=best[2])
 
 
 def _q3_sweep(prob: "_Problem", q_ref: list[float]) -> list[float]:
