@@ -142,7 +142,8 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
     env = _env()
     bundle_name = f"{out_dir.name}.pyz" if bundle else ""
     readme = env.get_template("README.md.j2").render(title=plan.title, description=plan.description, version=__version__, spec_name=plan.spec_name, bundle=bundle_name)
-    reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS)
+    urdf = ["yourdfpy>=0.0.56"] if "urdf" in app_text else []  # ejsrl.robotics.load_urdf, models.ur5_urdf
+    reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf)
     if "from ejsrl.fmi import" in app_text:  # the spec's fmus: run through FMPy
         reqs += "fmpy>=0.3.20\n"
     out_dir = out_dir.resolve()
