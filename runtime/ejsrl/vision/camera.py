@@ -28,6 +28,9 @@ __all__ = ["CameraModel", "intrinsics_from_fov", "look_at", "pose_from_rvec"]
 
 Array = NDArray[np.float64]
 
+#: remap tables of undistort/distort, by (direction, size, K, distortion); least recently used first
+_REMAP_CACHE: dict[tuple, NDArray[np.float32]] = {}
+
 
 def look_at(eye: ArrayLike, target: ArrayLike, up: ArrayLike = (0.0, 0.0, 1.0)) -> Array:
     """``T_world_camera`` (4, 4): a camera at ``eye`` looking at ``target`` (z forward, y down).
@@ -337,16 +340,17 @@ class CameraModel:
             raise ValueError(f"interpolation must be one of {sorted(modes)}, got {interpolation!r}")
         if not self.distorted and K_source is None:
             return arr.copy()
-        # the maps depend only on the camera: keep the last ones (a lab distorts every frame)
+        # the maps depend only on the camera's numbers: keep the last few (a lab distorts every
+        # frame, and a reset makes a new but equal CameraModel)
         key = (source_of.__name__, self.width, self.height, self.K.tobytes(), self.distortion.tobytes())
-        cache = self.__dict__.setdefault("_remap_cache", {})
-        maps = cache.get(key)
+        maps = _REMAP_CACHE.pop(key, None)
         if maps is None:
             v, u = np.mgrid[0 : self.height, 0 : self.width]
             src = source_of(np.column_stack([u.ravel(), v.ravel()]).astype(np.float64))
             maps = np.nan_to_num(src, nan=-1e6).astype(np.float32).reshape(self.height, self.width, 2)
-            cache.clear()
-            cache[key] = maps
+        _REMAP_CACHE[key] = maps  # most recently used last
+        while len(_REMAP_CACHE) > 4:
+            del _REMAP_CACHE[next(iter(_REMAP_CACHE))]
         return cv2.remap(np.ascontiguousarray(arr), maps[..., 0], maps[..., 1], modes[interpolation], borderMode=cv2.BORDER_CONSTANT)
 
     def undistort(self, img: ArrayLike, *, interpolation: str = "linear") -> NDArray:
