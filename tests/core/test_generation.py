@@ -48,7 +48,7 @@ def test_generated_app_matches_golden(name: str) -> None:
 
 
 def test_every_paper_lab_is_checked_against_a_golden_file() -> None:
-    assert len(PAPER_LABS) == 7
+    assert len(PAPER_LABS) == 8
     missing = [name for name in PAPER_LABS if not golden_path(name).exists()]
     assert missing == [], f"no golden file for {missing}; write them with {REGEN_HOW}"
 
