@@ -84,7 +84,7 @@ def dask_rate(app: Path, design: dict, workers: int) -> tuple[float, float]:
     from distributed import LocalCluster
 
     start = time.perf_counter()
-    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         up = time.perf_counter() - start
         rate, _, _ = sweep_rate(app, design, scheduler=cluster.scheduler_address)
     return rate, up

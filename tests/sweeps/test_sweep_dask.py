@@ -39,7 +39,7 @@ def test_a_sweep_on_a_running_scheduler_ships_the_app_to_its_workers(tmp_path: P
 
     app = build(SPECS / "springs.ejs.yaml", tmp_path / "app")
     local = sweep(app, grid=["c=0:1:3"], duration=0.3, workers=0)
-    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) as cluster:
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=":0") as cluster:
         remote = sweep(app, grid=["c=0:1:3"], duration=0.3, scheduler=cluster.scheduler_address)
     assert [r.status for r in remote.results] == ["ok"] * 3
     assert remote.results_table().to_pydict() == local.results_table().to_pydict()

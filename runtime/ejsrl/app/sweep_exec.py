@@ -201,7 +201,7 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
         payload = ref.with_archive()  # the workers may be on other machines
     else:
         cluster = LocalCluster(
-            n_workers=max(ex.workers, 1), threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
+            n_workers=max(ex.workers, 1), threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
         )
         client = Client(cluster)
         payload = ref
