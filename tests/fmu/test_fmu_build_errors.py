@@ -143,3 +143,14 @@ def test_an_invalid_model_description_is_refused_with_fmpys_reason(tmp_path, cap
     spec, err = first_error(tmp_path, cs_spec(), capsys)
     assert err.startswith(f"{place(spec, 'file: drives', 'drives')}: error: the FMU 'drives'")
     assert "has an invalid modelDescription.xml" in err and "inputt" in err
+
+
+def test_without_fmpy_the_build_says_how_to_install_it(tmp_path):
+    import subprocess
+    import sys
+
+    spec = write_spec(tmp_path, cs_spec())
+    code = "import sys; sys.modules['fmpy'] = None; from ejsgen.cli import main; sys.exit(main(['validate', sys.argv[1]]))"
+    r = subprocess.run([sys.executable, "-P", "-c", code, str(spec)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 1
+    assert f"{place(spec, 'file: drives', 'drives')}: error: FMUs need FMPy, which is not installed; pip install 'ejsgen[fmu]' (or pip install fmpy)" in r.stderr

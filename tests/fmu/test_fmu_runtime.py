@@ -117,3 +117,13 @@ def test_a_tunable_parameter_changed_while_running_reaches_the_fmu(cs_app):
         assert app.error is None and app.model.tau[0] > 1.0
     finally:
         app.stop()
+
+
+def test_an_app_run_without_fmpy_says_how_to_install_it(cs_app):
+    import subprocess
+    import sys
+
+    code = "import runpy, sys; sys.modules['fmpy'] = None; sys.argv = ['app.py', '--headless', '--duration', '0.1']; runpy.run_path('app.py', run_name='__main__')"
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=cs_app)
+    assert r.returncode == 1
+    assert "lab.ejs.yaml:15:3: error" in r.stderr and "pip install 'ejsgen[fmu]'" in r.stderr

@@ -104,8 +104,11 @@ class FmuRun:
         spec = self.spec
         if not self.path.exists():
             raise UserCodeError(f"FMU '{spec.name}': the file {spec.file} is missing from the app folder", spec.where)
-        folder = unpacked(self.path)
-        md = read_description(folder)
+        try:
+            folder = unpacked(self.path)
+            md = read_description(folder)
+        except ImportError as exc:  # FMPy missing: say how to install it, at the FMU's spec line
+            raise UserCodeError(f"FMU '{spec.name}': {exc}", spec.where) from None
         self.inst = self.guarded(lambda: FmuInstance(folder, md, spec.kind, spec.name))
         self.t = float(t0)
         self.params = list(spec.read_parameters()) if spec.read_parameters else []
