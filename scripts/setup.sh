@@ -13,6 +13,8 @@ need=()
 if ! ldconfig -p | grep -q 'libEGL_mesa.so.0' || ! ls /usr/lib/*/dri/swrast_dri.so >/dev/null 2>&1; then
   need+=(libegl1 libgl1 libegl-mesa0 libgl1-mesa-dri)
 fi
+# a C compiler: the build compiles FMUs kept as C sources (lab 8's joint drives, tests/fmu)
+command -v cc >/dev/null 2>&1 || need+=(gcc libc6-dev)
 if [ ${#need[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null
