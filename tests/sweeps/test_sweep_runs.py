@@ -195,3 +195,33 @@ def test_a_table_gives_one_run_per_row_crossed_with_values(tmp_path: Path) -> No
     table.write_text("L,b\n1.0\n")
     with pytest.raises(SweepDesignError, match=r"params.csv:2: 1 values for 2 variables"):
         design({"L": "float", "b": "float"}, table=table)
+
+
+def test_a_metric_that_raises_fails_its_run_with_the_metric_and_its_place(tmp_path: Path) -> None:
+    from ejsgen.cli import build
+    from ejsrl.app.sweep import sweep
+
+    text = (SPECS / "springs.ejs.yaml").read_text()
+    spec = tmp_path / "ratio.ejs.yaml"
+    spec.write_text(text.replace("  still: not moving", "  still: not moving\n  ratio: 1 / c"))
+    line = spec.read_text().splitlines().index("  ratio: 1 / c") + 1
+    result = sweep(build(spec, tmp_path / "app"), values=["c=0.5,0"], duration=0.1, workers=0)
+    summary = result.summary().to_pydict()
+    assert summary["status"] == ["ok", "error"]
+    assert summary["ratio"] == [2.0, None]
+    assert summary["error"][1] == f"ratio.ejs.yaml:{line}:10: metric 'ratio': ZeroDivisionError: float division by zero"
+
+
+def test_a_run_that_pauses_itself_is_stopped_not_failed(tmp_path: Path) -> None:
+    from ejsgen.cli import build
+    from ejsrl.app.sweep import sweep
+
+    text = (SPECS / "springs.ejs.yaml").read_text()
+    spec = tmp_path / "halt.ejs.yaml"
+    # an event that stops the simulation when the first spring passes x = 0 (at a quarter period, pi/4 s for k = 4)
+    spec.write_text(text.replace("          v: -(k*x + c*v)/m\n", "          v: -(k*x + c*v)/m\n        events:\n          - {when: \"x[0]\", direction: down, stop: true}\n"))
+    result = sweep(build(spec, tmp_path / "app"), values=["x0=[1.0, 0.5, 0.25],[-1.0, 0.5, 0.25]"], duration=2.0, workers=0)
+    summary = result.summary().to_pydict()
+    assert summary["status"] == ["stopped", "ok"]
+    assert summary["t.final"][0] == pytest.approx(0.79, abs=0.006)  # the step in which x[0] crossed zero
+    assert summary["t.final"][1] == pytest.approx(2.0)
