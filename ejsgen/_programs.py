@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING
 from ejsgen._resolve import Names
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError
-from ejsgen.plan import Line, body_lines
+from ejsgen.plan import Call, Expr, Line, ProgramPlan
 from ejsgen.validate import PROGRAM_COMMANDS
 from ejsrl.sim.names import PROGRAM_RUNNER
 
@@ -58,6 +58,7 @@ class _Commands(ast.NodeTransformer):
         call.args = [self.visit(a) for a in call.args]
         call.keywords = [self.visit(k) for k in call.keywords]
         call.func = ast.copy_location(ast.Attribute(value=ast.Name(id=RUNNER, ctx=ast.Load()), attr=name, ctx=ast.Load()), call.func)
+        call.func._ejs_prefix = f"yield from {RUNNER}."  # type: ignore[attr-defined]  # for rewrite_source
         return ast.copy_location(ast.Expr(value=ast.copy_location(ast.YieldFrom(value=call), call)), node)
 
     def visit_Attribute(self, node: ast.Attribute) -> ast.AST:
@@ -85,7 +86,6 @@ def compile_programs(c: Compiler) -> None:
         c.errors.append(SpecError(c.doc.key_loc(("model", "programs", first)), "robot programs run in simulated time: the model needs an independent variable (an ODE page or a variable 't')"))
         return
     names = Names(variables=c.names.variables, functions=c.names.functions, controls=c.names.controls, globals=c.names.globals, extra=set(PROGRAM_NAMES))
-    defs = []
     for pname, prog in programs.items():
         path = ("model", "programs", pname)
         for key, what in (("robot", "Robot"), ("q", "joint-vector"), ("gripper", "gripper")):
@@ -116,15 +116,10 @@ def compile_programs(c: Compiler) -> None:
             tree = tx.visit(tree)
             c.errors.extend(tx.errors)
             ast.fix_missing_locations(tree)
-            lines.extend(body_lines(tree.body, lambda n, s=snippet: s.location(n.lineno, n.col_offset)))
+            lines.extend(c.tree_lines(snippet, tree))
         method = c.method_name(f"_program_{pname}")
         c.add_method(method, f"self, {RUNNER}", f"Robot program '{pname}': each motion command takes simulated time ({RUNNER} runs them).", lines)
-        status = c.method_name(f"_program_{pname}_status")
-        c.add_method(status, "self", f"What program '{pname}' is doing (shown in the panel).", [Line(f"return self._ejs_program_status({pname!r})")])
-        defs.append(
-            f"    {pname!r}: ProgramDef(robot={prog.robot!r}, q={prog.q!r}, body=Model.{method}, gripper={prog.gripper!r}, "
-            f"autostart={prog.autostart!r}, where={c.where(path)!r}),"
-        )
-        c.program_labels.append(f"    E.Label(text=E.Dynamic(Model.{status}, 'program {pname}'), where={c.where(path)!r}),")
-    c.after_class.extend(["Model.PROGRAMS = {", *defs, "}"])
-    c.runtime_imports.append("from ejsrl.sim.programs import ProgramDef")
+        where = c.where(path)
+        c.programs.append(ProgramPlan(pname, method, prog.robot, prog.q, prog.gripper, prog.autostart, where))
+        status = Expr(f"self._ejs_program_status({pname!r})", None, "", "self")
+        c.program_labels.append(Call("E.Label", [], {"text": Call("E.Dynamic", [status, f"program {pname}"]), "where": where}))

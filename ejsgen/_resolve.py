@@ -24,7 +24,7 @@ from ejsgen.validate import MATH_NAMES
 from ejsgen.yamlload import TextOrigin
 from ejsrl.sim.names import MATH_CONSTANTS as _MATH_CONSTANTS
 
-__all__ = ["Names", "Snippet", "parse_snippet", "rewrite", "BUILTIN_NAMES"]
+__all__ = ["Names", "Snippet", "parse_snippet", "rewrite", "rewrite_source", "source_lines", "BUILTIN_NAMES"]
 
 BUILTIN_NAMES = frozenset(n for n in dir(builtins) if not n.startswith("_")) - {
     "eval",
@@ -256,6 +256,7 @@ class _Rewriter(ast.NodeTransformer):
 
     def _model_attr(self, node: ast.Name) -> ast.Attribute:
         attr = ast.Attribute(value=ast.Name(id="self", ctx=ast.Load()), attr=node.id, ctx=node.ctx)
+        attr._ejs_prefix = "self."  # type: ignore[attr-defined]  # for rewrite_source
         return ast.copy_location(attr, node)
 
     def visit_Name(self, node: ast.Name) -> ast.AST:
@@ -416,3 +417,74 @@ def rewrite(tree: ast.AST, names: Names, snippet: Snippet, *, extra_locals: Iter
     new = rw.visit(tree)
     ast.fix_missing_locations(new)
     return new, rw.errors
+
+
+def rewrite_source(snippet: Snippet, tree: ast.AST, lines: tuple[int, int] | None = None) -> str | None:
+    """The author's own text of a rewritten snippet: comments, line breaks and spacing kept.
+
+    The rewriter turns a name into ``self.name`` (and a program's motion command into
+    ``yield from cmd.name``) by marking the new node with the text to put before the name;
+    here that text is inserted at each such name of the snippet. The result is checked to
+    mean exactly the rewritten tree; None if it does not (the caller then unparses).
+    ``lines``: (first, last) line of the snippet that hold ``tree`` (a custom function).
+    """
+    span = lines
+    lines = snippet.text.split("\n")
+    edits: list[tuple[int, int, str]] = []
+    for node in ast.walk(tree):
+        prefix = getattr(node, "_ejs_prefix", None)
+        if prefix is None:
+            continue
+        row = node.lineno - 1  # type: ignore[attr-defined]
+        if row >= len(lines):
+            return None
+        line = lines[row]
+        col = len(line.encode("utf-8")[: node.col_offset].decode("utf-8", errors="replace"))  # type: ignore[attr-defined]
+        name = node.attr  # type: ignore[attr-defined]
+        if not line[col:].startswith(name):
+            return None
+        edits.append((row, col, prefix))
+    for row, col, prefix in sorted(edits, reverse=True):
+        lines[row] = lines[row][:col] + prefix + lines[row][col:]
+    text = "\n".join(lines if span is None else lines[span[0] - 1 : span[1]])
+    if snippet.mode == "eval":
+        text = text.strip()
+        if _has_comment(text):
+            return None  # an expression is placed inside other code: a comment would cut it
+    try:
+        again = ast.parse(f"({text}\n)" if snippet.mode == "eval" else text, mode=snippet.mode)
+    except SyntaxError:
+        return None
+    want = tree.body if isinstance(tree, ast.Expression) else tree
+    got = again.body if isinstance(again, ast.Expression) else again
+    if ast.unparse(got) != ast.unparse(want):
+        return None
+    if snippet.mode == "eval" and "\n" in text:
+        try:
+            ast.parse(text, mode="eval")
+        except SyntaxError:
+            text = f"({text})"
+    return text
+
+
+def source_lines(snippet: Snippet, text: str, first_line: int = 1) -> list[tuple[str, Location | None]]:
+    """The lines of ``text`` (the snippet's own lines from ``first_line``), each with the spec
+    location of its first character (None for blank and comment lines)."""
+    out: list[tuple[str, Location | None]] = []
+    for i, line in enumerate(text.split("\n"), start=first_line):
+        body = line.strip()
+        if not body or body.startswith("#"):
+            out.append((line.rstrip(), None))
+        else:
+            out.append((line.rstrip(), snippet.location(i, len(line) - len(line.lstrip()))))
+    return out
+
+
+def _has_comment(text: str) -> bool:
+    import io
+    import tokenize
+
+    try:
+        return any(tok.type == tokenize.COMMENT for tok in tokenize.generate_tokens(io.StringIO(text).readline))
+    except (tokenize.TokenError, SyntaxError):
+        return True

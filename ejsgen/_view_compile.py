@@ -1,8 +1,11 @@
 """Compile the view: each element becomes an ``ejsrl.view.elements`` record in ``VIEW``.
 
-Dynamic properties (expressions) become methods of the model, referenced as
-``E.Dynamic(Model._view3_position, "[x, 0, y]")``; bind targets become getter and setter
-methods; actions and ``on_change`` code become methods too.
+Each element becomes a :class:`~ejsgen.plan.Call` of its runtime record. A dynamic property
+(an expression) is ``E.Dynamic(lambda self: [self.x, 0, self.y], "[x, 0, y]")``, or
+``E.Dynamic("t")`` when it is just a variable (or an element, ``q[2]``), which the runtime
+reads itself, as it does ``bind:`` targets. An action or ``on_change`` that is one bare call
+(``kick()``) is that method (``Model.kick``); other code becomes a method named after its
+element (``_button_solve``).
 """
 
 from __future__ import annotations
@@ -16,7 +19,7 @@ from ejsgen._interpolate import BraceError, split_fields
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError
-from ejsgen.plan import Line, Src, py
+from ejsgen.plan import Call, Expr, Line, Ref, Src, py
 from ejsgen.validate import ViewItem
 from ejsgen.yamlload import Path_, TextOrigin
 from ejsrl.world.kinds import KINDS
@@ -39,7 +42,16 @@ _MAX_LEN = 100
 
 
 def _slug(text: str) -> str:
-    return re.sub(r"\W+", "_", text).strip("_") or "x"
+    return re.sub(r"\W+", "_", text.lower()).strip("_")[:30].strip("_") or "x"
+
+
+def _path_of(node: ast.expr, variables: set[str]) -> bool:
+    """Whether a rewritten expression is a bind path: ``self.x`` or ``self.x[2]`` (whole numbers)."""
+    while isinstance(node, ast.Subscript):
+        if _const_index(node.slice) is None:
+            return False
+        node = node.value
+    return isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id == "self" and node.attr in variables
 
 
 class ViewCompiler:
@@ -52,34 +64,18 @@ class ViewCompiler:
         self.auto_counts: dict[str, int] = {}
         self.binds: dict[str, tuple[str, str, str]] = {}
 
-    # -- formatting ------------------------------------------------------------------------------
-    def call(self, fn: str, kwargs: dict[str, Any], indent: int) -> list[str]:
-        parts = [f"{k}={py(v)}" for k, v in kwargs.items() if not isinstance(v, _Children)]
-        children = {k: v for k, v in kwargs.items() if isinstance(v, _Children)}
-        pad = " " * indent
-        one = f"{pad}{fn}(" + ", ".join(parts) + ")"
-        if not children and len(one) <= _MAX_LEN:
-            return [one + ","]
-        lines = [f"{pad}{fn}("]
-        for p in parts:
-            lines.append(f"{pad}    {p},")
-        for k, ch in children.items():
-            if not ch.items:
-                lines.append(f"{pad}    {k}=[],")
-                continue
-            lines.append(f"{pad}    {k}=[")
-            for item in ch.items:
-                lines.extend(item)
-            lines.append(f"{pad}    ],")
-        lines.append(f"{pad}),")
-        return lines
-
     # -- properties --------------------------------------------------------------------------------
-    def dynamic(self, path: Path_, base: str, what: str, text: str) -> Src | None:
-        name = self.c.expr_method(path, base, what, f"View: {what}.", text=text)
-        if name is None:
+    def dynamic(self, path: Path_, base: str, what: str, text: str) -> Call | None:
+        """``E.Dynamic``: a variable path read by the runtime, or a lambda of the model."""
+        snippet = self.c.snippet(path, what, "eval", text)
+        tree = self.c.parse_rewrite(snippet)
+        if tree is None:
             return None
-        return Src(f"E.Dynamic(Model.{name}, {text!r})")
+        assert isinstance(tree, ast.Expression)
+        if _path_of(tree.body, self.c.names.variables):
+            return Call("E.Dynamic", [text.strip()])
+        expr = self.c.expr(path, what, text=text, lam="self")
+        return Call("E.Dynamic", [expr, text]) if expr is not None else None
 
     def interpolated(self, path: Path_, text: str, base: str, what: str, *, markdown: bool = False, origin: Any = None) -> Any:
         """A text with {expr} / {expr:fmt}: a constant if it has none, else a Dynamic f-string.
@@ -125,9 +121,7 @@ class ViewCompiler:
                 fmt = ast.JoinedStr([ast.Constant(spec)]) if spec else None
                 values.append(ast.FormattedValue(res, ord(conv) if conv else -1, fmt))
         joined = ast.JoinedStr(values)
-        name = self.c.method_name(base)
-        self.c.add_method(name, "self", f"View: {what}.", [Line(f"return {ast.unparse(joined)}", self.c.loc(path))])
-        return Src(f"E.Dynamic(Model.{name}, {text!r})")
+        return Call("E.Dynamic", [Expr(ast.unparse(joined), self.c.loc(path), text, "self"), text])
 
     def _text_loc(self, path: Path_, origin: Any, text: str, offset: int) -> Location:
         """The spec location of character ``offset`` of the text at ``path`` starting at ``origin``."""
@@ -222,9 +216,7 @@ class ViewCompiler:
                 elts.append(res[0] if res else "0.0")
             else:
                 elts.append(repr(float(v)))
-        name = self.c.method_name(base)
-        self.c.add_method(name, "self", f"View: {what}.", [Line(f"return [{', '.join(elts)}]", self.c.loc(path))])
-        return Src(f"E.Dynamic(Model.{name}, {_list_text(value)!r})")
+        return Call("E.Dynamic", [Expr(f"[{', '.join(elts)}]", self.c.loc(path), "", "self"), _list_text(value)])
 
     def matrix(self, value: Any, path: Path_, base: str, what: str, shape: tuple[int, int] | None, cols: int | None = None) -> Any:
         if isinstance(value, str):
@@ -249,9 +241,7 @@ class ViewCompiler:
                         else:
                             items.append(repr(float(x)))
                     rows.append("[" + ", ".join(items) + "]")
-                name = self.c.method_name(base)
-                self.c.add_method(name, "self", f"View: {what}.", [Line(f"return [{', '.join(rows)}]", self.c.loc(path))])
-                return Src(f"E.Dynamic(Model.{name}, {_list_text(value)!r})")
+                return Call("E.Dynamic", [Expr(f"[{', '.join(rows)}]", self.c.loc(path), "", "self"), _list_text(value)])
             got, err = literal_shape(value)
             if err:
                 self.c.errors.append(SpecError(self.c.loc(path), f"{what}: {err}"))
@@ -317,95 +307,78 @@ class ViewCompiler:
             hint = f"bind one element, e.g. {var}[0]" if shape and len(shape) == 1 else ""
             c.errors.append(SpecError(c.loc(path), f"a {kind} shows one value, but '{var}' is an array of shape {shape}", hint))
             return None
-        key = ast.unparse(node)
-        if key in self.binds:
-            return self.binds[key]
-        slug = _slug(text)
-        getter = c.method_name(f"_get_{slug}")
-        c.add_method(getter, "self", f"Read the bound value {text}.", [Line(f"return {key}", c.loc(path))])
-        setter = c.method_name(f"_set_{slug}")
-        c.add_method(setter, "self, value", f"Write the bound value {text} (from the view).", [Line(f"{key} = value", c.loc(path))])
-        result = (getter, setter, "float" if vtype == "auto" else vtype)
-        self.binds[key] = result
-        return result
+        return (text, text, "float" if vtype == "auto" else vtype)
 
     # -- elements ------------------------------------------------------------------------------------------
-    def compile(self, items: list[ViewItem]) -> list[str]:
-        lines = ["VIEW = ["]
-        for item in items:
-            lines.extend(self.element(item, 4))
-        lines.append("]")
-        return lines
+    def compile(self, items: list[ViewItem]) -> list[Call]:
+        """The view: one runtime call per element (None for elements with errors dropped)."""
+        return [call for call in (self.element(item) for item in items) if call is not None]
 
-    def element(self, item: ViewItem, indent: int) -> list[str]:
+    def element(self, item: ViewItem) -> Call | None:
         self.n += 1
-        return _ELEMENT_COMPILERS[item.kind](self, item, self.n, indent)
+        return _ELEMENT_COMPILERS[item.kind](self, item, self.n)
 
-    def _folder(self, item: ViewItem, n: int, indent: int) -> list[str]:
+    def _children(self, items: list[ViewItem]) -> list[Call]:
+        return [call for call in (self.element(ch) for ch in items) if call is not None]
+
+    def code(self, base: str, code: Any, path: Path_, what: str) -> Any:
+        """An action or on_change: the method itself when it is one bare call, else a new method."""
+        got = self.c.code_method(base, code, path, what)
+        if got is None:
+            return None
+        return got if isinstance(got, Ref) else Ref(got)
+
+    def _folder(self, item: ViewItem, n: int) -> Call:
         p, path = item.props, item.path
-        where = self.c.where(item.path)
-        base = f"_view{n}"
-        kids = _Children([self.element(ch, indent + 8) for ch in item.children])
-        label = self.interpolated(path + ("label",), p.label, f"{base}_label", "a folder's label")
-        return self.call("E.Folder", {"label": label, "expanded": p.expanded, "where": where, "children": kids}, indent)
+        label = self.interpolated(path + ("label",), p.label, "", "a folder's label")
+        kw: dict[str, Any] = {"label": label} | ({} if p.expanded else {"expanded": False})
+        kw |= {"where": self.c.where(path), "children": self._children(item.children)}
+        return Call("E.Folder", [], kw, children="children")
 
-    def _tabs(self, item: ViewItem, n: int, indent: int) -> list[str]:
+    def _tabs(self, item: ViewItem, n: int) -> Call:
         path = item.path
-        where = self.c.where(item.path)
-        base = f"_view{n}"
-        pad = " " * indent
-        lines = [f"{pad}E.Tabs(", f"{pad}    tabs=["]
-        for i, (label, children) in enumerate(item.tabs):
-            shown = self.interpolated(path + ("tabs", label), label, f"{base}_tab{i + 1}", "a tab's label", origin=self._key_origin(path + ("tabs", label)))
-            lines.append(f"{pad}        ({py(shown)}, [")
-            for ch in children:
-                lines.extend(self.element(ch, indent + 12))
-            lines.append(f"{pad}        ]),")
-        lines += [f"{pad}    ],", f"{pad}    where={where!r},", f"{pad}),"]
-        return lines
+        tabs = []
+        for label, children in item.tabs:
+            shown = self.interpolated(path + ("tabs", label), label, "", "a tab's label", origin=self._key_origin(path + ("tabs", label)))
+            tabs.append((shown, self._children(children)))
+        return Call("E.Tabs", [], {"where": self.c.where(path), "tabs": tabs}, children="tabs")
 
-    def _markdown(self, item: ViewItem, n: int, indent: int) -> list[str]:
-        p = item.props
-        where = self.c.where(item.path)
-        return self.call("E.Markdown", {"text": p.text, "where": where}, indent)
+    def _markdown(self, item: ViewItem, n: int) -> Call:
+        return Call("E.Markdown", [], {"text": item.props.text, "where": self.c.where(item.path)})
 
-    def _label(self, item: ViewItem, n: int, indent: int) -> list[str]:
+    def _label(self, item: ViewItem, n: int) -> Call:
         p, path = item.props, item.path
-        where = self.c.where(item.path)
-        base = f"_view{n}"
-        return self.call("E.Label", {"text": self.interpolated(path + ("text",), p.text, f"{base}_text", "a label", markdown=True), "where": where}, indent)
+        text = self.interpolated(path + ("text",), p.text, "", "a label", markdown=True)
+        return Call("E.Label", [], {"text": text, "where": self.c.where(path)})
 
-    def _button(self, item: ViewItem, n: int, indent: int) -> list[str]:
+    def _button(self, item: ViewItem, n: int) -> Call:
         p, path = item.props, item.path
-        where = self.c.where(item.path)
+        action = self.code(f"_button_{_slug(p.label)}", p.action, path + ("action",), f"the action of button '{p.label}'")
+        label = self.interpolated(path + ("label",), p.label, "", f"the label of button '{p.label}'")
+        if action is None:  # no code: a button that does nothing
+            action = Src("lambda self: None")
+        return Call("E.Button", [], {"label": label, "action": action, "where": self.c.where(path)})
+
+    def _plot(self, item: ViewItem, n: int) -> Call:
+        p, path = item.props, item.path
         c = self.c
-        base = f"_view{n}"
-        lines = c.code_lines(p.action, path + ("action",), f"the action of button '{p.label}'")
-        name = c.add_method(c.method_name(f"_action_{_slug(p.label)}"), "self", f"Action of the button '{p.label}'.", lines)
-        label = self.interpolated(path + ("label",), p.label, f"{base}_label", f"the label of button '{p.label}'")
-        return self.call("E.Button", {"label": label, "action": Src(f"Model.{name}"), "where": where}, indent)
-
-    def _plot(self, item: ViewItem, n: int, indent: int) -> list[str]:
-        p, path = item.props, item.path
-        where = self.c.where(item.path)
-        c = self.c
-        base = f"_view{n}"
-        x = self.number(p.x, path + ("x",), f"{base}_x", "the plot's x")
+        x = self.number(p.x, path + ("x",), "", "the plot's x")
         series = []
         for i, s in enumerate(p.series):
             spath = path + ("series", i)
-            y = self.number(s.y, spath + ("y",), f"{base}_y{i}", f"series {i + 1} of the plot")
+            y = self.number(s.y, spath + ("y",), "", f"series {i + 1} of the plot")
             if s.label is not None:
-                label = self.interpolated(spath + ("label",), s.label, f"{base}_label{i}", f"the label of series {i + 1}")
+                label = self.interpolated(spath + ("label",), s.label, "", f"the label of series {i + 1}")
             else:
                 label = str(s.y)
             if s.color is not None:
-                self.color(s.color, spath + ("color",), f"{base}_c{i}")
-            series.append(Src("E.Series(" + ", ".join([f"y={py(y)}", f"label={py(label)}", f"color={s.color!r}", f"where={self.c.where(spath)!r}"]) + ")"))
+                self.color(s.color, spath + ("color",), "")
+            kw = {"y": y, "label": label} | ({"color": s.color} if s.color is not None else {})
+            series.append(Call("E.Series", [], kw | {"where": c.where(spath)}))
         if p.y_range is not None and (len(p.y_range) != 2 or p.y_range[0] >= p.y_range[1]):
             c.errors.append(SpecError(c.loc(path + ("y_range",)), "y_range is [ymin, ymax] with ymin < ymax"))
         y_range = tuple(float(v) for v in p.y_range) if p.y_range else None
-        title = self.interpolated(path + ("title",), p.title, f"{base}_title", "the plot's title")
+        title = self.interpolated(path + ("title",), p.title, "", "the plot's title")
         x_label = p.x_label if p.x_label is not None else self._axis_title(p.x)
         y_units = {self._unit_of(s.y) for s in p.series}
         y_label = p.y_label if p.y_label is not None else (y_units.pop() or "" if len(y_units) == 1 else "")
@@ -414,30 +387,27 @@ class ViewCompiler:
             kw["x_label"] = x_label
         if y_label:
             kw["y_label"] = y_label
-        kw["where"] = where
-        return self.call("E.Plot", kw, indent)
+        kw["where"] = c.where(path)
+        return Call("E.Plot", [], kw)
 
-    def _image(self, item: ViewItem, n: int, indent: int) -> list[str]:
+    def _image(self, item: ViewItem, n: int) -> Call:
         p, path = item.props, item.path
-        where = self.c.where(item.path)
-        base = f"_view{n}"
-        src = self.dynamic(path + ("source",), f"{base}_source", "an image source", p.source)
-        pts = self.dynamic(path + ("points",), f"{base}_points", "the image's points", p.points) if p.points is not None else None
-        label = self.interpolated(path + ("label",), p.label or "", f"{base}_label", "the image's label")
-        return self.call("E.Image", {"source": src, "label": label, "points": pts, "where": where}, indent)
+        src = self.dynamic(path + ("source",), "", "an image source", p.source)
+        pts = self.dynamic(path + ("points",), "", "the image's points", p.points) if p.points is not None else None
+        label = self.interpolated(path + ("label",), p.label or "", "", "the image's label")
+        return Call("E.Image", [], {"source": src, "label": label, "points": pts, "where": self.c.where(path)})
 
-    def _scene(self, item: ViewItem, n: int, indent: int) -> list[str]:
-        where = self.c.where(item.path)
-        kids = _Children([self.node3d(ch, indent + 8) for ch in item.children])
-        return self.call("E.Scene", {"where": where, "children": kids}, indent)
+    def _scene(self, item: ViewItem, n: int) -> Call:
+        kids = [call for call in (self.node3d(ch) for ch in item.children) if call is not None]
+        return Call("E.Scene", [], {"where": self.c.where(item.path), "children": kids}, children="children")
 
-    def control(self, item: ViewItem, n: int, indent: int) -> list[str]:
+    def control(self, item: ViewItem, n: int) -> Call | None:
         c = self.c
         kind, p, path = item.kind, item.props, item.path
         b = self.bind(p.bind, path + ("bind",), kind)
         if b is None:
-            return []
-        getter, setter, vtype = b
+            return None
+        _, _, vtype = b
         want = {"checkbox": ("bool",), "text": ("str",), "slider": ("float", "int"), "number": ("float", "int")}.get(kind)
         var = p.bind.split("[")[0].strip()
         declared = c.var_types.get(var)
@@ -447,14 +417,14 @@ class ViewCompiler:
             if kind == "checkbox" and isinstance(decl_value, str) and decl_value.lower() in ("yes", "no", "on", "off", "y", "n"):
                 hint = f"'{decl_value}' is text in ejsgen's YAML (1.2); declare '{var}' as true or false"
             c.errors.append(SpecError(c.loc(path + ("bind",)), f"a {kind} needs a {' or '.join(want)} variable, but '{var}' is {vtype}", hint))
-            return []
+            return None
         if declared == "auto" and want and "[" not in p.bind:
             vtype = want[0]
         on_change = None
         if p.on_change is not None:
-            lines = c.code_lines(p.on_change, path + ("on_change",), f"the on_change of the {kind} of {p.bind}")
-            on_change = Src("Model." + c.add_method(c.method_name(f"_on_change_{_slug(p.bind)}"), "self", f"Runs after the user changes {p.bind}.", lines))
-        kw: dict[str, Any] = {"bind": p.bind, "get": Src(f"Model.{getter}"), "set": Src(f"Model.{setter}"), "label": self.interpolated(path + ("label",), p.label, f"_view{n}_label", f"the label of the {kind} of {p.bind}") if p.label is not None else p.bind, "on_change": on_change, "vtype": vtype}
+            on_change = self.code(f"_{kind}_{_slug(p.bind)}_changed", p.on_change, path + ("on_change",), f"the on_change of the {kind} of {p.bind}")
+        label = self.interpolated(path + ("label",), p.label, "", f"the label of the {kind} of {p.bind}") if p.label is not None else p.bind
+        kw: dict[str, Any] = {"bind": p.bind, "label": label, "on_change": on_change, "vtype": vtype}
         decl = c.var_decls.get(var)
         if kind == "slider":
             if p.min >= p.max:
@@ -462,7 +432,7 @@ class ViewCompiler:
             step = p.step if p.step is not None else (1 if vtype == "int" else abs(p.max - p.min) / 100)
             if step <= 0 and p.min < p.max:
                 c.errors.append(SpecError(c.loc(path + ("step",)), "the slider's step must be positive"))
-            kw.update(min=float(p.min), max=float(p.max), step=float(step))
+            kw.update(min=float(p.min), max=float(p.max), step=float(f"{step:.12g}"))  # 0.029, not 0.028999999999999998
         elif kind == "number":
             lo = p.min if p.min is not None else (decl.decl.min if decl else None)
             hi = p.max if p.max is not None else (decl.decl.max if decl else None)
@@ -479,14 +449,12 @@ class ViewCompiler:
             kw["options"] = list(p.options)
         kw["where"] = c.where(path)
         cls = {"slider": "E.Slider", "number": "E.Number", "checkbox": "E.Checkbox", "text": "E.Text", "dropdown": "E.Dropdown"}[kind]
-        return self.call(cls, kw, indent)
+        return Call(cls, [], kw, keep=("min", "max", "step"))
 
-    def node3d(self, item: ViewItem, indent: int) -> list[str]:
+    def node3d(self, item: ViewItem) -> Call:
         c = self.c
         self.n += 1
-        n = self.n
         kind, p, path = item.kind, item.props, item.path
-        base = f"_scene{n}"
         name = p.name
         if name is None:
             self.auto_counts[kind] = self.auto_counts.get(kind, 0) + 1
@@ -515,43 +483,42 @@ class ViewCompiler:
             what = f"the {prop} of {kind} '{name}'"
             if value is None:
                 continue
-            props[prop] = _PROP_COMPILERS[decl.type](self, value, ppath, f"{base}_{prop}", what)
+            props[prop] = _PROP_COMPILERS[decl.type](self, value, ppath, "", what)
         kw["props"] = props
         if p.transform is not None:
             if p.position is not None or p.rotation is not None:
                 c.errors.append(SpecError(c.loc(path + ("transform",)), "give either 'transform' or 'position'/'rotation', not both"))
-            kw["transform"] = self.matrix(p.transform, path + ("transform",), f"{base}_transform", f"the transform of '{name}'", (4, 4))
+            kw["transform"] = self.matrix(p.transform, path + ("transform",), "", f"the transform of '{name}'", (4, 4))
         if p.position is not None:
-            kw["position"] = self.vector(p.position, path + ("position",), f"{base}_position", f"the position of '{name}'", 3)
+            kw["position"] = self.vector(p.position, path + ("position",), "", f"the position of '{name}'", 3)
         if p.rotation is not None:
-            kw["rotation"] = self.vector(p.rotation, path + ("rotation",), f"{base}_rotation", f"the rotation of '{name}'", 3)
+            kw["rotation"] = self.vector(p.rotation, path + ("rotation",), "", f"the rotation of '{name}'", 3)
         if kind == "gizmo":
             b = self.bind(p.bind, path + ("bind",), "gizmo")
             if b is not None:
                 var = p.bind.strip()
                 if c.var_shapes.get(var) not in (None, (4, 4)):
                     c.errors.append(SpecError(c.loc(path + ("bind",)), f"a gizmo binds a 4x4 pose variable, but '{var}' has shape {c.var_shapes.get(var)}"))
-                kw["transform"] = Src(f"E.Dynamic(Model.{b[0]}, {p.bind!r})")
-                kw["set"] = Src(f"Model.{b[1]}")
+                kw["bind"] = p.bind
             if p.on_change is not None:
-                lines = c.code_lines(p.on_change, path + ("on_change",), f"the on_change of gizmo '{name}'")
-                kw["on_change"] = Src("Model." + c.add_method(c.method_name(f"_on_change_{_slug(name)}"), "self", f"Runs after the gizmo '{name}' is dragged.", lines))
+                kw["on_change"] = self.code(f"_gizmo_{_slug(name)}_dragged", p.on_change, path + ("on_change",), f"the on_change of gizmo '{name}'")
         if "visible" in p.model_fields_set:
-            kw["visible"] = self.dynamic(path + ("visible",), f"{base}_visible", f"the visibility of '{name}'", p.visible) if isinstance(p.visible, str) else bool(p.visible)
+            kw["visible"] = self.dynamic(path + ("visible",), "", f"the visibility of '{name}'", p.visible) if isinstance(p.visible, str) else bool(p.visible)
         if p.color is not None:
-            kw["color"] = self.color(p.color, path + ("color",), f"{base}_color")
+            kw["color"] = self.color(p.color, path + ("color",), "")
         if "opacity" in p.model_fields_set:
-            kw["opacity"] = self.number(p.opacity, path + ("opacity",), f"{base}_opacity", f"the opacity of '{name}'")
+            kw["opacity"] = self.number(p.opacity, path + ("opacity",), "", f"the opacity of '{name}'")
         if p.graspable:
             kw["graspable"] = True
         kw["where"] = c.where(path)
         if item.children:
-            kw["children"] = _Children([self.node3d(ch, indent + 8) for ch in item.children])
-        return self.call("E.Node3D", kw, indent)
+            kw["children"] = [self.node3d(ch) for ch in item.children]
+            return Call("E.Node3D", [], kw, children="children")
+        return Call("E.Node3D", [], kw)
 
 
 #: view element kind -> compiles one element into the lines of its record in ``VIEW``
-_ELEMENT_COMPILERS: dict[str, Callable[[ViewCompiler, ViewItem, int, int], list[str]]] = {
+_ELEMENT_COMPILERS: dict[str, Callable[[ViewCompiler, ViewItem, int], Call | None]] = {
     "folder": ViewCompiler._folder,
     "tabs": ViewCompiler._tabs,
     "markdown": ViewCompiler._markdown,
@@ -597,13 +564,6 @@ def _list_text(value: Any) -> str:
     if isinstance(value, list):
         return "[" + ", ".join(_list_text(v) for v in value) + "]"
     return str(value)
-
-
-class _Children:
-    """Nested element lines, laid out one per line by ``call``."""
-
-    def __init__(self, items: list[list[str]]) -> None:
-        self.items = items
 
 
 def _const_index(node: ast.AST) -> tuple[int, ...] | None:

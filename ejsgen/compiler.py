@@ -12,11 +12,12 @@ import importlib.util
 from pathlib import Path
 from typing import Any
 
-from ejsgen._resolve import Names, Snippet, parse_snippet, rewrite
+from ejsgen._resolve import Names, Snippet, parse_snippet, rewrite, rewrite_source, source_lines
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError, SpecErrors
-from ejsgen.plan import AppPlan, Line, Method, body_lines, py
+from ejsgen.emit import WIDTH, declare_method, list_lines, page_call
+from ejsgen.plan import AppPlan, Call, EventPlan, Expr, Line, Method, OdePlan, ProgramPlan, Ref, Variable, body_lines, py
 from ejsgen.spec import Code, CodeEvolutionPage, OdePage
 from ejsgen.validate import CONTROL_NAMES, MATH_NAMES, PRELUDE_NAMES, Checked, free_name, import_name_clash, model_name_clash
 from ejsgen.yamlload import Path_, TextOrigin
@@ -44,7 +45,10 @@ class Compiler:
         self.assets: dict[str, Path] = {}
         self.after_class: list[str] = []
         self.runtime_imports: list[str] = []
-        self.program_labels: list[str] = []
+        self.program_labels: list[Call] = []
+        self.programs: list[ProgramPlan] = []
+        self.var_plans: list[Variable] = []
+        self.pages: list[OdePlan | Call] = []
         self.names = Names(variables=set(self.var_decls), functions=set(), controls=set(CONTROL_NAMES), globals={"np", *MATH_NAMES})
 
     # -- helpers ----------------------------------------------------------------------------------
@@ -78,7 +82,20 @@ class Compiler:
 
     def add_method(self, name: str, params: str, doc: str, lines: list[Line], comment: str = "") -> str:
         self.methods.append(Method(name, params, doc, lines or [Line("pass")], comment))
+        self._method_names.add(name)
         return name
+
+    def code_method(self, base: str, code: Code | None, path: Path_, what: str) -> str | Ref | None:
+        """A method ``base`` (made unique) running the code at ``path``; a bare call of a custom
+        function or control with no arguments (``kick()``) is that method itself (a ``Ref``)."""
+        lines = self.code_lines(code, path, what)
+        if isinstance(code, str):
+            one = _single_call(self, path)
+            if one is not None:
+                return Ref(one)
+        if not lines:
+            return None
+        return self.add_method(self.method_name(base), "self", "", lines)
 
     def parse(self, snippet: Snippet) -> ast.AST | None:
         """Parse a snippet; a syntax error is recorded (and None returned)."""
@@ -119,7 +136,33 @@ class Compiler:
         tree = self.parse_rewrite(snippet, names=names)
         if tree is None or not isinstance(tree, ast.Module) or not tree.body:
             return []
-        return body_lines(tree.body, lambda n: snippet.location(n.lineno, n.col_offset))
+        return self.tree_lines(snippet, tree)
+
+    def tree_lines(self, snippet: Snippet, tree: ast.Module) -> list[Line]:
+        """The lines of a rewritten block: the author's text (comments and line breaks kept),
+        or the unparsed tree when the text cannot be kept."""
+        text = rewrite_source(snippet, tree)
+        if text is None:
+            return body_lines(tree.body, lambda n: snippet.location(n.lineno, n.col_offset))
+        lines = [Line(t, w) for t, w in source_lines(snippet, text)]
+        while lines and not lines[-1].text.strip():
+            lines.pop()
+        while lines and not lines[0].text.strip():
+            lines.pop(0)
+        return lines
+
+    def expr(self, path: Path_, what: str, *, text: str | None = None, lam: str | None = None) -> Expr | None:
+        """The rewritten expression at ``path`` as written by the author (``lam``: as a lambda)."""
+        snippet = self.snippet(path, what, "eval", text)
+        tree = self.parse_rewrite(snippet)
+        if tree is None:
+            return None
+        assert isinstance(tree, ast.Expression)
+        source = rewrite_source(snippet, tree) or ast.unparse(tree.body)
+        if lam is not None and "\n" in source:
+            source = ast.unparse(tree.body)
+        where = snippet.location(tree.body.lineno, tree.body.col_offset)
+        return Expr(source, where, snippet.text.strip(), lam)
 
     def expr_method(self, path: Path_, base: str, what: str, doc: str, *, text: str | None = None) -> str | None:
         """Compile the expression at ``path`` into a method ``base(self)``; returns its name."""
@@ -140,7 +183,7 @@ class Compiler:
         if tree is None:
             return None
         assert isinstance(tree, ast.Expression)
-        return ast.unparse(tree.body), tree.body
+        return rewrite_source(snippet, tree) or ast.unparse(tree.body), tree.body
 
     # -- imports --------------------------------------------------------------------------------------
     def compile_imports(self) -> list[str]:
@@ -181,7 +224,6 @@ class Compiler:
 
     # -- variables ------------------------------------------------------------------------------------
     def compile_variables(self) -> None:
-        lines: list[Line] = []
         declared: list[str] = []
         for v in self.checked.variables:
             decl = v.decl
@@ -194,7 +236,7 @@ class Compiler:
                     later = {a.attr for a in ast.walk(node) if _is_self_attr(a) and a.attr in self.var_decls and a.attr not in declared}
                     for name in sorted(later):
                         self.errors.append(SpecError(self.loc(epath), f"'{v.name}' uses '{name}' before '{name}' is declared", "variables are initialised in declaration order"))
-                    lines.append(Line(f"self.{v.name} = {src}", where))
+                    self._declared(v, src, where)
                 self.var_types[v.name] = "auto"
                 self.var_shapes[v.name] = None
             else:
@@ -203,11 +245,18 @@ class Compiler:
                     vpath = v.path + ("value",) if isinstance(_get(self.doc.data, v.path), dict) else v.path
                     self.errors.append(SpecError(self.loc(vpath), f"variable '{v.name}': {err}"))
                     continue
-                lines.append(Line(f"self.{v.name} = {src}", where))
+                self._declared(v, src, where)
                 self.var_types[v.name] = vtype
                 self.var_shapes[v.name] = shape
             declared.append(v.name)
-        self.add_method("_declare", "self", "Give every variable its initial value, in declaration order.", lines)
+        self.methods.append(declare_method(self.var_plans))
+
+    def _declared(self, v: Any, src: str, where: Location) -> None:
+        """The plan of a variable: its initial value (an expression as the author laid it out)."""
+        first, *rest = src.split("\n")
+        init = [Line(f"self.{v.name} = {first}", where)] + [Line(r, where) for r in rest]
+        decl = v.decl
+        self.var_plans.append(Variable(v.name, "", init, getattr(decl, "unit", None), getattr(decl, "doc", None)))
 
     # -- custom functions -------------------------------------------------------------------------------
     def collect_custom_names(self) -> list[tuple[ast.FunctionDef, Snippet, Path_]]:
@@ -250,6 +299,11 @@ class Compiler:
             assert isinstance(new, ast.Module)
             func = new.body[0]
             assert isinstance(func, ast.FunctionDef)
+            own = None if func.decorator_list else _custom_source(snippet, func)
+            if own is not None:
+                self._method_names.add(func.name)
+                self.methods.append(Method(func.name, "", "", own, raw=True))
+                continue
             func.args.args.insert(0, ast.arg(arg="self"))
             doc = ast.get_docstring(func) or ""
             body = func.body[1:] if doc and func.body and isinstance(func.body[0], ast.Expr) else func.body
@@ -259,44 +313,51 @@ class Compiler:
             self._method_names.add(func.name)
             for dec in func.decorator_list:
                 lines.insert(0, Line(f"# decorator @{ast.unparse(dec)} is applied below"))
-            self.add_method(func.name, params, doc or f"Custom function '{func.name}' of the spec.", lines, comment=f"from {self.spec_path.name}:{fn.lineno + snippet.origin.line - 1}")
+            self.add_method(func.name, params, doc, lines)
 
     # -- init, fixed relations --------------------------------------------------------------------------
     def compile_blocks(self) -> None:
         m = self.spec.model
-        self.add_method("_init", "self", "The spec's init code: runs at start and on reset().", self.code_lines(m.init, ("model", "init"), "model.init"))
-        self.add_method(
-            "_fixed_relations",
-            "self",
-            "The spec's fixed relations: run after init, every step and every change from the view.",
-            self.code_lines(m.fixed_relations, ("model", "fixed_relations"), "model.fixed_relations"),
-        )
+        init = self.code_lines(m.init, ("model", "init"), "model.init")
+        if init:
+            self.add_method("_init", "self", "", init)
+        fixed = self.code_lines(m.fixed_relations, ("model", "fixed_relations"), "model.fixed_relations")
+        if fixed:
+            self.add_method("_fixed_relations", "self", "", fixed)
 
     # -- evolution ----------------------------------------------------------------------------------------
     def compile_evolution(self) -> None:
-        page_lines = [Line("pages = []")]
-        for i, page in enumerate(self.spec.model.evolution):
+        evolution = self.spec.model.evolution
+        first = len(self.methods)
+        odes = sum(1 for p in evolution if isinstance(p, OdePage))
+        for i, page in enumerate(evolution):
             path = ("model", "evolution", i)
             title = page.name or f"page {i + 1}"
+            base = _slug(page.name) if page.name else f"page{i + 1}"
             if isinstance(page, CodeEvolutionPage):
                 lines = self.code_lines(page.code, path + ("code",), f"evolution ({title})")
-                name = self.add_method(self.method_name(f"_evolution_{i}"), "self", f"Evolution page '{title}' (code).", lines)
-                page_lines.append(Line(f"pages.append(CodePage({title!r}, self.{name}, enabled={page.enabled!r}))"))
+                name = self.add_method(self.method_name(f"_{base}"), "self", "", lines)
+                self.pages.append(Call("CodePage", [title, Ref(name, "self")], {} if page.enabled else {"enabled": False}))
             else:
                 assert isinstance(page, OdePage)
-                page_lines.extend(self.compile_ode(i, page, path + ("ode",), title))
-        page_lines.append(Line("return pages"))
-        self.add_method("_evolution", "self", "The evolution pages, run in order once per step (solvers built fresh).", page_lines)
+                ode = self.compile_ode(page, path + ("ode",), title, "" if odes == 1 and not page.name else base)
+                if ode is not None:
+                    self.pages.append(ode)
+        if self.pages:
+            items = [page_call(p) if isinstance(p, OdePlan) else p for p in self.pages]
+            lines = list_lines("return ", items, 0)
+            self.add_method("_evolution", "self", "", lines)
+            self.methods.insert(first, self.methods.pop())  # read first, then the pages' parts
 
-    def compile_ode(self, i: int, page: OdePage, path: Path_, title: str) -> list[Line]:
+    def compile_ode(self, page: OdePage, path: Path_, title: str, base: str) -> OdePlan | None:
         ode = page.ode
         ind = ode.independent
         if ind not in self.var_decls:
             self.errors.append(SpecError(self.loc(path + ("independent",)) if "independent" in _get(self.doc.data, path) else self.loc(path), f"the independent variable '{ind}' is not a variable", did_you_mean(ind, self.var_decls) or f"declare it, e.g. '{ind}: 0.0'"))
-            return []
+            return None
         self.independents.append(ind)
         states: list[str] = []
-        rates: list[tuple[str, str, Path_]] = []
+        rates: dict[str, Expr] = {}
         for state, rate in ode.equations.items():
             spath = path + ("equations", state)
             if state not in self.var_decls:
@@ -314,127 +375,72 @@ class Compiler:
             self.state_vars.add(state)
             states.append(state)
             if isinstance(rate, str):
-                res = self.expr_source(spath, f"the rate of '{state}'")
+                res = self.expr(spath, f"the rate of '{state}'")
                 if res is None:
                     continue
-                src, node = res
-                shape = infer_shape(node, self.var_shapes)
+                shape = infer_shape(ast.parse(res.source.strip(), mode="eval").body if "\n" not in res.source else ast.parse(f"({res.source})", mode="eval").body, self.var_shapes)
             else:
-                src, shape = repr(float(rate)), ()
+                res, shape = Expr(repr(float(rate)), self.loc(spath)), ()
             want = self.var_shapes.get(state)
             if want is not None and shape is not None and shape != want and shape != ():
                 self.errors.append(SpecError(self.loc(spath), f"the rate of '{state}' has shape {_shape_text(shape)} but '{state}' has shape {_shape_text(want)}"))
             if want == () and shape not in (None, ()):
                 self.errors.append(SpecError(self.loc(spath), f"the rate of '{state}' is an array of shape {_shape_text(shape)} but '{state}' is a number"))
-            rates.append((state, src, spath))
+            rates[state] = Expr(res.source, self.loc(spath))
         if not states:
             if not ode.equations:
                 self.errors.append(SpecError(self.loc(path), "an ode page needs at least one equation"))
-            return []
+            return None
         for s in states + [ind]:
             if self.var_types.get(s) == "int":
                 self.var_types[s] = "float"
-        k = i
-        scalar = all(self.var_shapes.get(s) == () for s in states)
-        where_eq = {s: self.loc(p) for s, _, p in rates}
-        # state / load
-        if scalar:
-            packed = ", ".join(f"self.{s}" for s in states) + ("," if len(states) == 1 else "")
-            self.add_method(f"_ode{k}_state", "self", f"The independent variable and the packed state ({', '.join(states)}).", [Line(f"return self.{ind}, np.array(({packed}), dtype=float)")])
-            targets = ", ".join(f"self.{s}" for s in states) + ("," if len(states) == 1 else "")
-            self.add_method(f"_ode{k}_load", "self, t, y", "Write the independent variable and the state into the model.", [Line(f"self.{ind} = t"), Line(f"{targets} = y.tolist()")])
+        prefix = f"_{base}_" if base else "_"
+        # rates: one per state, in order
+        one = f"return [{', '.join(r.source for r in rates.values())}]  # " + ", ".join(f"d{s}/d{ind}" for s in rates)
+        if len(one) + 8 <= WIDTH and all("\n" not in r.source for r in rates.values()):
+            rate_lines = [Line(one, next(iter(rates.values())).where)]
         else:
-            packed = ", ".join(f"np.ravel(self.{s})" for s in states)
-            values = ", ".join(f"self.{s}" for s in states)
-            self.add_method(
-                f"_ode{k}_state",
-                "self",
-                f"The independent variable and the packed state ({', '.join(states)}); the layout follows any change of size.",
-                [Line(f"self._ejs_layout{k} = StateLayout.of(self._ejs_layout{k}, {values})"), Line(f"return self.{ind}, np.concatenate(({packed},)).astype(float)")],
-            )
-            targets = ", ".join(f"self.{s}" for s in states) + ("," if len(states) == 1 else "")
-            self.add_method(f"_ode{k}_load", "self, t, y", "Write the independent variable and the state into the model.", [Line(f"self.{ind} = t"), Line(f"{targets} = self._ejs_layout{k}.unpack(y)")])
-        # rates
-        rate_lines = [Line(f"self._ode{k}_load(t, y)")]
+            rate_lines = [Line("return [")] + [Line(f"    {r.source},  # d{s}/d{ind}", r.where) for s, r in rates.items()] + [Line("]")]
+        rates_name = self.add_method(self.method_name(f"{prefix}rates"), "self", "", rate_lines)
+        preliminary = None
         if ode.preliminary is not None:
             pre = self.code_lines(ode.preliminary, path + ("preliminary",), f"the preliminary code of {title}")
-            self.add_method(f"_ode{k}_preliminary", "self", f"Preliminary code of '{title}', run before each evaluation of the rates.", pre)
-            rate_lines.append(Line(f"self._ode{k}_preliminary()"))
-        if scalar:
-            if len(rates) == 1:
-                s, src, _ = rates[0]
-                rate_lines.append(Line(f"return np.array(({src},), dtype=float)", where_eq[s]))
-            else:
-                rate_lines.append(Line("return np.array(("))
-                for s, src, _ in rates:
-                    rate_lines.append(Line(f"    {src},  # d{s}/d{ind}", where_eq[s]))
-                rate_lines.append(Line("), dtype=float)"))
-        else:
-            rate_lines.append(Line(f"layout = self._ejs_layout{k}"))
-            rate_lines.append(Line("out = np.empty(layout.size)"))
-            rate_lines.append(Line("rates = layout.views(out)"))
-            for j, (s, src, _) in enumerate(rates):
-                rate_lines.append(Line(f"rates[{j}][...] = {src}  # d{s}/d{ind}", where_eq[s]))
-            rate_lines.append(Line("return out"))
-        self.add_method(f"_ode{k}_rates", "self, t, y", f"The rates d/d{ind} of {', '.join(states)}.", rate_lines)
+            preliminary = self.add_method(self.method_name(f"{prefix}preliminary"), "self", "", pre)
         # step
+        step: Expr | float
         if "step" not in _get(self.doc.data, path):
-            step_name = self._default_step(k, "dt", path)
+            if "dt" not in self.var_decls:
+                self.errors.append(SpecError(self.loc(path), "the default step 'dt' is not a variable", "declare 'dt' or give 'step:'"))
+            step = Expr("self.dt", self.loc(path), "dt", "")
         elif isinstance(ode.step, str):
-            step_name = self.expr_method(path + ("step",), f"_ode{k}_step", f"the step of {title}", f"The step of '{title}'.") or ""
+            step = self.expr(path + ("step",), f"the step of {title}", lam="") or Expr("0.0", lam="")
         else:
-            step_name = self.add_method(self.method_name(f"_ode{k}_step"), "self", f"The step of '{title}'.", [Line(f"return {float(ode.step)!r}")])
+            step = float(ode.step)
         # events
-        event_src = []
-        event_where: dict[str, str] = {}
+        events: list[EventPlan] = []
         for j, ev in enumerate(ode.events):
             epath = path + ("events", j)
             ename = ev.name or f"event {j + 1}"
-            res = self.expr_source(epath + ("when",), f"the condition of event '{ename}'")
-            if res is None:
+            when = self.expr(epath + ("when",), f"the condition of event '{ename}'", lam="")
+            if when is None:
                 continue
-            when = self.add_method(f"_ode{k}_event{j}_when", "self, t, y", f"Event '{ename}': fires when this crosses zero.", [Line(f"self._ode{k}_load(t, y)"), Line(f"return {res[0]}", self.loc(epath + ("when",)))])
-            action_lines = [Line(f"self._ode{k}_load(t, y.copy())")]
-            action_lines += self.code_lines(ev.action, epath + ("action",), f"the action of event '{ename}'")
-            action_lines.append(Line(f"return self._ode{k}_state()[1]"))
-            action = self.add_method(f"_ode{k}_event{j}_action", "self, t, y", f"Event '{ename}': the action, at the event's time.", action_lines)
-            event_where[ename] = self.where(epath)
-            direction = {"up": 1, "down": -1, "both": 0}[ev.direction]
-            event_src.append(f"EventDef({ename!r}, self.{when}, {direction}, self.{action}, stop={ev.stop!r})")
-        lines = [] if scalar else [Line(f"self._ejs_layout{k} = None")]
-        lines.append(Line(f"pages.append(OdePage("))
-        args = [
-            repr(title),
-            f"method={ode.method!r}",
-            f"step=self.{step_name}",
-            f"state=self._ode{k}_state",
-            f"load=self._ode{k}_load",
-            f"rates=self._ode{k}_rates",
-            f"names={tuple(states)!r}",
-        ]
-        lines += [Line(f"    {a},") for a in args]
-        if event_src:
-            lines.append(Line("    events=["))
-            lines += [Line(f"        {e},") for e in event_src]
-            lines.append(Line("    ],"))
-        args = [
-            f"tolerance={ode.tolerance!r}",
-            f"max_step={ode.max_step!r}",
-            f"enabled={page.enabled!r}",
-            f"where={self.where(path + ('equations',), key=True)!r}",
-        ]
-        if event_where:
-            args.append(f"event_where={event_where!r}")
-        lines += [Line(f"    {a},") for a in args]
-        lines.append(Line("))"))
-        return lines
-
-    def _default_step(self, k: int, step: str, path: Path_) -> str:
-        res_name = self.method_name(f"_ode{k}_step")
-        if step not in self.var_decls:
-            self.errors.append(SpecError(self.loc(path), f"the default step '{step}' is not a variable", f"declare '{step}' or give 'step:'"))
-        self.add_method(res_name, "self", "The step (default: dt).", [Line(f"return self.{step}")])
-        return res_name
+            lines = self.code_lines(ev.action, epath + ("action",), f"the action of event '{ename}'")
+            action = self.add_method(self.method_name(f"_on_{_slug(ename)}"), "self", "", lines) if lines else None
+            events.append(EventPlan(ename, when, ev.direction, action, ev.stop, self.where(epath)))
+        return OdePlan(
+            title=title,
+            independent=ind,
+            rates=rates,
+            method=ode.method,
+            step=step,
+            rates_method=rates_name,
+            preliminary=preliminary,
+            events=events,
+            tolerance=ode.tolerance,
+            max_step=ode.max_step,
+            enabled=page.enabled,
+            where=self.where(path + ("equations",), key=True),
+        )
 
     # -- assets ------------------------------------------------------------------------------------------
     def asset(self, rel: str, path: Path_, what: str = "asset") -> str | None:
@@ -469,12 +475,12 @@ class Compiler:
             from ejsgen._fmu import compile_fmus
 
             compile_fmus(self)
-        view_lines = ViewCompiler(self).compile(self.checked.view)
+        view = ViewCompiler(self).compile(self.checked.view)
         if self.spec.model.programs:
             from ejsgen._programs import compile_programs
 
             compile_programs(self)
-            view_lines = view_lines[:-1] + self.program_labels + view_lines[-1:]
+            view = view + self.program_labels
         generated = {m.name for m in self.methods} - self.names.functions
         for v in self.checked.variables:  # the generated methods' names are known only now
             if v.name in generated:
@@ -492,11 +498,14 @@ class Compiler:
             variables=dict(self.var_types),
             independent=independent,
             methods=self.methods,
-            view_lines=view_lines,
+            view=view,
             sim={"fps": sim.fps, "steps_per_display": sim.steps_per_display, "autoplay": sim.autoplay, "realtime": sim.realtime, "controls": sim.controls} | ({"panel_width": sim.panel_width} if sim.panel_width else {}),
             assets=sorted((src, rel) for rel, src in self.assets.items()),
             after_class=self.after_class,
             runtime_imports=self.runtime_imports,
+            var_plans=self.var_plans,
+            pages=self.pages,
+            programs=self.programs,
         )
 
 
@@ -571,3 +580,52 @@ def compile_spec(checked: Checked, spec_path: Path) -> AppPlan:
     """Compile a validated spec (raises ``SpecErrors``)."""
     return Compiler(checked, spec_path).compile()
 
+
+
+def _slug(text: str) -> str:
+    """A method-name part from a name or label: ``"Solve and move"`` -> ``"solve_and_move"``."""
+    import re
+
+    return re.sub(r"\W+", "_", text.lower()).strip("_") or "x"
+
+
+def _single_call(c: Compiler, path: Path_) -> str | None:
+    """The name called when the code at ``path`` is one bare call of a custom function or a
+    control with no arguments (``kick()``), else None."""
+    text = _get(c.doc.data, path)
+    try:
+        tree = ast.parse(str(text).strip())
+    except SyntaxError:
+        return None
+    if len(tree.body) != 1 or not isinstance(tree.body[0], ast.Expr):
+        return None
+    call = tree.body[0].value
+    if not (isinstance(call, ast.Call) and isinstance(call.func, ast.Name) and not call.args and not call.keywords):
+        return None
+    name = call.func.id
+    return name if name in c.names.functions or name in c.names.controls else None
+
+
+def _custom_source(snippet: Snippet, fn: ast.FunctionDef) -> list[Line] | None:
+    """A custom function as the author wrote it (with the comments right above it), names
+    rewritten and ``self`` added as its first parameter; None if the text cannot be kept."""
+    import re
+
+    end = fn.end_lineno or fn.lineno
+    all_lines = snippet.text.split("\n")
+    start = fn.lineno
+    while start > 1 and all_lines[start - 2].strip().startswith("#"):
+        start -= 1
+    text = rewrite_source(snippet, ast.Module(body=[fn], type_ignores=[]), lines=(start, end))
+    if text is None:
+        return None
+    out = source_lines(snippet, text, first_line=start)
+    k = fn.lineno - start
+    def_line = out[k][0]
+    a = fn.args
+    has_args = bool(a.posonlyargs or a.args or a.vararg or a.kwonlyargs or a.kwarg)
+    m = re.match(rf"(\s*def\s+{re.escape(fn.name)}\s*\()", def_line)
+    if m is None:
+        return None
+    out[k] = (def_line[: m.end()] + ("self, " if has_args else "self") + def_line[m.end():], out[k][1])
+    return [Line(t, w) for t, w in out]

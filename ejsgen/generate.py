@@ -1,6 +1,6 @@
 """Render an ``AppPlan`` into an app folder (and optionally a single-file ``.pyz``).
 
-The templates only lay out what the plan decided. After rendering, the location markers
+``ejsgen.emit`` turns the plan's data into lines; the template only lays them out. After rendering, the location markers
 on each line of model code are turned into ``Model.SPEC_LINES`` (app.py line -> spec
 line and column), every Python file is compiled as a check, and the folder is written
 next to its final place and moved there in one step, so a failed build leaves nothing
@@ -23,15 +23,14 @@ from ejsrl.sim.names import MATH_NAMES
 
 from ejsgen import __version__
 from ejsgen.errors import EjsError
-from ejsgen.plan import AppPlan
+from ejsgen.emit import WIDTH, call_lines, flat, meta_call, method_lines, program_call, sim_call, used_names, view_lines
+from ejsgen.plan import AppPlan, Line
 
 __all__ = ["render_app", "write_app", "REQUIREMENTS", "runtime_dir"]
 
 REQUIREMENTS = ["numpy>=1.26", "scipy>=1.11", "viser>=1.1,<1.2", "trimesh>=4.0", "opencv-python-headless>=4.8"]
 _MARK = "  #@@ejsloc:"
 _MARK_RE = re.compile(r"  #@@ejsloc:(\d+)$")
-#: the prelude's math names, as the template imports them (from the runtime's list)
-_MATH = textwrap.fill(", ".join(sorted(MATH_NAMES)), width=90, subsequent_indent="    ")
 
 
 def runtime_dir() -> Path:
@@ -58,61 +57,83 @@ def _env() -> jinja2.Environment:
     )
 
 
-def _doc_lines(doc: str) -> list[str]:
-    doc = doc.replace('"""', "'''").replace("\\", "\\\\").strip()
-    lines = doc.splitlines() or [""]
-    if len(lines) == 1:
-        return [f'"""{lines[0]}"""']
-    return [f'"""{lines[0]}'] + [ln.rstrip() for ln in lines[1:]] + ['"""']
+#: where the runtime names a generated app may use come from (imported only when used)
+_RUNTIME_FROM = {
+    "ejsrl.app": ("AppMeta", "SimConfig", "main"),
+    "ejsrl.sim": ("CodePage", "EventDef", "ModelBase", "OdePage"),
+    "ejsrl.sim.programs": ("ProgramDef",),
+}
 
 
-def _wrap_dict(name: str, items: list[str], width: int = 96) -> str:
-    if not items:
-        return f"{name} = {{}}"
-    lines = [f"{name} = {{"]
-    cur = "   "
-    for it in items:
-        if len(cur) + len(it) + 2 > width:
-            lines.append(cur.rstrip())
-            cur = "   "
-        cur += f" {it},"
-    lines.append(cur.rstrip())
-    lines.append("}")
-    return "\n".join(lines)
+def _imports(texts: list[str]) -> list[str]:
+    """The runtime imports of the names the app's text uses."""
+    used = used_names(texts)
+    out = [f"from {mod} import {', '.join(n for n in names if n in used)}" for mod, names in _RUNTIME_FROM.items() if used & set(names)]
+    if "E" in used:
+        out.insert(2 if len(out) > 1 else len(out), "from ejsrl.view import elements as E")
+    return out
+
+
+def _math_import() -> list[str]:
+    """The prelude's math names (every app has them as module globals)."""
+    names = ", ".join(sorted(MATH_NAMES))
+    return textwrap.wrap(f"from math import ({names})", width=WIDTH, subsequent_indent=" " * 18)
+
+
+def _marked(lines: list[Line], locs: list[tuple[int, int]]) -> list[str]:
+    """Lines as text, those with a spec location marked for the SPEC_LINES table."""
+    out = []
+    for line in lines:
+        if line.where is not None and line.text.strip() and not line.text.lstrip().startswith("#"):
+            out.append(f"{line.text}{_MARK}{len(locs)}")
+            locs.append((line.where.line, line.where.col))
+        else:
+            out.append(line.text)
+    return out
+
+
+def _line_table(table: list[tuple[int, int, int]]) -> str:
+    """``Model.SPEC_LINES`` in runs: consecutive app lines on consecutive spec lines, same column."""
+    runs: list[list[int]] = []
+    for app, line, col in table:
+        last = runs[-1] if runs else None
+        if last is not None and app == last[1] + 1 and line == last[2] + (last[1] - last[0]) + 1 and col == last[3]:
+            last[1] = app
+        else:
+            runs.append([app, app, line, col])
+    entries = [f"{a}={ln}:{c}" if a == b else f"{a}-{b}={ln}:{c}" for a, b, ln, c in runs]
+    chunks = textwrap.wrap(" ".join(entries), width=WIDTH - 6)
+    note = "  # app.py line=spec line:column, for errors"
+    if len(chunks) <= 1:
+        one = f'Model.SPEC_LINES = Model._ejs_lines("{chunks[0] if chunks else ""}")'
+        return one + note if len(one + note) <= WIDTH else one
+    return "\n".join([f"Model.SPEC_LINES = Model._ejs_lines({note}", *[f'    "{c} "' for c in chunks[:-1]], f'    "{chunks[-1]}"', ")"])
 
 
 def render_app(plan: AppPlan) -> str:
     """The text of ``app.py`` for a plan."""
-    locs = []
-    methods = []
-    for m in plan.methods:
-        body = []
-        for line in m.lines:
-            if line.where is not None and line.text.strip() and not line.text.lstrip().startswith("#"):
-                body.append(f"{line.text}{_MARK}{len(locs)}")
-                locs.append((line.where.line, line.where.col))
-            else:
-                body.append(line.text)
-        methods.append({"name": m.name, "params": m.params, "doc_lines": _doc_lines(m.doc), "body": body, "comment": m.comment})
-    variables = "{" + ", ".join(f"{k!r}: {v!r}" for k, v in plan.variables.items()) + "}"
-    sim = ", ".join(f"{k}={v!r}" for k, v in plan.sim.items())
+    locs: list[tuple[int, int]] = []
+    methods = [_marked(method_lines(m), locs) for m in plan.methods]
+    class_lines = [*_dict_lines("VARIABLES", plan.variables, 4), f"    INDEPENDENT = {plan.independent!r}"]
+    blocks: list[list[str]] = []
+    if plan.programs:
+        blocks.append(["Model.PROGRAMS = {", *(f"    {p.name!r}: {flat(program_call(p))}," for p in plan.programs), "}"])
+    if plan.after_class:
+        blocks.append(list(plan.after_class))
+    blocks.append(_marked(view_lines(plan.view), locs))
+    blocks.append([ln.text for ln in call_lines(sim_call(plan), 0, "SIMULATION = ", "")] + [ln.text for ln in call_lines(meta_call(plan), 0, "META = ", "")])
+    texts = [ln for m in methods for ln in m] + [ln for b in blocks for ln in b] + ["ModelBase", "main", "AppMeta", "SimConfig"]
     text = _env().get_template("app.py.j2").render(
         version=__version__,
-        title=plan.title.replace('"""', "'''"),
-        title_repr=repr(plan.title),
+        title=plan.title.replace('"""', "'''").replace("\\", "\\\\"),
         spec_name=plan.spec_name,
         spec_name_repr=repr(plan.spec_name),
-        description_repr=repr(plan.description),
-        author_repr=repr(plan.author),
-        math_names=_MATH,
+        prelude_imports=_math_import(),
+        runtime_imports=_imports(texts) + list(plan.runtime_imports),
         user_imports=plan.user_imports,
-        variables=variables,
-        independent=repr(plan.independent),
+        class_lines=class_lines,
         methods=methods,
-        view_lines=plan.view_lines,
-        after_class=plan.after_class,
-        runtime_imports=plan.runtime_imports,
-        sim=sim,
+        module_blocks=blocks,
         spec_lines="@@SPEC_LINES@@",
     )
     out_lines = []
@@ -121,11 +142,30 @@ def render_app(plan: AppPlan) -> str:
         m = _MARK_RE.search(line)
         if m:
             spec_line, spec_col = locs[int(m.group(1))]
-            table.append(f"{lineno}: ({spec_line}, {spec_col})")
+            table.append((lineno, spec_line, spec_col))
             line = line[: m.start()]
         out_lines.append(line)
-    text = "\n".join(out_lines)
-    return text.replace("@@SPEC_LINES@@", _wrap_dict("Model.SPEC_LINES", table))
+    return "\n".join(out_lines).replace("@@SPEC_LINES@@", _line_table(table))
+
+
+def _dict_lines(name: str, values: dict[str, str], indent: int) -> list[str]:
+    """``NAME = {...}`` filled over lines of at most WIDTH columns."""
+    items = [f"{k!r}: {v!r}" for k, v in values.items()]
+    head = " " * indent + f"{name} = {{"
+    return [ln.text for ln in _fill_items(head, items)]
+
+
+def _fill_items(head: str, items: list[str]) -> list[Line]:
+    lines, cur = [], head
+    hang = " " * len(head)
+    for i, it in enumerate(items):
+        piece = it + (", " if i < len(items) - 1 else "")
+        if cur != head and len(cur) + len(piece.rstrip()) > WIDTH:
+            lines.append(Line(cur.rstrip()))
+            cur = hang
+        cur += piece
+    lines.append(Line(cur + "}"))
+    return lines
 
 
 def _check_compiles(text: str, name: str) -> None:

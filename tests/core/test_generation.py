@@ -88,8 +88,8 @@ def test_spec_lines_point_back_into_the_spec() -> None:
     lines = text.splitlines()
     spec_lines = spec.read_text().splitlines()
     table = namespace["Model"].SPEC_LINES
-    # the fixed relation 'x = L*sin(theta)' maps to the spec line that has it
-    app_line = next(i for i, ln in enumerate(lines, 1) if "self.x = self.L * sin(self.theta)" in ln)
+    # the fixed relation 'x = L*sin(theta)' (written as the author wrote it) maps to the spec line that has it
+    app_line = next(i for i, ln in enumerate(lines, 1) if "self.x = self.L*sin(self.theta)" in ln)
     line, col = table[app_line]
     assert spec_lines[line - 1][col - 1 :].startswith("x = L*sin(theta)")
 

@@ -111,7 +111,7 @@ def test_every_name_a_built_app_binds_is_refused_as_an_import(built, tmp_path: P
         module_names = {n for n in _app_module(app) if not n.startswith("__")} - user
         assert {"Model", "VIEW", "E", "np", "sin"} <= module_names
         reserved |= module_names | _generated_locals(app)
-    assert {"ProgramDef", "t", "y", "value", "cmd", "layout", "rates", "pages"} <= reserved
+    assert {"ProgramDef", "OdePage", "EventDef", "cmd", "self"} <= reserved  # the apps bind no getter/setter or packing locals any more
     names = sorted(reserved)
     imports = "".join(f"  - from math import tau as {n}\n" for n in names)
     errors = _refusals(tmp_path, f"ejs: 1\ntitle: T\nimports:\n{imports}model:\n  variables:\n    x: 0.0\nview: []\n")

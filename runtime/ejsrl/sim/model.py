@@ -100,6 +100,9 @@ class Controller:
     def capture(self, name: str) -> np.ndarray:
         raise RuntimeError("capture() needs a scene; this model runs without one")
 
+    def capture_depth(self, name: str) -> np.ndarray:
+        raise RuntimeError("capture_depth() needs a scene; this model runs without one")
+
     def world_functions(self) -> WorldFunctionsAccess:
         raise RuntimeError("this model runs without a scene")
 
@@ -164,6 +167,90 @@ class OdePage:
         self.event_where = dict(event_where or {})
         self.integrator = OdeIntegrator(rates, method, tolerance=tolerance, max_step=max_step, events=events)
         self.fired: list[tuple[str, float]] = []
+
+    @classmethod
+    def of(
+        cls,
+        model: Any,
+        name: str,
+        independent: str,
+        states: Sequence[str],
+        rates: Callable[[], Sequence[Any]],
+        *,
+        method: str,
+        step: float | Callable[[], float],
+        preliminary: Callable[[], None] | None = None,
+        events: Sequence[Any] = (),
+        tolerance: float = 1e-6,
+        max_step: float | None = None,
+        enabled: bool = True,
+        where: str = "",
+        event_where: dict[str, str] | None = None,
+    ) -> OdePage:
+        """A page integrating the model variables ``states`` over the variable ``independent``.
+
+        The page packs the states (numbers or arrays of any shape, in order) into one vector
+        and writes them back itself. ``rates()`` gives one rate per state (a number, or an
+        array of the state's shape), computed from the model's variables after the state has
+        been written into the model and ``preliminary()`` has run. ``step``: a number or a
+        function giving it. ``events``: :class:`~ejsrl.sim.ode.EventDef` whose ``when()``
+        and ``action()`` take no arguments (the page writes the state at the event's time into
+        the model first; the action changes the model; None: no action) and whose
+        ``direction`` may be ``"up"``, ``"down"`` or ``"both"``.
+        """
+        from ejsrl.sim._layout import StateLayout
+        from ejsrl.sim.ode import EventDef
+
+        names = tuple(states)
+        layout: list[StateLayout | None] = [None]
+
+        def state() -> tuple[float, np.ndarray]:
+            values = [getattr(model, n) for n in names]
+            lay = layout[0] = StateLayout.of(layout[0], *values)
+            if not any(lay.shapes):
+                return getattr(model, independent), np.array(values, dtype=float)
+            return getattr(model, independent), np.concatenate([np.ravel(v) for v in values]).astype(float)
+
+        def load(t: float, y: np.ndarray) -> None:
+            setattr(model, independent, t)
+            lay = layout[0]
+            values = y.tolist() if lay is None or not any(lay.shapes) else lay.unpack(y)
+            for n, v in zip(names, values):
+                setattr(model, n, v)
+
+        def page_rates(t: float, y: np.ndarray) -> np.ndarray:
+            load(t, y)
+            if preliminary is not None:
+                preliminary()
+            got = rates()
+            lay = layout[0]
+            if lay is None or not any(lay.shapes):
+                return np.array(tuple(got), dtype=float)
+            out = np.empty(lay.size)
+            for view, rate in zip(lay.views(out), got):
+                view[...] = rate
+            return out
+
+        def event(ev: Any) -> EventDef:
+            def when(t: float, y: np.ndarray) -> float:
+                load(t, y)
+                return ev.when()
+
+            def action(t: float, y: np.ndarray) -> np.ndarray:
+                load(t, y.copy())
+                if ev.action is not None:
+                    ev.action()
+                return state()[1]
+
+            direction = {"up": 1, "down": -1, "both": 0}.get(ev.direction, ev.direction)
+            return EventDef(ev.name, when, direction, action, stop=ev.stop)
+
+        step_fn = step if callable(step) else (lambda: step)
+        return cls(
+            name, method=method, step=step_fn, state=state, load=load, rates=page_rates, names=names,
+            events=[event(e) for e in events], tolerance=tolerance, max_step=max_step, enabled=enabled,
+            where=where, event_where=event_where,
+        )
 
     def run(self) -> bool:
         """Advance one step; True if an event asked the simulation to stop."""
@@ -251,6 +338,19 @@ class ModelBase:
             self._ejs_programs = Programs(self, self.PROGRAMS)
         if start:
             self._ejs_reset()
+
+    @staticmethod
+    def _ejs_lines(table: str) -> dict[int, tuple[int, int]]:
+        """``SPEC_LINES`` from its compact text: ``"35-44=13:5 48=24:5"`` maps app.py lines
+        35..44 to spec lines 13..22 (column 5) and line 48 to spec line 24, column 5."""
+        out: dict[int, tuple[int, int]] = {}
+        for entry in table.split():
+            lines, at = entry.split("=")
+            first, _, last = lines.partition("-")
+            line, col = (int(v) for v in at.split(":"))
+            for k in range(int(last or first) - int(first) + 1):
+                out[int(first) + k] = (line + k, col)
+        return out
 
     # -- generated parts (overridden) ----------------------------------------------------
     def _declare(self) -> None:
@@ -431,6 +531,11 @@ class ModelBase:
     def capture(self, name: str) -> np.ndarray:
         """The current RGB image (H, W, 3) uint8 seen by the virtual camera ``name``."""
         return self._ejs_world.capture(name)
+
+    @prelude("control")
+    def capture_depth(self, name: str) -> np.ndarray:
+        """The current depth image (H, W) float32 of camera ``name``: Z in metres, inf where nothing is seen."""
+        return self._ejs_world.capture_depth(name)
 
     # -- the prelude's world functions (named scene objects) --------------------------------------
     @prelude("world")

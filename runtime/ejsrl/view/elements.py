@@ -50,11 +50,17 @@ class Dynamic:
     """A property computed from the model: ``fn(model) -> value``.
 
     ``source`` is the spec expression it came from (shown in error messages and tooltips).
+    ``fn`` may also be a bind path (``Dynamic("t")``, ``Dynamic("q[2]")``): the value of
+    that variable or element, read by :func:`ejsrl.sim.paths.getter`.
     """
 
     __slots__ = ("fn", "source")
 
-    def __init__(self, fn: Callable[[Any], Any], source: str = "") -> None:
+    def __init__(self, fn: Callable[[Any], Any] | str, source: str = "") -> None:
+        if isinstance(fn, str):
+            from ejsrl.sim.paths import getter
+
+            fn, source = getter(fn), source or fn
         self.fn = fn
         self.source = source
 
@@ -199,17 +205,25 @@ class Control(Element):
     """Base of the controls that show and edit one model variable (or array element).
 
     ``bind``: the spec's target text (``"L"`` or ``"q[2]"``); ``get(model)`` reads it and
-    ``set(model, value)`` writes it; ``on_change(model)`` runs after a change made in the UI
+    ``set(model, value)`` writes it (made from ``bind`` by :mod:`ejsrl.sim.paths` when not given); ``on_change(model)`` runs after a change made in the UI
     (then the app runs the fixed relations). ``vtype`` is the variable's value type:
     ``"float"``, ``"int"``, ``"bool"`` or ``"str"``. ``label``: text or a ``Dynamic``.
     """
 
     bind: str
-    get: Callable[[Any], Any]
-    set: Callable[[Any, Any], None]
+    get: Callable[[Any], Any] = None  # type: ignore[assignment]
+    set: Callable[[Any, Any], None] = None  # type: ignore[assignment]
     label: Any = ""
     on_change: Callable[[Any], None] | None = None
     vtype: str = "float"
+
+    def __post_init__(self) -> None:
+        from ejsrl.sim.paths import getter, setter
+
+        if self.get is None:
+            self.get = getter(self.bind)
+        if self.set is None:
+            self.set = setter(self.bind)
 
     @property
     def title(self) -> str:
@@ -331,9 +345,19 @@ class Node3D(Element):
     #: for ``gizmo``: writes the dragged (4, 4) pose into the bound variable
     set: Callable[[Any, Any], None] | None = None
     on_change: Callable[[Any], None] | None = None
+    #: for ``gizmo``: the bound (4, 4) pose variable; gives ``transform`` and ``set`` when they are not given
+    bind: str | None = None
 
     def __post_init__(self) -> None:
         from difflib import get_close_matches
+
+        if self.bind is not None:
+            from ejsrl.sim.paths import setter
+
+            if self.transform is None:
+                self.transform = Dynamic(self.bind)
+            if self.set is None:
+                self.set = setter(self.bind)
 
         from ejsrl.world.kinds import KINDS  # imported here: the world package imports this module
 
