@@ -61,7 +61,8 @@ def cache_dir() -> Path:
 
 
 def _inside(spec_dir: Path, rel: str, where: Location) -> Path:
-    """The real path of ``rel`` (a file or folder), refused if it leaves the spec's folder."""
+    """The real path of the folder ``rel``, refused if it leaves the spec's folder (as
+    ``ejsgen._assets.checked_asset`` refuses files)."""
     p = PurePosixPath(rel.replace("\\", "/"))
     if p.is_absolute() or Path(rel).is_absolute() or ".." in p.parts:
         raise SpecError(where, f"the FMU '{rel}' must be a path inside the spec's folder", "copy the FMU next to the spec (or into a subfolder) and name it relative to the spec")
@@ -88,7 +89,12 @@ def prepare_fmu(spec_dir: Path, rel: str, where: Location) -> FmuFile:
         import fmpy
     except ImportError:
         raise SpecError(where, "FMUs need FMPy, which is not installed", "pip install 'ejsgen[fmu]' (or pip install fmpy)") from None
-    real = _inside(spec_dir, rel, where)
+    if (spec_dir / rel).is_dir():  # an unpacked FMU: checked here, file by file
+        real = _inside(spec_dir, rel, where)
+    else:  # an .fmu file: checked as every asset is (inside the spec's folder, no link out of it)
+        from ejsgen._assets import checked_asset
+
+        _, real = checked_asset(spec_dir, rel, where, "FMU")
     if real.is_dir():
         for f in real.rglob("*"):
             if f.is_symlink():

@@ -97,6 +97,10 @@ def test_an_fmu_outside_the_specs_folder_is_refused(tmp_path, capsys):
     os.symlink(tmp_path / "outside", inner / "linked")
     spec, err = first_error(inner, cs_spec().replace("file: drives", "file: linked"), capsys)
     assert err.startswith(f"{place(spec, 'linked')}: error: the FMU 'linked' is a link to a file outside the spec's folder")
+    (tmp_path / "elsewhere.fmu").write_bytes(b"PK")
+    os.symlink(tmp_path / "elsewhere.fmu", inner / "link.fmu")
+    spec, err = first_error(inner, cs_spec().replace("file: drives", "file: link.fmu"), capsys)
+    assert err.startswith(f"{place(spec, 'link.fmu')}: error: the FMU 'link.fmu' is a link to a file outside the spec's folder")
 
 
 def test_an_fmu_without_a_binary_for_this_platform_or_sources_is_refused(tmp_path, capsys):
