@@ -80,6 +80,8 @@ def test_urdf_reads_friction_continuous_joints_and_fixed_branches() -> None:
     np.testing.assert_allclose(robot.links[2].qlim, [0.0, 0.3])
     assert robot.links[1].B == 0.5
     np.testing.assert_allclose(robot.links[1].Tc, [0.1, -0.1])
+    still = robot.nofriction(coulomb=True, viscous=True)  # a copy keeps the URDF's names and geometry
+    assert still.links[1].B == 0.0 and still.joint_names == robot.joint_names and still.visuals is robot.visuals
     # link 2 carries l2, the plate and the sensor (fixed joints): 2.5 + 0.7 + 0.4 kg
     assert robot.links[1].m == pytest.approx(3.6, abs=1e-12)
     # visuals: a cylinder on link 1, a box and the sensor's sphere on link 2

@@ -415,6 +415,9 @@ class Robot:
         r = Robot(links, name=self.name + " (no friction)", base=self.base, tool=self.tool,
                   gravity=self.gravity, poses=self.poses, manufacturer=self.manufacturer)
         r._payload = self._payload
+        for key in ("visuals", "joint_names", "urdf_frames", "urdf_path", "link_names", "tip"):  # a URDF arm's
+            if key in self.__dict__:
+                setattr(r, key, self.__dict__[key])
         return r
 
     def rne(
