@@ -1,4 +1,4 @@
-"""ejsrl.robotics: serial-link arms from DH parameters (what EjsRL's Robotics module gave EJS).
+"""ejsrl.robotics: serial-link arms from DH parameters or URDF files (what EjsRL's Robotics module gave EJS).
 
 Names follow Corke's Robotics Toolbox: ``Robot.fkine``, ``jacob0``, ``ikine``, ``rne``...
 Everything takes and returns NumPy arrays, SI units and radians.
@@ -6,8 +6,9 @@ Everything takes and returns NumPy arrays, SI units and radians.
 - :class:`Link`, :class:`Robot`: models and their kinematics and dynamics.
 - :class:`SE3`, :class:`SO3`: pose and rotation values (composition ``*``, ``inv``, ``interp``...).
 - :func:`load_urdf`: a ``Robot`` from a URDF file (:class:`ETSLink` links, meshes to draw).
-- :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``planar``, ``rrr``, ``scara``.
-- :mod:`trajectory`: cubic, quintic, LSPB, synchronous/asynchronous, splines, 4-3-4, Cartesian.
+- :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``ur5_urdf``, ``planar``, ``rrr``, ``scara``.
+- :mod:`trajectory`: cubic, quintic, LSPB, synchronous/asynchronous, splines, 4-3-4, Cartesian,
+  :func:`mstraj` (multi-segment with blends, as the Toolbox's).
 - :mod:`transforms`: rotations, transforms, RPY/Euler, angle-axis, quaternions (wxyz).
 - :mod:`ik`: ``ikine`` (closed-form seeds where the arm has them, Levenberg-Marquardt) and
   ``ikine_a`` (closed form, Puma type).
