@@ -161,6 +161,10 @@ def test_an_unknown_name_in_a_metric_is_an_error_at_its_place(tmp_path: Path) ->
     line = next(i for i, l in enumerate(bad.read_text().splitlines(), 1) if "peak_speed" in l)
     assert f"bad.ejs.yaml:{line}:15: error: unknown name 'peek'; did you mean 'peak'?" in proc.stderr
     assert f"bad.ejs.yaml:{line + 1}:3: error: the metric 'E' has the name of a variable" in proc.stderr
+    # ejsgen sweep builds first: the same errors, before any run
+    swept = ejsgen("sweep", str(bad), "--values", "k=1,2", "--duration", "1", "--out", str(tmp_path / "x.parquet"))
+    assert swept.returncode == 1 and f"bad.ejs.yaml:{line}:15: error: unknown name 'peek'" in swept.stderr
+    assert not (tmp_path / "x.parquet").exists()
 
 
 def test_lhs_samples_fill_every_stratum_once_and_a_seed_repeats_them() -> None:
