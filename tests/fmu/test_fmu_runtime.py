@@ -127,3 +127,17 @@ def test_an_app_run_without_fmpy_says_how_to_install_it(cs_app):
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, cwd=cs_app)
     assert r.returncode == 1
     assert "lab.ejs.yaml:15:3: error" in r.stderr and "pip install 'ejsgen[fmu]'" in r.stderr
+
+
+def test_a_model_dropped_without_stopping_frees_its_fmu(cs_app):
+    """A browser tab's session that ends drops its model: the FMU goes with it."""
+    import gc
+
+    from ejsrl.app import load_app
+
+    app = load_app(cs_app)
+    app.step_once()
+    inst = app.model._ejs_fmus.runs[0].inst
+    del app
+    gc.collect()
+    assert inst.freed

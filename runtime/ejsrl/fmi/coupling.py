@@ -292,12 +292,19 @@ class Fmus:
         base = Path(base_dir) if base_dir is not None else app_folder(model)
         self.runs = [FmuRun(model, d, base) for d in defs]
         self.model = model
-        self._finalizer = weakref.finalize(self, _free_all, list(self.runs))
+        # the instances to free: when closed, or once the model is collected (a browser tab's
+        # session that ends), or at exit; the list holds no reference back to the model
+        self._instances: list[FmuInstance] = []
+        self._finalizer = weakref.finalize(self, _free_all, self._instances)
 
     def start(self, pages: Sequence[Any]) -> None:
         t0 = self.model._ejs_time() or 0.0
         for run in self.runs:
-            run.start(t0, pages)
+            try:
+                run.start(t0, pages)
+            finally:
+                if run.inst is not None:
+                    self._instances.append(run.inst)
 
     def before_step(self) -> None:
         t = self.model._ejs_time() or 0.0
@@ -335,6 +342,6 @@ def app_folder(model: Any) -> Path:
     return Path(getattr(module, "__file__", ".")).resolve().parent
 
 
-def _free_all(runs: list[FmuRun]) -> None:
-    for run in runs:
-        run.free()
+def _free_all(instances: list[FmuInstance]) -> None:
+    for inst in instances:
+        inst.free()
