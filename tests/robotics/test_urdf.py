@@ -143,3 +143,18 @@ def test_urdf_arm_with_a_base_tool_and_payload_agrees_on_both_paths() -> None:
     slow = [robot.fkine(q), robot.jacob0(q), robot.rne(q, qd, qdd), robot.inertia(q), robot.accel(q, qd, qdd)]
     for a, b in zip(fast, slow):
         np.testing.assert_allclose(a, b, atol=1e-12)
+
+
+def test_urdf_arm_without_meshes_is_drawn_with_rods_from_joint_to_joint() -> None:
+    from ejsrl.world.robot_node import robot_geometry
+
+    robot = load_urdf(UR5, load_visuals=False)
+    assert robot.visuals is None
+    parts, shapes = robot_geometry(robot)
+    assert len(parts) == robot.n + 1 and all(parts)
+    F = robot.fkine_all(np.array([0.3, -1.0, 1.2, 0.2, 0.5, -0.4]))
+    for i in range(1, robot.n + 1):  # in frame i-1, a rod from its origin to joint i's origin
+        (rod,) = [s for s in shapes[i - 1] if s.kind == "capsule"]
+        np.testing.assert_allclose(rod.p0, 0.0)
+        p1_world = F[i - 1][:3, :3] @ rod.p1 + F[i - 1][:3, 3]
+        np.testing.assert_allclose(p1_world, F[i][:3, 3], atol=1e-12)
