@@ -7,9 +7,18 @@ the USAN ("univalue segment assimilating nucleus"). A corner or an edge is where
 is small: the response is ``g - n`` where ``n < g``, with the geometric threshold ``g``
 half the mask area for corners and three quarters for edges.
 
-The loop runs over the 37 mask offsets only, each step a whole-image OpenCV operation
-(absolute difference, look-up table, add); the false-positive tests and the direction of
-edges look only at the candidate pixels (``n < g``), all at once with NumPy indexing.
+The USAN is computed with whole-image OpenCV operations over the 18 offset pairs (d, -d)
+(the brightness test is symmetric); the false-positive tests and the direction of edges
+look only at candidate pixels, with NumPy indexing.
+
+Corners in anti-aliased (or slightly blurred) images need one addition to the original:
+a pixel inside an edge has an in-between grey, so its own USAN is tiny and means nothing.
+Such a pixel is judged as the side it belongs to: each mask pixel counts by its share of
+that side, and the response is what that side falls short of the half-plane a straight
+edge would leave (see ``susan_corners``). This finds obtuse corners, whose only small
+USAN is at the anti-aliased apex, and gives true sub-pixel output with ``cornerSubPix``;
+X-junctions (checkerboard corners) are recognised by their brighter and darker pixels
+lying in opposite quadrants around the nucleus.
 
 Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV.
 """
@@ -29,6 +38,9 @@ SUSAN_MASK: NDArray[np.int64] = np.array(
     [(dx, dy) for dy in range(-3, 4) for dx in range(-3, 4) if dx * dx + dy * dy <= 11.56], dtype=np.int64
 )
 _R = 3  # mask radius in whole pixels
+_CHORD = 6.8  # the mask's diameter in pixels
+_MID_SLACK = 1.0  # in-between pixels kept for the one-by-one test: whole-image estimate >= min_response - this
+_ROUNDS = 12  # rounds of testing maxima and searching the windows of the rejected ones again
 _SCALE = 100  # c is stored as round(100 c) in a uint8 look-up table, as in the original code
 
 
@@ -49,18 +61,31 @@ def usan_area(img: NDArray, t: float = 20.0) -> NDArray[np.float32]:
 
 
 def _usan(gray: NDArray[np.uint8], t: float) -> tuple[NDArray[np.uint16], NDArray[np.uint8], NDArray[np.uint8]]:
-    """USAN area scaled by 100 (H, W) uint16, the padded image and the LUT."""
+    """USAN area scaled by 100 (H, W) uint16, the padded image and the LUT.
+
+    The brightness test is symmetric, ``c(p, p + d) = c(p + d, p)``, so each of the 18
+    offset pairs (d, -d) needs one difference image and one look-up: over the pixels q of
+    the image and of the image shifted by -d, ``E(q) = c(|I(q) - I(q + d)|)``; pixel p gets
+    ``E(p)`` for offset d and ``E(p - d)`` for offset -d. The two add exactly in uint8
+    (at most 200) before the uint16 sum.
+    """
     H, W = gray.shape
     pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
     lut = _lut(t)
-    acc = np.zeros((H, W), dtype=np.uint16)
+    acc = np.full((H, W), _SCALE, dtype=np.uint16)  # the nucleus itself
+    pair = np.empty((H, W), np.uint8)
     for dx, dy in SUSAN_MASK:
-        if dx == 0 and dy == 0:
-            continue
-        view = pad[_R + dy : _R + dy + H, _R + dx : _R + dx + W]
-        c = cv2.LUT(cv2.absdiff(gray, view), lut)
-        cv2.add(acc, c, dst=acc, dtype=cv2.CV_16U)
-    acc += _SCALE  # the nucleus itself
+        if dy < 0 or (dy == 0 and dx <= 0):
+            continue  # one offset of each pair (d, -d)
+        # q spans rows -dy .. H-1 and columns min(0, -dx) .. max(W, W - dx) - 1 of the image
+        r0, c0 = _R - dy, _R + min(0, -dx)
+        h, w = H + dy, W + abs(dx)
+        a = pad[r0 : r0 + h, c0 : c0 + w]
+        b = pad[r0 + dy : r0 + dy + h, c0 + dx : c0 + dx + w]
+        E = cv2.LUT(cv2.absdiff(a, b), lut)
+        py, px = dy, -min(0, -dx)  # where the image's pixel (0, 0) sits in E
+        cv2.add(E[py : py + H, px : px + W], E[py - dy : py - dy + H, px - dx : px - dx + W], dst=pair)
+        np.add(acc, pair, out=acc)
     return acc, pad, lut
 
 
@@ -135,66 +160,222 @@ def _clear_border(resp: NDArray, b: int) -> None:
     resp[:, -b:] = 0
 
 
+def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, *, return_saddle: bool = False):
+    """The false-positive tests on the pixels (ys, xs); returns which pass and their USAN areas n (x100).
+
+    ``similarity(values)`` gives c (x100, float) for grey values (K, m) of the pixels around
+    each nucleus, with their sign (brighter > 0, darker < 0, alike 0) as a second array.
+
+    1. (Smith and Brady) the USAN centroid lies more than 1/sqrt(2) pixel from the nucleus;
+    2. (Smith and Brady) the three pixels from the nucleus towards the centroid are in the USAN;
+    3. (one-sided) the pixels unlike the nucleus are not split into brighter ones on one side
+       and darker ones on the other, as around a nucleus inside an anti-aliased edge.
+    """
+    if len(ys) == 0:
+        return (np.zeros(0, bool), np.zeros(0), np.zeros(0, bool)) if return_saddle else (np.zeros(0, bool), np.zeros(0))
+    Wp = pad.shape[1]
+    offs = SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0]
+    cast = np.int16 if pad.dtype == np.uint8 else np.float64
+    vals = pad.ravel()[((ys + _R) * Wp + (xs + _R))[:, None] + offs[None, :]].astype(cast)
+    c, sign = similarity(vals)
+    n = c.sum(axis=1)
+    mx, my = SUSAN_MASK[:, 0].astype(np.float64), SUSAN_MASK[:, 1].astype(np.float64)
+    sx, sy = c @ mx, c @ my
+    far_enough = sx * sx + sy * sy > 0.5 * n * n
+    ax, ay = np.abs(sx), np.abs(sy)
+    along_x = ay < ax
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = np.where(along_x, sy / np.where(ax > 0, ax, 1), sx / np.where(ay > 0, ay, 1))
+    sgn = np.where(along_x, np.sign(sx), np.sign(sy)).astype(np.int64)
+    steps = []
+    for k in (1, 2, 3):
+        off = (np.sign(k * slope) * np.floor(np.abs(k * slope) + 0.5)).astype(np.int64)
+        oy = np.where(along_x, off, k * sgn)
+        ox = np.where(along_x, k * sgn, off)
+        steps.append(pad[ys + _R + oy, xs + _R + ox].astype(cast))
+    total = similarity(np.column_stack(steps))[0].sum(axis=1)
+    contiguous = total > 2.9 * _SCALE
+    unlike = _SCALE - c
+    bright, dark = unlike * (sign > 0), unlike * (sign < 0)
+    mb, md = bright.sum(axis=1), dark.sum(axis=1)
+    bx, by, dx_, dy_ = bright @ mx, bright @ my, dark @ mx, dark @ my
+    opposite = bx * dx_ + by * dy_ < 0
+    balanced = np.minimum(mb, md) > 0.25 * (mb + md)
+    two_sided = opposite & balanced
+    # an X-junction (a saddle: the corner of a checkerboard) is two-sided too, but its brighter
+    # and its darker pixels each lie in two opposite quadrants, centred on the nucleus
+    with np.errstate(divide="ignore", invalid="ignore"):
+        off_b = np.hypot(bx, by) / np.where(mb > 0, mb, 1)
+        off_d = np.hypot(dx_, dy_) / np.where(md > 0, md, 1)
+    saddle = (np.minimum(mb, md) > 0.3 * (mb + md)) & (mb + md > 0.35 * _SCALE * len(SUSAN_MASK)) & (off_b < 0.8) & (off_d < 0.8)
+    if return_saddle:
+        return far_enough & contiguous & ~two_sided, n, saddle
+    return far_enough & contiguous & ~two_sided, n
+
+
+def _smooth_similarity(lut: NDArray[np.uint8], nucleus: NDArray):
+    """SUSAN's test ``c = exp(-((I - I0) / t)^6)`` (the LUT) around the nuclei's own grey levels."""
+    g0 = np.asarray(nucleus).astype(np.int16)[:, None]
+
+    def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
+        d = vals - g0[: len(vals)]
+        return np.take(lut, np.abs(d)).astype(np.float64), np.sign(d)
+
+    return sim
+
+
+def _coverage_response(gray: NDArray[np.uint8], g100: float) -> NDArray[np.float32]:
+    """The corner response (x100) of each pixel judged as the dark side of its 7x7 neighbourhood
+    (negative: the bright side's, of that size), from the pixels' dark shares.
+
+    ``share = (max7 - I) / (max7 - min7)`` (the part of the pixel covered by the darker region,
+    for two grey levels and an anti-aliased edge); the darker side's USAN of a nucleus is the
+    sum of the shares over the mask. A straight edge cutting the nucleus pixel so that a share
+    a of it is dark leaves about ``g + 6.8 (a - 1/2)`` of the mask dark (the mask's chord is
+    6.8 pixels long); the response is what the side falls short of that, on the side that
+    falls short (the other side then has more than its share).
+    """
+    k7 = np.ones((7, 7), np.uint8)
+    levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
+    lo = cv2.erode(levels, k7).astype(np.float32)
+    hi = cv2.dilate(levels, k7).astype(np.float32)
+    share = np.clip((hi - gray.astype(np.float32)) / np.maximum(hi - lo, 1.0), 0.0, 1.0)
+    disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
+    disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
+    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE)
+    return (g100 + _CHORD * _SCALE * (share - 0.5)) - _SCALE * n_dark
+
+
+def _coverage_similarity(lo: NDArray, hi: NDArray, dark: bool):
+    """For a nucleus inside an anti-aliased edge between grey levels lo and hi: each pixel's
+    share of the dark (or bright) side, ``(hi - I) / (hi - lo)`` clipped to [0, 1] (x100)."""
+    lo_ = lo.astype(np.float64)[:, None]
+    span = np.maximum(hi.astype(np.float64)[:, None] - lo_, 1.0)
+
+    def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
+        share = np.clip((vals - lo_[: len(vals)]) / span[: len(vals)], 0.0, 1.0)
+        c = _SCALE * (1.0 - share if dark else share)
+        return c, (1 if dark else -1) * np.sign(_SCALE - c)  # the other side: brighter if dark
+
+    return sim
+
+
 @image_function
 def susan_corners(
     img: NDArray,
-    t: float = 20.0,
+    t: float = 25.0,
     *,
     g: float | None = None,
     nms_radius: int = 3,
-    quality: float = 0.25,
+    quality: float = 0.0,
+    min_response: float = 1.5,
     max_corners: int | None = None,
     subpixel: bool = True,
     return_response: bool = False,
 ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float32]]:
     """SUSAN corner detector (Smith and Brady 1997).
 
-    ``img``: grey (H, W) or RGB (H, W, 3) uint8. ``t``: brightness threshold in grey levels
-    (lower finds weaker corners, higher resists noise). ``g``: geometric threshold in mask
-    pixels (default half the mask, 18.5). ``nms_radius``: non-maximum suppression window
-    radius (3: 7x7, as in the original code). ``quality``: drop corners whose response is
+    ``img``: grey (H, W) or RGB (H, W, 3) image (uint8, or another type read as
+    ``ejsrl.vision._util`` says). ``t``: brightness threshold in grey levels (lower finds
+    weaker corners, higher resists noise). ``g``: geometric threshold in mask pixels
+    (default half the mask, 18.5). ``nms_radius``: non-maximum suppression window radius
+    (3: 7x7, as in the original code). ``min_response``: drop corners whose response
+    ``g - n`` is below this many mask pixels (a straight edge gives about 0, a 150-degree
+    corner about 3; noise on edges gives up to about 1). ``quality``: also drop corners
     below this fraction of the strongest one (as ``cv2.goodFeaturesToTrack``'s quality
-    level; straight staircase edges give weak responses that noise can turn into local
-    maxima). ``max_corners``: keep at most this many, strongest first. ``subpixel``: refine
-    each corner with ``cv2.cornerSubPix`` in a 5x5 window (the original reports the pixel
-    just inside the corner, up to about 1.5 px from the true vertex).
+    level; 0: off). ``max_corners``: keep at most this many, strongest first.
+    ``subpixel``: refine each corner to sub-pixel accuracy with ``cv2.cornerSubPix``
+    (the intersection of the edges through a 7x7 window: the true vertex of an L corner,
+    the saddle of an X-junction), kept when it stays within 3 pixels; the pixel found
+    otherwise is the one just inside the corner, up to about 1.5 px from the vertex.
 
-    The false-positive tests of the original are applied: the USAN centroid must lie more
-    than 1/sqrt(2) pixel from the nucleus, and the three pixels from the nucleus towards the
-    centroid must belong to the USAN.
+    The response is ``g - n`` where the USAN area ``n < g``. The false-positive tests
+    (see ``_corner_tests``: the centroid and contiguity tests of the original, and a test
+    that rejects pixels inside anti-aliased edges) are applied to the local maxima of the
+    response; a maximum that fails is removed and its window searched again, until every
+    maximum passes (the original tests every pixel first, the same result but for a weaker
+    pixel beside a rejected one in a chain of suppressions).
 
     Returns the corners (N, 2) float64 as ``(x, y)`` pixel coordinates, strongest first
-    (ties in raster order); with ``return_response`` also the response map (H, W) float32.
+    (ties in raster order); with ``return_response`` also the response map (H, W) float32
+    (after the tests: 0 where a maximum was rejected).
     """
     gray = as_gray(img)
+    if not float(t) > 0:
+        raise ValueError(f"susan_corners: t must be positive, got {t}")
     H, W = gray.shape
     gthr = 0.5 * len(SUSAN_MASK) if g is None else float(g)
     g100 = gthr * _SCALE
-    ys, xs, c, n, pad, lut = _candidates(gray, t, g100)
-    resp = np.zeros((H, W), np.float32)
-    if len(ys):
-        sx = c @ SUSAN_MASK[:, 0]
-        sy = c @ SUSAN_MASK[:, 1]
-        far_enough = sx * sx + sy * sy > 0.5 * n * n
-        # pixels at 1, 2, 3 steps from the nucleus towards the centroid must be in the USAN
-        ax, ay = np.abs(sx), np.abs(sy)
-        along_x = ay < ax
-        with np.errstate(divide="ignore", invalid="ignore"):
-            slope = np.where(along_x, sy / np.where(ax > 0, ax, 1), sx / np.where(ay > 0, ay, 1))
-        sgn = np.where(along_x, np.sign(sx), np.sign(sy)).astype(np.int64)
-        total = np.zeros(len(ys))
-        for k in (1, 2, 3):
-            off = (np.sign(k * slope) * np.floor(np.abs(k * slope) + 0.5)).astype(np.int64)
-            oy = np.where(along_x, off, k * sgn)
-            ox = np.where(along_x, k * sgn, off)
-            v = pad[ys + _R + oy, xs + _R + ox].astype(np.int16)
-            total += lut[np.abs(v - gray[ys, xs].astype(np.int16))]
-        ok = far_enough & (total > 2.9 * _SCALE)
-        resp[ys[ok], xs[ok]] = ((g100 - n[ok]) / _SCALE).astype(np.float32)
-    cy, cx = (ys[ok], xs[ok]) if len(ys) else (ys, xs)
-    peak = _local_max(resp, nms_radius, cy, cx)
-    py, px = cy[peak], cx[peak]
-    strength = resp[py, px]
+    r = int(nms_radius)
+    if H <= 2 * _R + 2 or W <= 2 * _R + 2:
+        pts = np.zeros((0, 2))
+        return (pts, np.zeros((H, W), np.float32)) if return_response else pts
+    acc, pad, lut = _usan(gray, t)
+    resp = np.float32(g100) - acc.astype(np.float32)  # g - n, x100
+    floor = float(min_response) * _SCALE
+    resp[resp < floor] = 0
+    _clear_border(resp, _R + 1)
+    # pixels with an in-between grey (inside an anti-aliased or blurred edge) have a tiny USAN of
+    # their own that means nothing: they are judged as the side they belong to would be. Those
+    # that cannot be a corner that way (a straight edge: the whole-image estimate of
+    # _coverage_response) are dropped at once; the others are judged one by one below
+    k3 = np.ones((3, 3), np.uint8)
+    grayf = gray.astype(np.float32)
+    half_t = np.float32(0.5 * float(t))
+    lo3, hi3 = cv2.erode(gray, k3), cv2.dilate(gray, k3)
+    mid = (grayf - lo3 > half_t) & (hi3 - grayf > half_t)
+    kernel = np.ones((2 * r + 1, 2 * r + 1), np.uint8)
+    tested = np.zeros((H, W), bool)
+    passed_y, passed_x = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+    # X-junctions (saddles: the corner of a checkerboard) have an in-between centre pixel with a
+    # small USAN of its own, its brighter and darker neighbours in opposite quadrants
+    # (and, being half dark and half bright, no corner by the side it belongs to)
+    r_dark = _coverage_response(gray, g100)
+    flat_side = mid & (np.abs(r_dark) < floor - _MID_SLACK * _SCALE)
+    own_mid = np.where(flat_side, resp, 0)
+    sy, sx = np.nonzero((own_mid > 0) & (own_mid >= cv2.dilate(own_mid, k3)))
+    saddle = _corner_tests(pad, sy, sx, _smooth_similarity(lut, gray[sy, sx]), return_saddle=True)[2]
+    sy, sx = sy[saddle], sx[saddle]
+    resp[flat_side] = 0
+    resp[sy, sx] = own_mid[sy, sx]
+    tested[sy, sx] = True
+    passed_y.append(sy)
+    passed_x.append(sx)
+    for _ in range(_ROUNDS):
+        ys, xs = np.nonzero((resp > 0) & (resp >= cv2.dilate(resp, kernel)) & ~tested)
+        if len(ys) == 0:
+            break
+        tested[ys, xs] = True
+        v = gray[ys, xs]
+        ok, _ = _corner_tests(pad, ys, xs, _smooth_similarity(lut, v))
+        m = mid[ys, xs] & ~ok
+        new = np.zeros(len(ys))
+        if m.any():
+            my, mx, lo, hi = ys[m], xs[m], lo3[ys[m], xs[m]], hi3[ys[m], xs[m]]
+            # judged as the side that falls short of its share (the sign of the whole-image
+            # estimate): a straight edge cutting the nucleus pixel so that a share a of it lies on
+            # one side leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord
+            # is 6.8 pixels long); only what falls short of that is a corner
+            dark = r_dark[my, mx] > 0
+            a_dark = (hi.astype(np.float64) - v[m]) / np.maximum(hi.astype(np.float64) - lo, 1.0)
+            a_side = np.where(dark, a_dark, 1.0 - a_dark)
+            ok_m = np.zeros(len(my), bool)
+            n_m = np.zeros(len(my))
+            for side in (True, False):
+                k = dark == side
+                if k.any():
+                    ok_m[k], n_m[k] = _corner_tests(pad, my[k], mx[k], _coverage_similarity(lo[k], hi[k], dark=side))
+            r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
+            new[m] = np.where(r_mid >= floor, r_mid, 0.0)
+            ok |= new > 0
+        lowered = ~ok | (new > 0)
+        resp[ys[lowered], xs[lowered]] = new[lowered].astype(np.float32)
+        passed_y.append(ys[ok])
+        passed_x.append(xs[ok])
+    cy, cx = np.concatenate(passed_y), np.concatenate(passed_x)
+    keep = _local_max(resp, r, cy, cx)
+    py, px = cy[keep], cx[keep]
+    strength = resp[py, px] / _SCALE
     if len(strength) and quality > 0:
         strong = strength >= quality * strength.max()
         py, px, strength = py[strong], px[strong], strength[strong]
@@ -203,14 +384,18 @@ def susan_corners(
     if max_corners is not None:
         pts = pts[: int(max_corners)]
     if subpixel and len(pts):
-        refined = cv2.cornerSubPix(
-            gray, pts.astype(np.float32).reshape(-1, 1, 2), (2, 2), (-1, -1),
-            (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 20, 0.01),
-        ).reshape(-1, 2).astype(np.float64)
-        # keep the pixel estimate where the refinement wandered off (a flat or noisy patch)
-        moved = np.linalg.norm(refined - pts, axis=1)
-        pts = np.where((moved <= 2.0)[:, None], refined, pts)
-    return (pts, resp) if return_response else pts
+        pts = _refine(gray, pts)
+    return (pts, resp / _SCALE) if return_response else pts
+
+
+def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Sub-pixel corners: ``cv2.cornerSubPix`` in a 7x7 window, kept where it moved at most 3 px."""
+    refined = cv2.cornerSubPix(
+        gray, pts.astype(np.float32).reshape(-1, 1, 2), (3, 3), (-1, -1),
+        (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 20, 0.01),
+    ).reshape(-1, 2).astype(np.float64)
+    moved = np.linalg.norm(refined - pts, axis=1)
+    return np.where((moved <= 3.0)[:, None], refined, pts)
 
 
 @image_function
