@@ -34,7 +34,6 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import statistics
 import sys
 import time
 import warnings
@@ -266,7 +265,8 @@ def rtb_arm(rtb, robot):  # type: ignore[no-untyped-def]
     return ets
 
 
-def measured(ets, T: np.ndarray, q: np.ndarray, lim: np.ndarray) -> tuple[bool, float, float]:  # type: ignore[no-untyped-def]
+def measured(ets, T: np.ndarray, q: np.ndarray,  # type: ignore[no-untyped-def]
+             lim: np.ndarray) -> tuple[bool, float, float]:
     """Does ``q`` reach ``T`` to IK_TOL, by the Toolbox's fkine, within ``lim``?
     Returns (ok, position error m, rotation angle rad)."""
     if q is None or not np.all(np.isfinite(q)):
@@ -292,7 +292,8 @@ def _sol(s) -> tuple[bool, np.ndarray]:  # type: ignore[no-untyped-def]
     return bool(s.success), np.asarray(s.q, dtype=float)
 
 
-def run_targets(fs: dict, targets: np.ndarray, ets, lim: np.ndarray, limits: dict[str, int]) -> dict:  # type: ignore[no-untyped-def]
+def run_targets(fs: dict, targets: np.ndarray, ets,  # type: ignore[no-untyped-def]
+                lim: np.ndarray, limits: dict[str, int]) -> dict:
     """Time every solver on every target, interleaved (solver order rotated per target).
     ``limits``: solver name -> number of targets it gets (the slow Python solver)."""
     names = list(fs)
@@ -403,15 +404,17 @@ def ik_bench(args: argparse.Namespace, rtb) -> None:  # type: ignore[no-untyped-
                            (f"{0.95 * bound:.2f} m away, horizontal",
                             [0.95 * bound * np.array([math.cos(a), math.sin(a), 0.0]) for a in angles])):
             ures = paired(fs, np.array([transl_np(p) for p in pts]), ets, lim, 0)
-            cells = "; ".join(f"{k}: {r['n'] - r['claimed']}/{r['n']} rejected, median {fmt(float(np.median(r['t'])))}, "
-                              f"max {fmt(float(np.max(r['t'])))} (CPU max {fmt(float(np.max(r['cpu'])))})"
+            cells = "; ".join(f"{k}: {r['n'] - r['claimed']}/{r['n']} rejected, "
+                              f"median {fmt(float(np.median(r['t'])))}, max {fmt(float(np.max(r['t'])))} "
+                              f"(CPU max {fmt(float(np.max(r['cpu'])))})"
                               for k, r in ures.items())
             print(f"  unreachable ({label}): {cells}")
             o = ures["ejsrl ikine"]
             cmax = float(np.max(o["cpu"]))
             targets_met.append((o["claimed"] == 0 and cmax <= 2e-3,
-                                f"{robot.name}: unreachable ({label}) rejected in <= 2 ms: {o['n'] - o['claimed']}/{o['n']}, "
-                                f"slowest {fmt(cmax)} CPU ({fmt(float(np.max(o['t'])))} wall)"))
+                                f"{robot.name}: unreachable ({label}) rejected in <= 2 ms: "
+                                f"{o['n'] - o['claimed']}/{o['n']}, slowest {fmt(cmax)} CPU "
+                                f"({fmt(float(np.max(o['t'])))} wall)"))
     print("\nIK targets:")
     for met, text in targets_met:
         print(f"  {'MET    ' if met else 'NOT MET'} {text}")

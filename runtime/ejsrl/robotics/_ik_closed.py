@@ -192,7 +192,8 @@ class ClosedForm:
         out = list(self.candidates(T, q_ref))
         return [q for q, _ in out], [c for _, c in out]
 
-    def candidates(self, T: np.ndarray, q_ref: Sequence[float], q3: float | None = None) -> Iterator[tuple[list[float], str]]:
+    def candidates(self, T: np.ndarray, q_ref: Sequence[float],
+                   q3: float | None = None) -> Iterator[tuple[list[float], str]]:
         """The solutions of :meth:`solve` one by one, computed lazily, roughly nearest to
         ``q_ref`` first (the arm branches by their first joints, then the wrist's pair).
         ``q3``: joint 3 of a 7R arm (default ``q_ref``'s)."""

@@ -314,7 +314,8 @@ class _Problem:
     def errors(self, e: list[float]) -> tuple[float, float]:
         """Norms of the (weighted-in) position and orientation errors."""
         if self.pidx is _PIDX and self.ridx is _RIDX:
-            return (math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
+            return (math.sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]),
+                    math.sqrt(e[3] * e[3] + e[4] * e[4] + e[5] * e[5]))
         return (math.sqrt(sum(e[k] * e[k] for k in self.pidx)), math.sqrt(sum(e[k] * e[k] for k in self.ridx)))
 
     def converged(self, e: list[float]) -> bool:
@@ -398,7 +399,8 @@ class _Problem:
         x, y, z = g[0][3], g[1][3], g[2][3]
         B = self.setup.base_inv_rows
         if B is not None:
-            x, y, z = (B[0][0] * x + B[0][1] * y + B[0][2] * z + B[0][3], B[1][0] * x + B[1][1] * y + B[1][2] * z + B[1][3],
+            x, y, z = (B[0][0] * x + B[0][1] * y + B[0][2] * z + B[0][3],
+                       B[1][0] * x + B[1][1] * y + B[1][2] * z + B[1][3],
                        B[2][0] * x + B[2][1] * y + B[2][2] * z + B[2][3])
         return math.sqrt(x * x + y * y + z * z) > reach * (1.0 + 1e-9) + 1e-12
 
