@@ -1,7 +1,11 @@
 """ejsrl.vision: image functions over NumPy arrays, SUSAN, pipelines, the camera model and visual servoing.
 
-Images are (H, W) uint8 grey or (H, W, 3) uint8 RGB arrays; features are ``(x, y)`` =
-(column, row) pixel coordinates, as in OpenCV. Everything public is importable from here:
+Images are (H, W) grey or (H, W, 3) RGB arrays (channel order R, G, B), uint8 0..255 or
+bool masks, uint16 (scaled to 0..255) or finite floats in [0, 1]; every image function
+checks its input and refuses an empty, NaN, wrongly shaped or typed image, or an unknown
+option, with a ``ValueError`` that says what to do (the rules: ``ejsrl.vision._util``).
+Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV. Everything public
+is importable from here:
 
     from ejsrl.vision import Pipeline, susan, CameraModel, interaction_matrix, ibvs_velocity
 """

@@ -341,11 +341,16 @@ def susan_corners(
     tested[sy, sx] = True
     passed_y.append(sy)
     passed_x.append(sx)
+    untested = np.where(tested, 0, 255).astype(np.uint8)
     for _ in range(_ROUNDS):
-        ys, xs = np.nonzero((resp > 0) & (resp >= cv2.dilate(resp, kernel)) & ~tested)
-        if len(ys) == 0:
+        # the untested local maxima, with OpenCV's whole-image operations (NumPy's are slower here)
+        peak = cv2.bitwise_and(cv2.compare(resp, cv2.dilate(resp, kernel), cv2.CMP_GE), cv2.compare(resp, 0.0, cv2.CMP_GT))
+        found = cv2.findNonZero(cv2.bitwise_and(peak, untested))
+        if found is None:
             break
-        tested[ys, xs] = True
+        found = found.reshape(-1, 2)
+        xs, ys = found[:, 0].astype(np.int64), found[:, 1].astype(np.int64)
+        untested[ys, xs] = 0
         v = gray[ys, xs]
         ok, _ = _corner_tests(pad, ys, xs, _smooth_similarity(lut, v))
         m = mid[ys, xs] & ~ok
