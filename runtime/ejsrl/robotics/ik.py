@@ -9,9 +9,10 @@ angle-axis vector of the remaining rotation.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -247,12 +248,19 @@ class _Setup:
             lim = np.vstack((np.full(n, -np.inf), np.full(n, np.inf)))
         self.joint_limits = joint_limits
         self.qmin, self.qmax = lim.tolist()
-        self.pose_jacob = robot._kernel(("pose_jacob0",)).single
         self.fk = robot._kernel(("fkine",)).single
-        self.lm_step = robot._kernel(("lm_step",)).single
         self.closed = _ik_closed.solver(robot)
         self.base_inv_rows = None if robot._base_is_eye else np.linalg.inv(robot.base)[:3].tolist()
         self.reach = self._reach()
+
+    @functools.cached_property
+    def pose_jacob(self) -> Callable[..., tuple]:
+        """Pose and Jacobian kernel, generated on first use (the closed form rarely needs it)."""
+        return self.robot._kernel(("pose_jacob0",)).single
+
+    @functools.cached_property
+    def lm_step(self) -> Callable[..., tuple]:
+        return self.robot._kernel(("lm_step",)).single
 
     def _reach(self) -> float:
         """Upper bound on the distance from the base origin to the tool point (m): the sum
@@ -290,7 +298,7 @@ class _Problem:
         self.lo, self.hi, self.mid = setup.lo, setup.hi, setup.mid
         self.qmin, self.qmax = setup.qmin, setup.qmax
         self.joint_limits = setup.joint_limits
-        self.pose_jacob, self.fk, self.lm_step = setup.pose_jacob, setup.fk, setup.lm_step
+        self.fk = setup.fk
         self.Tg = Tg
         self.goal = Tg[:3, :].tolist()
         if W is _FULL:
@@ -323,7 +331,7 @@ class _Problem:
         return pe < self.tol and re < self.tol
 
     def evaluate(self, q: list[float]) -> tuple[list[float], tuple, float]:
-        v = self.pose_jacob(*q)
+        v = self.setup.pose_jacob(*q)
         e = _pose_error_rows(self.goal, v)
         return e, v[16:], self._E(e)
 
@@ -356,7 +364,7 @@ class _Problem:
         damp = self.lam
         it = 0
         w = self.w
-        lm_step = self.lm_step
+        lm_step = self.setup.lm_step
         clamp = self.joint_limits
         while not self.converged(e):
             if it >= ilimit:
