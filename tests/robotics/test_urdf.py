@@ -158,3 +158,24 @@ def test_urdf_arm_without_meshes_is_drawn_with_rods_from_joint_to_joint() -> Non
         np.testing.assert_allclose(rod.p0, 0.0)
         p1_world = F[i - 1][:3, :3] @ rod.p1 + F[i - 1][:3, 3]
         np.testing.assert_allclose(p1_world, F[i][:3, 3], atol=1e-12)
+
+
+def _two_joints(tmp_path, second: str) -> str:
+    p = tmp_path / "arm.urdf"
+    p.write_text('<robot name="g"><link name="a"/><link name="b"/><link name="c"/><link name="f"/>'
+                 '<joint name="j1" type="revolute"><parent link="a"/><child link="b"/><axis xyz="0 0 1"/>'
+                 '<limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+                 '<joint name="j2" type="revolute"><parent link="b"/><child link="c"/><axis xyz="0 1 0"/>'
+                 '<origin xyz="0.3 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>'
+                 f'<joint name="finger" type="prismatic"><parent link="b"/><child link="f"/>{second}'
+                 '<axis xyz="1 0 0"/><limit lower="0" upper="0.04" effort="1" velocity="1"/></joint></robot>')
+    return str(p)
+
+
+def test_urdf_off_chain_and_mimic_joints(tmp_path) -> None:
+    path = _two_joints(tmp_path, "")
+    with pytest.warns(UserWarning, match="joint 'finger' is not on the chain to 'c'; it is held at 0"):
+        robot = load_urdf(path, tip="c")
+    assert robot.n == 2
+    with pytest.raises(URDFError, match="joint 'finger' mimics 'j1'; mimic joints on the chain are not supported"):
+        load_urdf(_two_joints(tmp_path, '<mimic joint="j1" multiplier="0.01"/>'), tip="f")
