@@ -232,8 +232,11 @@ class ClosedForm:
         delta = math.asin(d3 / rho)
         beta = math.atan2(a3, d4)
         branches = []
+        r1, r2, r3 = ref[0], ref[1], ref[2]
         for arm in ("l", "r"):
             th1 = phi + delta if arm == "r" else phi + _PI - delta
+            e1 = (th1 - r1 + _PI) % _TWO_PI - _PI
+            e1 *= e1
             c1, s1 = math.cos(th1), math.sin(th1)
             X = px * c1 + py * s1
             r = math.hypot(X, pz)
@@ -251,7 +254,9 @@ class ClosedForm:
                 th2 = gamma + n2 * psi
                 c2, s2 = math.cos(th2), math.sin(th2)
                 th3 = beta - math.atan2(c2 * X + s2 * pz - a2, c2 * pz - s2 * X)
-                branches.append((_dist((th1, th2, th3), ref), th1, th2, th3, arm + elbow))
+                u = (th2 - r2 + _PI) % _TWO_PI - _PI
+                w = (th3 - r3 + _PI) % _TWO_PI - _PI
+                branches.append((e1 + u * u + w * w, th1, th2, th3, arm + elbow))
         branches.sort(key=_first)
         cs = self.cs
         for _, th1, th2, th3, label in branches:

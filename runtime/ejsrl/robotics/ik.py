@@ -344,7 +344,9 @@ class _Problem:
         None if a joint cannot be."""
         out = []
         for v, r, a, b in zip(q, ref, self.qmin, self.qmax):
-            v = v + _TWO_PI * round((r - v) / _TWO_PI)  # nearest to the reference
+            d = r - v
+            if d > math.pi or d < -math.pi:
+                v = v + _TWO_PI * round(d / _TWO_PI)  # nearest to the reference
             if v < a or v > b:
                 best = None
                 for k in (-2, -1, 1, 2):
