@@ -30,9 +30,13 @@ class Task(Protocol):
 
 def default_workers(cpus: int | None = None) -> int:
     """Stepper threads for ``cpus`` cores: one per core (NumPy releases the GIL while it
-    works), at least two so that one slow frame never holds up every session, at most 8."""
+    works), at least two so that one slow frame never holds up every session, at most 8.
+    The environment variable ``EJSRL_STEPPERS`` overrides it (for benchmarks)."""
     import os
 
+    forced = os.environ.get("EJSRL_STEPPERS", "")
+    if forced.isdigit() and int(forced) > 0:
+        return int(forced)
     n = cpus if cpus is not None else (os.cpu_count() or 1)
     return max(2, min(8, n))
 

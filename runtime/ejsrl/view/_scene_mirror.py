@@ -71,7 +71,7 @@ def _snapshot(node: Any) -> tuple:
 class _Mirror:
     """What has been sent for one world node."""
 
-    __slots__ = ("kind", "style", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref")
+    __slots__ = ("kind", "style", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref", "sent")
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
@@ -89,6 +89,8 @@ class _Mirror:
         self.part_keys: list[tuple] | None = None
         self.part_handles: list[list[Any]] = []
         self.parts_ref: list[Any] = []  # keeps the keyed arrays alive, so their ids stay unique
+        #: the line style last set on the first geometry (colour, width, shown): set again only when it changes
+        self.sent: tuple | None = None
 
 
 class SceneMirror:
@@ -149,8 +151,11 @@ class SceneMirror:
         if m.style == "gizmo" and self._is_dragging(node.name):
             m.T = None  # the user moves it; send the model's pose again once the drag is over
         elif m.T is None or not np.array_equal(m.T, T):
-            m.frame.position = T[:3, 3]
-            m.frame.wxyz = r2q(T)
+            # only the part that moved: a body that translates (a pendulum's bob) sends no rotation
+            if m.T is None or not np.array_equal(m.T[:3, 3], T[:3, 3]):
+                m.frame.position = T[:3, 3]
+            if m.T is None or not np.array_equal(m.T[:3, :3], T[:3, :3]):
+                m.frame.wxyz = r2q(T)
             self.counters["pose"] += 1
             m.T = np.array(T)
         if visible != m.visible:
@@ -207,6 +212,7 @@ class SceneMirror:
         color = _rgb255(node.color)
         opacity = _opacity(node.opacity)
         m.geoms = []
+        m.sent = None
         m.mesh_parts_rgb = []
         _BUILDERS[_style(node.kind)](self, node, m, base, color, opacity)
 
@@ -462,11 +468,14 @@ def _props_polyline(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, op
     g = m.geoms[0]
     pts = np.asarray(node.props["points"]).reshape(-1, 3)
     g.points = _polyline_segments(pts)
-    # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
-    # means; per-vertex colours would be read as linear and shown washed out
-    g.colors = np.array(color, dtype=np.uint8)
-    g.thickness = float(node.props["width"])
-    g.visible = len(pts) >= 2
+    style = (tuple(color), float(node.props["width"]), len(pts) >= 2)
+    if style != m.sent:  # a moving line (a pendulum's rod) changes its points only: each set costs
+        # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
+        # means; per-vertex colours would be read as linear and shown washed out
+        g.colors = np.array(color, dtype=np.uint8)
+        g.thickness = style[1]
+        g.visible = style[2]
+        m.sent = style
 
 
 def _props_points(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:

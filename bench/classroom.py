@@ -1,0 +1,329 @@
+"""Classroom capacity: how many students, each with their own simulation, one machine serves.
+
+    python bench/classroom.py [--quick] [--labs a,b] [--seconds S] [--ladder pendulum=10,20,40 ...]
+                              [--no-browser] [--spy LAB=N]
+
+For each lab (pendulum, six_axis_kinematics, visual_servoing_eih by default) the generated
+app is served as a teacher would (``python app.py --port P --max-sessions 1000``, its own
+process), and N simulated students connect: real viser websocket clients that complete
+the handshake (subprotocol, camera message), read and decode every message, and press
+Play on their own session. Over ``--seconds`` we measure, per student, the display frames
+delivered (the time readout's updates) and the simulated time per wall second over what
+the lab asks for (1.0 = full rate); on the server, its CPU seconds per session-second and
+its RSS. N goes up a ladder until a step fails (some student below 25 frames/s or below
+0.95 of the asked rate). With ``--no-browser`` off, one real Chromium page then joins at
+the largest N that held and must see its own time run.
+
+The students' clients run in this process, the server in its own: on a 2-core machine
+they compete for the same cores (decoding zstd + msgpack for N clients costs about as much
+as encoding it), so the figures are a lower bound for a classroom whose students bring
+their own machines. The load average is printed with each line: read them with it.
+
+``--spy LAB=N`` serves LAB to N students and samples the server with py-spy (``pip install
+py-spy``): the share of the server's busy time in model steps, rendering (the virtual
+camera, the world), the view's diffing (panel, plots, scene mirror), serialising (msgpack,
+zstd) and sending.
+
+``--quick``: the three labs at a few sizes, 4 s each (a couple of minutes in all).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import re
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))  # testkit.guard_client: the raw viser client
+
+LABS = {
+    "pendulum": ROOT / "examples" / "pendulum.ejs.yaml",
+    "six_axis_kinematics": ROOT / "examples" / "paper" / "six_axis_kinematics.ejs.yaml",
+    "visual_servoing_eih": ROOT / "examples" / "paper" / "visual_servoing_eih.ejs.yaml",
+}
+#: the issue's targets: sessions at full rate
+TARGETS = {"pendulum": 40, "six_axis_kinematics": 12, "visual_servoing_eih": 4}
+LADDER = {"pendulum": [10, 20, 30, 40, 50, 60], "six_axis_kinematics": [4, 8, 12, 16, 20], "visual_servoing_eih": [1, 2, 4, 6, 8]}
+QUICK = {"pendulum": [10, 20, 40], "six_axis_kinematics": [4, 8, 12], "visual_servoing_eih": [1, 2, 4]}
+MIN_FPS = 25.0
+MIN_RATE = 0.95
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def build(name: str, out_root: Path) -> Path:
+    from ejsgen.cli import build as build_spec
+
+    return build_spec(LABS[name], out_root / name)
+
+
+class Server:
+    """The lab's app.py serving in its own process."""
+
+    def __init__(self, app_dir: Path) -> None:
+        self.port = free_port()
+        self.log = Path(tempfile.mkdtemp()) / "server.log"
+        env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-P", str(app_dir / "app.py"), "--port", str(self.port), "--max-sessions", "1000", "--grace", "1"],
+            stdout=self.log.open("w"), stderr=subprocess.STDOUT, env=env,
+        )
+        deadline = time.monotonic() + 120
+        while "serving on" not in self.log.read_text():
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                raise RuntimeError(f"the server did not start:\n{self.log.read_text()}")
+            time.sleep(0.2)
+
+    def cpu_seconds(self) -> float:
+        fields = Path(f"/proc/{self.proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+    def rss_mb(self) -> float:
+        for line in Path(f"/proc/{self.proc.pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+        return float("nan")
+
+    def stop(self) -> None:
+        self.proc.terminate()
+        try:
+            self.proc.wait(10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+
+
+_READOUT = re.compile(r"^\*\*(\w+)\*\* = ([-+0-9.eE]+|nan|inf)")
+
+
+class Student:
+    """One raw client: connects, presses Play, and records the readout updates it is sent."""
+
+    def __init__(self, client: Any) -> None:
+        self.client = client
+        self.readout_uuid: str | None = None
+
+    @classmethod
+    async def join(cls, port: int) -> Student:
+        from testkit.guard_client import Client
+
+        client = await Client.open(port)
+        student = cls(client)
+        await client.until(lambda: student._find_readout() is not None, "the panel", timeout=120)
+        return student
+
+    def _find_readout(self) -> str | None:
+        if self.readout_uuid is None:
+            for m in self.client.received:
+                if m.get("type") == "GuiUpdateMessage" and _READOUT.match(str(m["updates"].get("_markdown", m["updates"].get("content", "")))):
+                    self.readout_uuid = m["uuid"]
+                    break
+        return self.readout_uuid
+
+    async def play(self) -> None:
+        from testkit.guard_client import gui_update
+
+        uuid = next(m["uuid"] for m in self.client.received if m.get("type") == "GuiButtonMessage" and m["props"].get("label") == "Play")
+        await self.client.send(gui_update(uuid, value=True))
+
+    def readouts(self) -> list[tuple[float, float]]:
+        """(arrival index, simulated time) of each readout update received."""
+        out = []
+        for m in self.client.received:
+            if m.get("type") == "GuiUpdateMessage" and m.get("uuid") == self.readout_uuid:
+                match = _READOUT.match(str(m["updates"].get("_markdown", m["updates"].get("content", ""))))
+                if match:
+                    out.append(float(match.group(2)))
+        return out
+
+
+async def _measure(port: int, n: int, seconds: float, server: Server, asked_pace: float, fps: float) -> dict[str, Any]:
+    students = []
+    for _ in range(n):  # one after the other, as a class arriving
+        students.append(await Student.join(port))
+    for s in students:
+        await s.play()
+    await asyncio.sleep(2.0)  # every session playing
+    before = [len(s.readouts()) for s in students]
+    t_before = [s.readouts()[-1] if s.readouts() else 0.0 for s in students]
+    cpu0, wall0 = server.cpu_seconds(), time.perf_counter()
+    await asyncio.sleep(seconds)
+    wall = time.perf_counter() - wall0
+    cpu = server.cpu_seconds() - cpu0
+    rss = server.rss_mb()
+    frames = [len(s.readouts()) - b for s, b in zip(students, before)]
+    rates = [((s.readouts()[-1] if s.readouts() else 0.0) - t0) / wall / asked_pace for s, t0 in zip(students, t_before)]
+    for s in students:
+        await s.client.close()
+    return {"fps": [f / wall for f in frames], "rate": rates, "cpu": cpu / wall, "rss": rss,
+            "load": os.getloadavg()[0]}
+
+
+def lab_settings(app_dir: Path) -> tuple[float, float]:
+    """(fps, asked pace): the lab's frame rate and the simulated seconds per wall second it asks for."""
+    from ejsrl.app import load_app
+
+    app = load_app(app_dir)
+    fps = float(app.sim.fps)
+    if app.sim.realtime:
+        return fps, 1.0
+    t0 = app.model._ejs_time() or 0.0
+    app._run_steps(int(app.sim.steps_per_display))
+    return fps, ((app.model._ejs_time() or 0.0) - t0) * fps
+
+
+def chromium_check(port: int, seconds: float = 4.0) -> str:
+    """One real page joins, presses Play, and reads its own time readout twice."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as pw:
+        ctx = pw.chromium.launch_persistent_context(
+            tempfile.mkdtemp(), executable_path="/usr/bin/chromium", headless=True,
+            args=["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                  "--disable-background-networking", "--disable-component-update", "--disable-sync"])
+        try:
+            page = ctx.new_page()
+            page.set_default_timeout(120_000)
+            page.goto(f"http://127.0.0.1:{port}")
+            page.get_by_role("button", name="Play").first.click()
+            read = "Array.from(document.querySelectorAll('p')).map(p=>p.textContent).filter(t=>/^\\w+ = [-0-9.e]+/.test(t))[0]||''"
+            page.wait_for_timeout(1000)
+            a, t0 = page.evaluate(read), time.perf_counter()
+            page.wait_for_timeout(seconds * 1000)
+            b, t1 = page.evaluate(read), time.perf_counter()
+        finally:
+            ctx.close()
+    va, vb = (float(x.split("=")[1].split()[0]) if "=" in x else float("nan") for x in (a, b))
+    return f"Chromium page: readout {a!r} -> {b!r}: {(vb - va) / (t1 - t0):.2f} simulated s per s"
+
+
+def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser: bool) -> None:
+    app_dir = build(name, out_root)
+    fps, pace = lab_settings(app_dir)
+    server = Server(app_dir)
+    try:
+        time.sleep(1.0)
+        idle_rss = server.rss_mb()
+        print(f"{name}: {fps:.0f} frames/s asked, {pace:.3g} simulated s per s; server idle RSS {idle_rss:.0f} MB "
+              f"(target: {TARGETS[name]} sessions at >= {MIN_FPS:.0f} fps and >= {MIN_RATE} of the asked rate)", flush=True)
+        best = 0
+        for n in sizes:
+            r = asyncio.run(_measure(server.port, n, seconds, server, pace, fps))
+            ok = min(r["fps"]) >= MIN_FPS and min(r["rate"]) >= MIN_RATE
+            best = n if ok else best
+            print(f"   N={n:3d}: fps min {min(r['fps']):5.1f} median {sorted(r['fps'])[n // 2]:5.1f}; rate min {min(r['rate']):.2f} "
+                  f"median {sorted(r['rate'])[n // 2]:.2f}; server CPU {r['cpu']:.2f} cores = {1000 * r['cpu'] / n:.1f} ms per "
+                  f"session-second; RSS {r['rss']:.0f} MB = {(r['rss'] - idle_rss) / n:.1f} MB per session; "
+                  f"load {r['load']:.1f}  {'HELD' if ok else 'NOT HELD'}", flush=True)
+            time.sleep(2.5)  # the sessions are freed (--grace 1)
+            if not ok:
+                break
+        met = "MET" if best >= TARGETS[name] else "NOT MET"
+        print(f"   largest N at full rate: {best} (target {TARGETS[name]}): {met}", flush=True)
+        if browser and best:
+            print("   " + chromium_check(server.port), flush=True)
+        print(f"   after everyone left: RSS {server.rss_mb():.0f} MB", flush=True)
+    finally:
+        server.stop()
+
+
+def spy(name: str, n: int, seconds: float, out_root: Path) -> None:
+    """Sample the server with py-spy while ``n`` students play ``name``: where the time goes."""
+    import shutil
+    from collections import Counter
+
+    if shutil.which("py-spy") is None:
+        sys.exit("--spy needs py-spy: pip install py-spy")
+    app_dir = build(name, out_root)
+    fps, pace = lab_settings(app_dir)
+    server = Server(app_dir)
+    out = Path(tempfile.mkdtemp()) / "stacks.txt"
+
+    async def students() -> None:
+        joined = [await Student.join(server.port) for _ in range(n)]
+        for s in joined:
+            await s.play()
+        await asyncio.sleep(1.0)
+        proc = await asyncio.create_subprocess_exec(
+            "py-spy", "record", "--pid", str(server.proc.pid), "--duration", str(int(seconds)), "--rate", "100",
+            "--format", "raw", "--threads", "--output", str(out), "--nonblocking",
+            stdout=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.DEVNULL)
+        await proc.wait()
+        for s in joined:
+            await s.client.close()
+
+    try:
+        asyncio.run(students())
+    finally:
+        server.stop()
+    parts = {
+        "model steps": ("_ejs_step", "_run_steps", "_realtime_steps"),
+        "render (camera, world)": ("render", "capture", "rasterize", "_refresh_views", "scene.update", "update (ejsrl/world"),
+        "view diff (panel, plots, scene mirror)": ("refresh (ejsrl/view", "sync (ejsrl/view", "on_frame", "push (ejsrl/view", "update (ejsrl/view"),
+        "serialise (msgpack, zstd)": ("as_serializable_dict", "encode", "compress", "_message_producer"),
+        "send (websocket)": ("send (websockets", "write", "sendall", "_write"),
+    }
+    counts: Counter[str] = Counter()
+    total = 0
+    for line in out.read_text().splitlines():
+        stack, _, count = line.rpartition(" ")
+        k = int(count)
+        total += k
+        frames = stack.split(";")
+        for label, keys in parts.items():
+            if any(any(key in f for key in keys) for f in frames):
+                counts[label] += k
+                break
+        else:
+            counts["other (viser internals, scheduling, GC)"] += k
+    print(f"{name}, {n} students, py-spy over {seconds:.0f} s: {total} busy samples (idle threads excluded); first matching part wins:")
+    for label, k in counts.most_common():
+        print(f"   {k / max(total, 1):6.1%}  {label}")
+    inclusive: Counter[str] = Counter()
+    for line in out.read_text().splitlines():
+        stack, _, count = line.rpartition(" ")
+        for f in {f.split(" (")[0] + " (" + f.split(" (")[-1].split(":")[0].split("/")[-1] + ")" for f in stack.split(";")[1:]}:
+            inclusive[f] += int(count)
+    print("   functions by inclusive share:")
+    for f, k in inclusive.most_common(30):
+        print(f"      {k / max(total, 1):6.1%}  {f}")
+
+
+def main() -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--quick", action="store_true", help="a few sizes per lab, 4 s each")
+    p.add_argument("--labs", default=",".join(LABS), help="comma-separated lab names")
+    p.add_argument("--seconds", type=float, default=None, help="measuring time per size (default 8; 4 with --quick)")
+    p.add_argument("--ladder", action="append", default=[], metavar="LAB=N,N,...", help="the sizes to try for LAB")
+    p.add_argument("--no-browser", action="store_true", help="skip the Chromium page")
+    p.add_argument("--spy", metavar="LAB=N", help="profile the server with py-spy while N students play LAB")
+    args = p.parse_args()
+    out_root = Path(tempfile.mkdtemp(prefix="ejsgen-classroom-"))
+    print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} (other processes share these cores)", flush=True)
+    if args.spy:
+        name, _, n = args.spy.partition("=")
+        spy(name, int(n or 10), args.seconds or 10.0, out_root)
+        return 0
+    ladders = dict(QUICK if args.quick else LADDER)
+    for item in args.ladder:
+        name, _, sizes = item.partition("=")
+        ladders[name] = [int(x) for x in sizes.split(",") if x]
+    seconds = args.seconds or (4.0 if args.quick else 8.0)
+    for name in [x.strip() for x in args.labs.split(",") if x.strip()]:
+        run_lab(name, ladders[name], seconds, out_root, browser=not args.no_browser)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,127 @@
+"""The classroom's stepper pool: fair when overloaded, nothing for idle tasks, bounded threads;
+and the command line that chooses between a simulation per tab and one shared."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+
+from ejsrl.app import _sessions, cli
+from ejsrl.app._loop import App
+from ejsrl.app._scheduler import Scheduler
+from testkit.browser_lab import VIEW, Pendulum, make_app
+
+
+class Busy:
+    """A task that wants ``fps`` frames a second, each taking ``cost`` seconds of its worker."""
+
+    def __init__(self, fps: float, cost: float, playing: bool = True) -> None:
+        self.period, self.cost, self.playing = 1.0 / fps, cost, playing
+        self.frames = 0
+
+    def tick(self, due: float) -> float | None:
+        time.sleep(self.cost)
+        self.frames += 1
+        if not self.playing:
+            return None
+        now = time.monotonic()
+        nxt = due + self.period
+        return nxt if nxt >= now else now
+
+
+def test_an_overloaded_pool_slows_every_task_evenly():
+    # 5 tasks asking 30 frames/s of 10 ms on one worker: 150 frames/s asked, 100 possible
+    pool = Scheduler(1)
+    tasks = [Busy(30.0, 0.010) for _ in range(5)]
+    try:
+        for t in tasks:
+            pool.wake(t)
+        time.sleep(3.0)
+    finally:
+        pool.stop()
+    frames = [t.frames for t in tasks]
+    assert sum(frames) > 200  # the worker was kept busy (about 300 possible)
+    assert max(frames) - min(frames) <= 0.15 * max(frames), f"uneven frames: {frames}"
+    assert max(frames) < 0.85 * 90  # nobody got its full 30 frames/s
+
+
+def test_a_pool_that_keeps_up_gives_each_task_its_rate_and_idle_tasks_nothing():
+    pool = Scheduler(2)
+    playing = [Busy(30.0, 0.001) for _ in range(3)]
+    idle = Busy(30.0, 0.001, playing=False)
+    try:
+        for t in (*playing, idle):
+            pool.wake(t)
+        time.sleep(2.0)
+        frames = [t.frames for t in playing]
+        assert idle.frames == 1  # one frame when woken, then nothing
+        pool.wake(idle)
+        time.sleep(0.2)
+        assert idle.frames == 2
+    finally:
+        pool.stop()
+    for n in frames:
+        assert 50 <= n <= 62, frames  # 30 frames/s for 2 s, no catching up beyond it
+
+
+def test_the_pool_has_the_threads_it_was_given():
+    before = threading.active_count()
+    pool = Scheduler(3)
+    try:
+        for _ in range(20):
+            pool.wake(Busy(30.0, 0.0))
+        assert threading.active_count() == before + 3
+    finally:
+        pool.stop()
+
+
+def test_the_default_limit_follows_the_cores_and_the_lab_cost():
+    assert _sessions.default_max_sessions(0.001, 30.0, cpus=2) == 35  # 1.6 cores / (1.5 ms * 30)
+    assert _sessions.default_max_sessions(0.001, 30.0, cpus=4) == 71
+    assert _sessions.default_max_sessions(0.020, 30.0, cpus=2) == 2  # a heavy lab: the floor
+    assert _sessions.default_max_sessions(1e-9, 30.0, cpus=64) == _sessions.MAX_DEFAULT_SESSIONS
+    app = make_app()
+    cost = _sessions.measure_frame_cost(app, frames=4)
+    assert 0.0 < cost < 0.05
+    assert app.model.t == 0.0 and not app.is_playing()  # the probe leaves the app as it was
+
+
+@pytest.fixture
+def served_with(monkeypatch):
+    """Run ``cli.main`` with ``App.serve`` recorded instead of serving."""
+    calls: list[dict] = []
+    monkeypatch.setattr(App, "serve", lambda self, host, port, **kw: calls.append(dict(host=host, port=port, **kw)))
+
+    def run(*argv: str) -> tuple[int, list[dict]]:
+        status = cli.main(Pendulum, VIEW, sim=make_app().sim, meta=make_app().meta, base_dir=".", argv=list(argv))
+        return status, calls
+
+    return run
+
+
+def test_serving_gives_each_tab_its_own_simulation_unless_shared(served_with):
+    status, calls = served_with()
+    assert status == 0 and calls[-1]["per_client"] is True and calls[-1]["max_sessions"] is None
+    assert calls[-1]["grace"] == 60.0
+    status, calls = served_with("--shared")
+    assert status == 0 and calls[-1]["per_client"] is False
+    status, calls = served_with("--max-sessions", "12", "--grace", "5")
+    assert calls[-1]["max_sessions"] == 12 and calls[-1]["grace"] == 5.0
+
+
+def test_bad_session_options_are_plain_errors(served_with, capsys):
+    assert served_with("--max-sessions", "0")[0] == 2
+    assert "--max-sessions must be at least 1" in capsys.readouterr().err
+    assert served_with("--grace", "-1")[0] == 2
+    assert "--grace" in capsys.readouterr().err
+
+
+def test_help_describes_the_classroom_options(capsys):
+    with pytest.raises(SystemExit):
+        cli.main(Pendulum, VIEW, sim=make_app().sim, meta=make_app().meta, base_dir=".", argv=["--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "--shared" in out and "one simulation for everyone" in out
+    assert "--max-sessions N" in out and "the next one is told the lab is full" in out
+    assert "--grace SECONDS" in out and "a reload finds it again" in out
