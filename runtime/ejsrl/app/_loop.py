@@ -270,6 +270,13 @@ class App(Controller):
         rgb, _depth = render(self.scene.world, name)
         return rgb
 
+    def capture_depth(self, name: str) -> np.ndarray:
+        """The depth image camera ``name`` sees now (Z in metres along its axis, inf where empty)."""
+        from ejsrl.world.rendering import render_depth
+
+        self.scene.update(self.model, None)
+        return render_depth(self.scene.world, name)
+
     # -- stepping ---------------------------------------------------------------------------------
     def _run_steps(self, n: int) -> int:
         done = 0

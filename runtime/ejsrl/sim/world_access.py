@@ -45,6 +45,10 @@ class WorldAccess(Protocol):
         """The RGB image (H, W, 3) that camera ``name`` sees now."""
         ...
 
+    def capture_depth(self, name: str) -> np.ndarray:
+        """The depth image (H, W) float32 of camera ``name`` now (Z in metres, inf where empty)."""
+        ...
+
     def world_functions(self) -> WorldFunctionsAccess:
         """The world functions over the app's scene."""
         ...

@@ -42,7 +42,7 @@ _VERTEX_SHADER = """
 uniform mat4 proj;
 in vec3 in_pos;
 in vec3 in_col;
-flat out vec3 v_col;
+INTERP out vec3 v_col;
 void main() {
     v_col = in_col;
     gl_Position = proj * vec4(in_pos, 1.0);
@@ -52,7 +52,7 @@ void main() {
 _FRAGMENT_SHADER = """
 #version 330
 uniform float inv_far;  // 1 / far, or 0 for no far plane
-flat in vec3 v_col;
+INTERP in vec3 v_col;
 layout(location = 0) out vec4 out_rgb;
 layout(location = 1) out float out_inv_z;
 void main() {
@@ -102,10 +102,18 @@ class _Renderer:
 
         self.mgl = moderngl
         self.ctx = moderngl.create_context(standalone=True, backend="egl", require=330)
-        self.prog = self.ctx.program(vertex_shader=_VERTEX_SHADER, fragment_shader=_FRAGMENT_SHADER)
         self.vbo = self.ctx.buffer(reserve=36 * 64, dynamic=True)
         self.cbo = self.ctx.buffer(reserve=9 * 64, dynamic=True)
-        self.vao = self.ctx.vertex_array(self.prog, [(self.vbo, "3f", "in_pos"), (self.cbo, "3f1", "in_col")])
+        # flat: one colour per face; smooth: per-corner colours interpolated (perspective-correct)
+        self.progs = {}
+        self.vaos = {}
+        for mode, qualifier in (("flat", "flat"), ("smooth", "smooth")):
+            prog = self.ctx.program(
+                vertex_shader=_VERTEX_SHADER.replace("INTERP", qualifier),
+                fragment_shader=_FRAGMENT_SHADER.replace("INTERP", qualifier),
+            )
+            self.progs[mode] = prog
+            self.vaos[mode] = self.ctx.vertex_array(prog, [(self.vbo, "3f", "in_pos"), (self.cbo, "3f1", "in_col")])
         self.targets: dict[tuple[int, int], tuple[Any, Any, Any]] = {}
         self.lock = threading.Lock()
         self.pid = os.getpid()
@@ -134,7 +142,12 @@ class _Renderer:
         W, H = int(camera.width), int(camera.height)
         F = P.shape[2]
         pos = np.ascontiguousarray(P.transpose(2, 0, 1), dtype=np.float32)  # (F, 3 vertices, 3)
-        col = np.repeat(shaded, 3, axis=0)  # one colour per vertex, the face's
+        mode = "smooth" if shaded.ndim == 3 else "flat"
+        if mode == "smooth":  # (F, 3 corners, 3)
+            col = np.ascontiguousarray(shaded, dtype=np.uint8).reshape(-1, 3)
+        else:
+            col = np.repeat(shaded, 3, axis=0)  # one colour per vertex, the face's
+        prog, vao = self.progs[mode], self.vaos[mode]
         proj = projection_matrix(camera.K, W, H, camera.near, camera.far)
         rgb = np.empty((H, W, 3), dtype=np.uint8)
         inv_z = np.empty((H, W), dtype=np.float32)
@@ -145,15 +158,15 @@ class _Renderer:
                     if buf.size < data.nbytes:
                         buf.orphan(data.nbytes + data.nbytes // 4)
                     buf.write(data)
-            self.prog["proj"].write(proj.T.astype(np.float32).tobytes())  # GL wants column-major
-            self.prog["inv_far"].value = 1.0 / camera.far if np.isfinite(camera.far) else 0.0
+            prog["proj"].write(proj.T.astype(np.float32).tobytes())  # GL wants column-major
+            prog["inv_far"].value = 1.0 / camera.far if np.isfinite(camera.far) else 0.0
             colour_only.clear(*(bg / 255.0), 1.0)
             inv_z_depth.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
             draw.use()
             self.ctx.enable_only(self.mgl.DEPTH_TEST)
             self.ctx.depth_func = "<"
             if F:
-                self.vao.render(self.mgl.TRIANGLES, vertices=3 * F)
+                vao.render(self.mgl.TRIANGLES, vertices=3 * F)
             draw.read_into(rgb, components=3, attachment=0, alignment=1)
             draw.read_into(inv_z, components=1, attachment=1, alignment=1, dtype="f4")
         with np.errstate(divide="ignore"):
@@ -204,7 +217,8 @@ def describe() -> str:
 def render_faces(
     P: NDArray[np.float64], shaded: NDArray[np.uint8], camera: Any, bg: NDArray[np.uint8]
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
-    """Draw camera-frame faces ``P`` (3, 3, F) (vertex-major) with flat colours ``shaded`` (F, 3) uint8.
+    """Draw camera-frame faces ``P`` (3, 3, F) (vertex-major) with flat colours ``shaded`` (F, 3) uint8,
+    or per-corner colours (F, 3 corners, 3) uint8 interpolated across each face (smooth shading).
 
     ``camera``: a ``CameraModel`` (K, width, height, near, far). ``bg`` (3,) uint8. Returns
     ``rgb`` (H, W, 3) uint8 and ``depth`` (H, W) float32, Z in metres, inf where empty.

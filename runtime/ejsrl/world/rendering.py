@@ -20,6 +20,12 @@ Shading, the same on both back ends (computed here, on the CPU, in float64): eac
 gets its colour times ``ambient + (1 - ambient) * |cos a|`` where ``a`` is the angle
 between its normal and ``LIGHT_DIR``, a light attached to the camera (so faces seen
 edge-on are darker); no textures, no shadows.
+
+A more realistic camera (``realism=``, or a camera node's ``antialias``, ``shading``,
+``noise``, ``blur`` and ``distortion`` properties; all off by default, and then the render
+is the plain one, bit for bit): supersampling, smooth (Gouraud) shading, lens distortion
+through the camera's own ``CameraModel.distort``, defocus blur and Gaussian sensor noise,
+on both back ends (see ``ejsrl.world._realism``). ``render_depth`` is the depth image alone.
 """
 
 from __future__ import annotations
@@ -33,8 +39,12 @@ from numpy.typing import ArrayLike, NDArray
 
 from ejsrl.vision.camera import CameraModel
 from ejsrl.world._raster import face_normals, front_faces, zbuffer
+from ejsrl.world._realism import Realism, block_mean, centre_depth, corner_normals, margin_for, supersampled_K
 
-__all__ = ["render", "render_triangles", "shade_faces", "available_backends", "BACKGROUND", "AMBIENT", "BACKENDS"]
+__all__ = [
+    "render", "render_depth", "render_triangles", "shade_faces", "available_backends", "Realism",
+    "BACKGROUND", "AMBIENT", "BACKENDS",
+]
 
 #: default background colour, RGB in [0, 1] (a light grey-blue)
 BACKGROUND: tuple[float, float, float] = (0.82, 0.86, 0.92)
@@ -54,6 +64,13 @@ def _shade(n: NDArray[np.float64], rgb: NDArray[np.float64], ambient: float) -> 
     cos = np.nan_to_num(cos, nan=1.0)
     k = ambient + (1.0 - ambient) * cos
     return np.clip(np.rint(255.0 * np.clip(rgb, 0.0, 1.0) * k[:, None]), 0, 255).astype(np.uint8)
+
+
+def _shade_corners(cn: NDArray[np.float64], rgb: NDArray[np.float64], ambient: float) -> NDArray[np.uint8]:
+    """Gouraud shading: unit corner normals ``cn`` (3 corners, 3, F), colours (F, 3) -> (F, 3 corners, 3) uint8."""
+    cos = np.abs(np.einsum("vcf,c->fv", cn, LIGHT_DIR))
+    k = ambient + (1.0 - ambient) * cos  # (F, 3 corners)
+    return np.clip(np.rint(255.0 * np.clip(rgb, 0.0, 1.0)[:, None, :] * k[:, :, None]), 0, 255).astype(np.uint8)
 
 
 def shade_faces(
@@ -116,12 +133,16 @@ def render_triangles(
     background: Sequence[float] = BACKGROUND,
     cull_backfaces: bool = True,
     backend: str = "numpy",
+    realism: Realism | None = None,
+    rng: np.random.Generator | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Render world triangles (F, 3, 3) with colours (F, 3) in [0, 1] seen by ``camera``.
 
     ``T_world_camera``: (4, 4) pose of the camera in the world. ``backend``: "numpy", "gl"
-    or "auto" (see the module docstring). Returns ``rgb`` (H, W, 3) uint8 and ``depth``
-    (H, W) float32 (metres along the optical axis, inf where nothing is seen).
+    or "auto" (see the module docstring). ``realism``: anti-aliasing, smooth shading, lens
+    distortion, blur and noise (``Realism``; None or all off: the plain pinhole render);
+    ``rng``: the generator of the noise (default: a fresh one). Returns ``rgb`` (H, W, 3)
+    uint8 and ``depth`` (H, W) float32 (metres along the optical axis, inf where nothing is seen).
     """
     be = _pick_backend(backend)
     tris = np.asarray(tris_world, dtype=np.float64).reshape(-1, 3, 3)
@@ -131,6 +152,8 @@ def render_triangles(
     P = _to_camera(tris, T)
     n = face_normals(P)
     front = front_faces(P, n) if cull_backfaces else None
+    if realism is not None and not realism.plain:
+        return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng)
     if be == "gl":
         from ejsrl.world import _gl
 
@@ -142,6 +165,104 @@ def render_triangles(
     return zb.lookup(shaded, bg), zb.depth()
 
 
+def _render_smooth_numpy(
+    P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
+    camera: CameraModel, bg: NDArray[np.uint8],
+) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+    """Gouraud-shaded NumPy render: corner colours interpolated with perspective-correct barycentrics."""
+    W, H = camera.width, camera.height
+    zb = zbuffer(P, camera.K, W, H, near=camera.near, far=camera.far, front=front)
+    depth = zb.depth()
+    face = zb.face().reshape(-1)
+    out = np.empty((H * W, 3), dtype=np.uint8)
+    out[:] = bg
+    pix = np.flatnonzero(face >= 0)
+    if len(pix):
+        f = face[pix]
+        corner = _shade_corners(corner_normals(P, n), cols, AMBIENT)[f].astype(np.float64)  # (N, 3 corners, 3)
+        K = camera.K
+        v = (pix // W).astype(np.float64)
+        u = (pix % W).astype(np.float64)
+        yn = (v - K[1, 2]) / K[1, 1]
+        xn = (u - K[0, 2] - K[0, 1] * yn) / K[0, 0]
+        r = np.stack([xn, yn, np.ones_like(xn)])  # (3, N) the pixel centre's ray
+        V0, V1, V2 = P[0][:, f], P[1][:, f], P[2][:, f]
+        nf = n[:, f]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            X = r * (np.einsum("cn,cn->n", nf, V0) / np.einsum("cn,cn->n", nf, r))
+            n2 = np.einsum("cn,cn->n", nf, nf)
+            b0 = np.einsum("cn,cn->n", nf, np.cross(V1 - X, V2 - X, axis=0)) / n2
+            b1 = np.einsum("cn,cn->n", nf, np.cross(V2 - X, V0 - X, axis=0)) / n2
+        b0, b1 = np.nan_to_num(b0, nan=1 / 3), np.nan_to_num(b1, nan=1 / 3)
+        b = np.clip(np.stack([b0, b1, 1.0 - b0 - b1], axis=1), 0.0, 1.0)
+        b /= b.sum(axis=1, keepdims=True)
+        out[pix] = np.clip(np.rint(np.einsum("nv,nvc->nc", b, corner)), 0, 255).astype(np.uint8)
+    return out.reshape(H, W, 3), depth
+
+
+def _render_pinhole(
+    P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
+    camera: CameraModel, bg: NDArray[np.uint8], be: str, smooth: bool,
+) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+    """The pinhole render of camera-frame faces, flat or smooth, on back end ``be``."""
+    if be == "gl":
+        from ejsrl.world import _gl
+
+        keep = np.flatnonzero(front) if front is not None else np.arange(P.shape[2])
+        if smooth:
+            shaded = _shade_corners(corner_normals(P, n), cols, AMBIENT)[keep]
+        else:
+            shaded = _shade(n.take(keep, axis=1), cols[keep], AMBIENT)
+        return _gl.render_faces(P.take(keep, axis=2), shaded, camera, bg)
+    if smooth:
+        return _render_smooth_numpy(P, n, cols, front, camera, bg)
+    zb = zbuffer(P, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, front=front)
+    shaded = _shade(n.take(zb.ids, axis=1), cols[zb.ids], AMBIENT)
+    return zb.lookup(shaded, bg), zb.depth()
+
+
+def _render_realistic(
+    P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
+    camera: CameraModel, bg: NDArray[np.uint8], be: str, realism: Realism, rng: np.random.Generator | None,
+) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
+    """The pipeline of ``ejsrl.world._realism``: render finer and wider, average, distort, blur, add noise."""
+    s = int(realism.antialias)
+    W, H = camera.width, camera.height
+    lens = None
+    if realism.distorted:
+        lens = CameraModel(W, H, K=camera.K, distortion=realism.distortion, near=camera.near, far=camera.far)
+    m = margin_for(lens) if lens is not None else 0
+    fine = CameraModel(s * (W + 2 * m), s * (H + 2 * m), K=supersampled_K(camera.K, s, m), near=camera.near, far=camera.far)
+    rgb, depth = _render_pinhole(P, n, cols, front, fine, bg, be, realism.shading == "smooth")
+    img = block_mean(rgb, s)
+    depth = centre_depth(depth, s)
+    if lens is not None:
+        K_wide = np.array(camera.K, dtype=np.float64)
+        K_wide[0, 2] += m
+        K_wide[1, 2] += m
+        img = lens.distort(img, K_source=K_wide)
+        depth = lens.distort(depth, interpolation="nearest", K_source=K_wide)
+        depth[depth <= 0] = np.inf  # no source: nothing seen
+    if realism.blur > 0:
+        import cv2
+
+        img = cv2.GaussianBlur(img, (0, 0), sigmaX=float(realism.blur), sigmaY=float(realism.blur), borderType=cv2.BORDER_REFLECT)
+    if realism.noise > 0:
+        gen = rng if rng is not None else np.random.default_rng()
+        img = img + gen.standard_normal(img.shape, dtype=np.float32) * np.float32(realism.noise)
+    return np.clip(np.rint(img), 0, 255).astype(np.uint8), np.ascontiguousarray(depth, dtype=np.float32)
+
+
+def _noise_rng(node: Any) -> np.random.Generator:
+    """The noise generator of a camera node: one per node, seeded from its name (reproducible runs)."""
+    gen = node.__dict__.get("_ejs_noise_rng")
+    if gen is None:
+        import zlib
+
+        gen = node.__dict__["_ejs_noise_rng"] = np.random.default_rng(zlib.crc32(node.name.encode()))
+    return gen
+
+
 def render(
     world: Any,
     camera: CameraModel | str,
@@ -151,6 +272,8 @@ def render(
     background: Sequence[float] = BACKGROUND,
     cull_backfaces: bool = True,
     backend: str = "auto",
+    realism: Realism | None = None,
+    rng: np.random.Generator | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Render what a camera sees in ``world``: ``(rgb (H, W, 3) uint8, depth (H, W) float32)``.
 
@@ -164,8 +287,15 @@ def render(
     ``backend``: "auto" (default: OpenGL when it works here, else NumPy), "numpy" or "gl"
     (see the module docstring; "gl" raises with an install hint when it cannot run).
 
+    ``realism``: anti-aliasing, smooth shading, lens distortion, blur and noise
+    (``Realism``); by default, for a camera node, those of its properties (``antialias``,
+    ``shading``, ``distortion``, ``blur``, ``noise``), none for a ``CameraModel``. Noise
+    comes from ``rng`` or else, for a camera node, from a generator of the node seeded
+    from its name.
+
     Depth is Z in the camera frame (metres along the optical axis), inf where nothing is
-    seen. The output is deterministic for a given back end and machine.
+    seen. The output is deterministic for a given back end and machine (noise aside: the
+    same sequence of frames from the same start).
     """
     if isinstance(camera, str):
         node = world[camera]
@@ -174,6 +304,10 @@ def render(
         cam = CameraModel.from_node(node)
         T = node.T_world() if T_world_camera is None else np.asarray(T_world_camera, dtype=float)
         exclude = tuple(exclude) + (camera,)
+        if realism is None:
+            realism = Realism.from_props(node.props)
+        if realism.noise > 0 and rng is None:
+            rng = _noise_rng(node)
     elif isinstance(camera, CameraModel):
         if T_world_camera is None:
             raise ValueError("render(world, CameraModel, T_world_camera): the camera pose T_world_camera is required")
@@ -182,4 +316,21 @@ def render(
     else:
         raise TypeError(f"camera must be a CameraModel or a camera name, not {type(camera).__name__}")
     tris, rgb = world.triangles(exclude=tuple(exclude))
-    return render_triangles(tris, rgb, cam, T, background=background, cull_backfaces=cull_backfaces, backend=backend)
+    return render_triangles(
+        tris, rgb, cam, T, background=background, cull_backfaces=cull_backfaces, backend=backend, realism=realism, rng=rng
+    )
+
+
+def render_depth(world: Any, camera: CameraModel | str, T_world_camera: ArrayLike | None = None, **kw: Any) -> NDArray[np.float32]:
+    """The depth image alone (H, W) float32: Z in metres along the optical axis, inf where nothing is seen.
+
+    As ``render`` (same arguments); lens distortion moves depth as it moves the image;
+    anti-aliasing, blur and noise do not touch it (it is the depth at each pixel's centre).
+    """
+    realism = kw.pop("realism", None)
+    if isinstance(camera, str) and realism is None:
+        node = world[camera]
+        if getattr(node, "kind", None) == "camera":
+            p = Realism.from_props(node.props)
+            realism = Realism(distortion=p.distortion)  # only what moves the depth
+    return render(world, camera, T_world_camera, realism=realism, **kw)[1]
