@@ -217,3 +217,29 @@ def test_ikine_searches_on_when_closed_form_seeds_do_not_polish(monkeypatch):
     T = p.fkine([0.3, 0.4, -0.2, 0.5, -0.7, 1.0])
     sol = p.ikine(T)
     assert sol.success and _reached(p, T, sol.q)
+
+
+def _dh_arm(a, d, alpha, qlim, name):
+    from ejsrl.robotics import Robot, RevoluteDH
+
+    return Robot([RevoluteDH(a=a[j], d=d[j], alpha=alpha[j], qlim=qlim[j]) for j in range(len(a))], name=name)
+
+
+def test_ikine_closed_form_covers_other_arms_of_the_families():
+    """UR10 and KUKA LWR-IV (alpha signs other than the PA-10's, one-sided elbow and wrist
+    limits), with the DH tables of Robotics Toolbox's ``models.DH.UR10`` and ``LWR4``."""
+    h = np.pi / 2
+    ur10 = _dh_arm([0, -0.612, -0.5723, 0, 0, 0], [0.1273, 0, 0, 0.163941, 0.1157, 0.0922],
+                   [h, 0, 0, h, -h, 0], [[-2 * np.pi, 2 * np.pi]] * 6, "UR10")
+    lwr = _dh_arm([0] * 7, [0, 0, 0.40, 0, 0.39, 0, 0], [h, -h, -h, h, h, -h, 0],
+                  [[-2.8973, 2.8973], [-1.7628, 1.7628], [-2.8973, 2.8973], [-3.0718, -0.0698],
+                   [-2.8973, 2.8973], [-0.0175, 3.7525], [-2.8973, 2.8973]], "LWR-IV")
+    for arm in (ur10, lwr):
+        arm.tool = transl(0, 0, 0.103)
+        rng = np.random.default_rng(19)
+        lim = arm.qlim
+        for T in arm.fkine(random_q(arm, rng, 200)):
+            sol = arm.ikine(T)
+            assert sol.success, (arm.name, sol.reason)
+            assert _reached(arm, T, sol.q)
+            assert np.all(sol.q >= lim[0]) and np.all(sol.q <= lim[1])

@@ -10,7 +10,7 @@ Three families are recognised from the DH parameters (standard DH, revolute join
   ``[90, 0, 0, 90, -90, 0]`` deg, ``a1 = a4 = a5 = a6 = 0``, ``d2 = d3 = 0``. 8 solutions
   (Hawkins, "Analytic inverse kinematics for the Universal Robots UR-5/UR-10 arms", 2013).
 - ``"srs"``: 7R spherical-shoulder, revolute-elbow, spherical-wrist arm (Mitsubishi PA-10,
-  KUKA LBR): every ``a = 0``, ``d2 = d4 = d6 = 0``, alpha ``±90`` deg for joints 1-6. The
+  KUKA LWR-IV): every ``a = 0``, ``d2 = d4 = d6 = 0``, alpha ``±90`` deg for joints 1-6. The
   redundancy is taken up by joint 3 (the upper-arm roll): for a chosen ``q3`` there are
   up to 8 solutions (Shimizu et al., "Analytical inverse kinematic computation for 7-DOF
   redundant manipulators with joint limits", IEEE T-RO 2008, parametrise by the arm angle
