@@ -99,6 +99,8 @@ class FmuInstance:
         self._callbacks: Any = None
         self._freed = False
         self._groups: dict[tuple[str, ...], dict[str, list[tuple[int, int]]]] = {}
+        self._buffers: dict[tuple[Any, ...], tuple[Any, Any, Any]] = {}
+        self._xbufs: tuple[np.ndarray, Any, np.ndarray, Any] | None = None
         self._instantiate()
 
     # -- calls, each turning a failure into FmuError with the FMU's messages -----------------
@@ -170,10 +172,32 @@ class FmuInstance:
             self._groups[key] = groups
         return groups
 
+    def _reals(self, names: Sequence[str], items: list[tuple[int, int]]) -> tuple[Any, Any, Any]:
+        """For a group of 64-bit reals: (value references as a C array, their count, a value buffer),
+        made once per list of names (FMPy's getReal/setReal build them at every call)."""
+        key = (tuple(names), "reals")
+        got = self._buffers.get(key)
+        if got is None:
+            from ctypes import c_double, c_uint
+
+            n = len(items)
+            got = ((c_uint * n)(*[vr for _, vr in items]), n, (c_double * n)())
+            self._buffers[key] = got
+        return got
+
     def set_values(self, names: Sequence[str], values: Sequence[Any], what: str = "setting values") -> None:
         """Set FMU variables by name (numbers, booleans or text, by the variable's type)."""
         f = self._fmu
         for vtype, items in self._typed(names).items():
+            if vtype in ("Real", "Float64"):
+                vr_array, n, buf = self._reals(names, items)
+                for j, (k, _) in enumerate(items):
+                    buf[j] = float(values[k])
+                if self.version == 2:
+                    self.call(what, f.fmi2SetReal, f.component, vr_array, n, buf)
+                else:
+                    self.call(what, f.fmi3SetFloat64, f.component, vr_array, n, buf, n)
+                continue
             vrs = [vr for _, vr in items]
             vals = [values[k] for k, _ in items]
             if vtype in ("Real", "Float64", "Float32"):
@@ -194,6 +218,15 @@ class FmuInstance:
         f = self._fmu
         out: list[Any] = [None] * len(names)
         for vtype, items in self._typed(names).items():
+            if vtype in ("Real", "Float64"):
+                vr_array, n, buf = self._reals(names, items)
+                if self.version == 2:
+                    self.call(what, f.fmi2GetReal, f.component, vr_array, n, buf)
+                else:
+                    self.call(what, f.fmi3GetFloat64, f.component, vr_array, n, buf, n)
+                for j, (k, _) in enumerate(items):
+                    out[k] = buf[j]
+                continue
             vrs = [vr for _, vr in items]
             if vtype in ("Real", "Float64", "Float32"):
                 fn = f.getReal if self.version == 2 else (f.getFloat64 if vtype == "Float64" else f.getFloat32)
@@ -258,19 +291,28 @@ class FmuInstance:
     def set_time(self, t: float) -> None:
         self.call("SetTime", self._fmu.setTime, t)
 
+    def _state_buffers(self) -> tuple[np.ndarray, Any, np.ndarray, Any]:
+        """(x, a pointer to it, dx, a pointer to it): the buffers of the state calls, made once."""
+        if self._xbufs is None:
+            x, dx = np.zeros(self.nx), np.zeros(self.nx)
+            self._xbufs = (x, x.ctypes.data_as(_double_p()), dx, dx.ctypes.data_as(_double_p()))
+        return self._xbufs
+
     def set_states(self, x: np.ndarray) -> None:
-        self.call("SetContinuousStates", self._fmu.setContinuousStates, np.ascontiguousarray(x, dtype=float).ctypes.data_as(_double_p()), self.nx)
+        buf, ptr, _, _ = self._state_buffers()
+        buf[:] = x
+        self.call("SetContinuousStates", self._fmu.setContinuousStates, ptr, self.nx)
 
     def get_states(self) -> np.ndarray:
-        x = np.zeros(self.nx)
-        self.call("GetContinuousStates", self._fmu.getContinuousStates, x.ctypes.data_as(_double_p()), self.nx)
-        return x
+        buf, ptr, _, _ = self._state_buffers()
+        self.call("GetContinuousStates", self._fmu.getContinuousStates, ptr, self.nx)
+        return buf.copy()
 
     def derivatives(self) -> np.ndarray:
-        dx = np.zeros(self.nx)
+        _, _, buf, ptr = self._state_buffers()
         fn = self._fmu.getDerivatives if self.version == 2 else self._fmu.getContinuousStateDerivatives
-        self.call("GetDerivatives", fn, dx.ctypes.data_as(_double_p()), self.nx)
-        return dx
+        self.call("GetDerivatives", fn, ptr, self.nx)
+        return buf.copy()
 
     def event_indicators(self) -> np.ndarray:
         z = np.zeros(self.nz)
