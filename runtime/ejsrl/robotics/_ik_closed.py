@@ -231,12 +231,16 @@ class ClosedForm:
         phi = math.atan2(py, px)
         delta = math.asin(d3 / rho)
         beta = math.atan2(a3, d4)
-        branches = []
         r1, r2, r3 = ref[0], ref[1], ref[2]
+        arms = []
         for arm in ("l", "r"):
             th1 = phi + delta if arm == "r" else phi + _PI - delta
             e1 = (th1 - r1 + _PI) % _TWO_PI - _PI
-            e1 *= e1
+            arms.append((e1 * e1, th1, arm))
+        if arms[1][0] < arms[0][0]:
+            arms.reverse()
+        cs = self.cs
+        for _, th1, arm in arms:  # the arm nearest the reference first, then its elbows
             c1, s1 = math.cos(th1), math.sin(th1)
             X = px * c1 + py * s1
             r = math.hypot(X, pz)
@@ -247,6 +251,7 @@ class ClosedForm:
             if psi is None:
                 continue
             gamma = math.atan2(pz, X)
+            elbows = []
             for elbow in ("u", "d"):
                 n2 = 1.0 if elbow == "u" else -1.0
                 if arm == "l":
@@ -256,18 +261,17 @@ class ClosedForm:
                 th3 = beta - math.atan2(c2 * X + s2 * pz - a2, c2 * pz - s2 * X)
                 u = (th2 - r2 + _PI) % _TWO_PI - _PI
                 w = (th3 - r3 + _PI) % _TWO_PI - _PI
-                branches.append((e1 + u * u + w * w, th1, th2, th3, arm + elbow))
-        branches.sort(key=_first)
-        cs = self.cs
-        for _, th1, th2, th3, label in branches:
-            R03 = _chain([th1, th2, th3], cs[:3])
-            M = _tmul(R03, R)
-            if cs[5][1] != 0.0:
-                M = _mul(M, _rzrx(0.0, cs[5][0], -cs[5][1]))  # Rx(-alpha6)
-            for a, b, c in _nearest(wrist(M, cs[3], cs[4], ref[3]), ref[3:6]):
-                # Robotics Toolbox: wrist "n" when the Euler angle -q5 is in [0, pi] (alpha4 > 0)
-                flip = (b > 0) == (cs[3][1] > 0)
-                yield [th1, th2, th3, a, b, c], label + ("f" if flip else "n")
+                elbows.append((u * u + w * w, th2, th3, elbow))
+            if elbows[1][0] < elbows[0][0]:
+                elbows.reverse()
+            for _, th2, th3, elbow in elbows:
+                # R03 = Rz(q1) Rx(90 deg) Rz(q2 + q3) Rx(-90 deg) (alpha2 = 0 merges q2 and q3)
+                c23, s23 = math.cos(th2 + th3), math.sin(th2 + th3)
+                M = _tmul((c1 * c23, -s1, -c1 * s23, s1 * c23, c1, -s1 * s23, s23, 0.0, c23), R)
+                for a, b, c in _nearest(wrist(M, cs[3], cs[4], ref[3]), ref[3:6]):
+                    # Robotics Toolbox: wrist "n" when the Euler angle -q5 is in [0, pi] (alpha4 > 0)
+                    flip = (b > 0) == (cs[3][1] > 0)
+                    yield [th1, th2, th3, a, b, c], arm + elbow + ("f" if flip else "n")
 
     # ------------------------------------------------------------------ UR type
     def _ur(self, R: Rot, p: list[float], ref: list[float]) -> Iterator[tuple[list[float], str]]:
