@@ -282,35 +282,45 @@ class ClosedForm:
             return
         phi = math.atan2(y5, x5)
         beta = math.acos(max(-1.0, min(1.0, d4 / rho)))
-        branches = []
+        shoulders = []
         for sh, th1 in (("l", phi + beta + _PI / 2), ("r", phi - beta + _PI / 2)):
+            e1 = (th1 - ref[0] + _PI) % _TWO_PI - _PI
+            shoulders.append((e1 * e1, th1, sh))
+        if shoulders[1][0] < shoulders[0][0]:
+            shoulders.reverse()
+        r5, r6 = ref[4], ref[5]
+        for _, th1, sh in shoulders:  # the shoulder nearest the reference first
             c1, s1 = math.cos(th1), math.sin(th1)
             # cos q5 = z6 . z1, z1 = (s1, -c1, 0) the axis of joints 2-4; |sin q5| from the
             # other two components (accurate near q5 = 0, where acos is not)
             g = math.atan2(math.hypot(R[2] * c1 + R[5] * s1, R[8]), R[2] * s1 - R[5] * c1)
+            wrists = []
             for wr, th5 in (("n", g), ("f", -g)):
                 s5 = math.sin(th5)
                 if abs(s5) > _SING:
                     k = 1.0 if s5 > 0 else -1.0
                     th6 = math.atan2(k * (-R[1] * s1 + R[4] * c1), k * (R[0] * s1 - R[3] * c1))
                 else:
-                    th6 = ref[5]
-                branches.append((_dist((th1, th5, th6), (ref[0], ref[4], ref[5])), th1, th5, th6, sh, wr))
-        branches.sort(key=_first)
-        for _, th1, th5, th6, sh, wr in branches:
-            if abs(math.sin(th5)) > _SING:
-                elbows = self._ur_arm(R, (x5, y5, z5), th1, th5, th6, ref)
-            else:
-                # joint 6 parallel to joints 2-4: q6 trades against q2 + q3 + q4; take the
-                # one nearest the reference for which the 2R elbow reaches
-                elbows = []
-                for k in range(24):
-                    th6 = ref[5] + (k + 1) // 2 * (1 if k % 2 else -1) * (2 * _PI / 24)
+                    th6 = r6
+                u = (th5 - r5 + _PI) % _TWO_PI - _PI
+                w = (th6 - r6 + _PI) % _TWO_PI - _PI
+                wrists.append((u * u + w * w, th5, th6, wr))
+            if wrists[1][0] < wrists[0][0]:
+                wrists.reverse()
+            for _, th5, th6, wr in wrists:
+                if abs(math.sin(th5)) > _SING:
                     elbows = self._ur_arm(R, (x5, y5, z5), th1, th5, th6, ref)
-                    if elbows:
-                        break
-            for _, th2, th3, th4, th6, el in elbows:
-                yield [th1, th2, th3, th4, th5, th6], sh + el + wr
+                else:
+                    # joint 6 parallel to joints 2-4: q6 trades against q2 + q3 + q4; take
+                    # the one nearest the reference for which the 2R elbow reaches
+                    elbows = []
+                    for k in range(24):
+                        th6 = r6 + (k + 1) // 2 * (1 if k % 2 else -1) * (2 * _PI / 24)
+                        elbows = self._ur_arm(R, (x5, y5, z5), th1, th5, th6, ref)
+                        if elbows:
+                            break
+                for _, th2, th3, th4, th6e, el in elbows:
+                    yield [th1, th2, th3, th4, th5, th6e], sh + el + wr
 
     def _ur_arm(self, R: Rot, o5: tuple[float, float, float], th1: float, th5: float, th6: float,
                 ref: list[float]) -> list[tuple]:
