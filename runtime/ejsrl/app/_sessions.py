@@ -93,6 +93,8 @@ class Session:
         self.awake_until = -math.inf
         self.behind_since: float | None = None
         self.freed = False
+        #: serialises taking the session (a tab connecting) and leaving it (a tab closing)
+        self.lock = threading.RLock()
 
     def wake(self) -> None:
         """A change from the browser: show it (and keep refreshing a moment)."""
@@ -102,7 +104,7 @@ class Session:
     def tick(self, due: float) -> float | None:
         """One frame (the scheduler's task); when the next one is due, or None to rest."""
         app, view = self.app, self.view
-        if app is None or view is None or self.freed:
+        if app is None or view is None or view.closed or self.freed:
             return None
         backlog = self.classroom.backlog(self.client_id)
         view.hold = backlog > SKIP_BACKLOG
@@ -214,26 +216,31 @@ class Classroom:
     def _attach(self, session: Session, client: Any, fresh: bool) -> None:
         from ejsrl.view.viser_view import ViserView
 
-        if fresh:
-            app = self.make_app()
-            app.on_wake = session.wake
-            session.app = app
-        app = session.app
-        old_view = session.view
-        view = ViserView(app, self.server, client=client)
-        client.gui.add_html(_token_script(session.token))
-        with app.lock:
-            if old_view is not None:
-                view.adopt(old_view)
-            app.views = [view]
-            session.view = view
-            if session.resume_playing and app.error is None:
-                app.playing = True
-            session.resume_playing = False
+        with session.lock:
+            if fresh:
+                app = self.make_app()
+                app.on_wake = session.wake
+                session.app = app
+            app = session.app
+            if app is None:  # freed meanwhile
+                return
+            old_view = session.view
+            if old_view is not None and not old_view.closed:  # the old tab's leaving is not handled yet
+                self._close_view(session, old_view)
+            view = ViserView(app, self.server, client=client)
+            client.gui.add_html(_token_script(session.token))
+            with app.lock:
+                if old_view is not None:
+                    view.adopt(old_view)
+                app.views = [view]
+                session.view = view
+                if session.resume_playing and app.error is None:
+                    app.playing = True
+                session.resume_playing = False
         with self._lock:
             gone = session.client_id != client.client_id
         if gone:  # the tab closed while its panel was being built
-            self._detach(session)
+            self._detach(session, client.client_id)
             return
         log.info("ejsrl: %s session %s… (%d connected)", "new" if fresh else "reconnected",
                  session.token[:6], len(self.connected()))
@@ -245,24 +252,31 @@ class Classroom:
             session = self._by_client.pop(client.client_id, None)
             if session is None:
                 return
-            session.client_id = None
-            session.detached_at = self.clock()
-        self._detach(session)
+            if session.client_id == client.client_id:
+                session.client_id = None
+                session.detached_at = self.clock()
+        self._detach(session, client.client_id)
 
-    def _detach(self, session: Session) -> None:
-        """The tab is gone: stop stepping the session, keep it for a reload."""
-        self.scheduler.remove(session)
-        app = session.app
-        if app is None:
-            return
-        with app.lock:
-            if session.view is not None:
-                session.resume_playing = bool(app.playing)
-                app.playing = False
-                session.view.close()
-            app.views = []
-        # the old view is kept (closed) until a reload takes its plots over, or it is freed
+    def _detach(self, session: Session, client_id: int) -> None:
+        """Client ``client_id`` is gone: stop stepping its session, keep it for a reload."""
+        with session.lock:
+            view = session.view
+            if view is None or view.closed or view.client is None or view.client.client_id != client_id:
+                return  # not its view (a reload was quicker), or already done
+            self.scheduler.remove(session)
+            self._close_view(session, view)
+        # the closed view is kept until a reload takes its plots over, or the session is freed
         self._trim_detached()
+
+    @staticmethod
+    def _close_view(session: Session, view: Any) -> None:
+        """Pause the session (remembering whether it played) and close ``view``."""
+        app = session.app
+        with app.lock:
+            session.resume_playing = bool(app.playing)
+            app.playing = False
+            view.close()
+            app.views = [v for v in app.views if v is not view]
 
     def _show_full(self, client: Any) -> None:
         try:
@@ -286,12 +300,15 @@ class Classroom:
             self._free(s)
 
     def _free(self, session: Session) -> None:
-        session.freed = True
-        self.scheduler.remove(session)
-        app, session.app, session.view = session.app, None, None
-        if app is not None:
-            app.on_wake = None
-            app.views = []
+        with session.lock:
+            session.freed = True
+            self.scheduler.remove(session)
+            app, view, session.app, session.view = session.app, session.view, None, None
+            if view is not None:
+                view.close()
+            if app is not None:
+                app.on_wake = None
+                app.views = []
 
     def _reap_loop(self) -> None:
         while not self._stopped.wait(0.5):

@@ -142,8 +142,15 @@ class ViserView:
         except Exception:
             log.debug("framing the camera failed", exc_info=True)
 
+    @property
+    def closed(self) -> bool:
+        """True once :meth:`close` was called: the view sends nothing more."""
+        return self._closed
+
     def close(self) -> None:
         """Forget this view's controls (its client is gone): the guard stops checking them."""
+        if self._closed:
+            return
         self._closed = True
         if self._guard is not None:
             self._guard.unwatch(b.handle for b in self.panel.controls)
