@@ -153,7 +153,8 @@ def render_triangles(
     n = face_normals(P)
     front = front_faces(P, n) if cull_backfaces else None
     if realism is not None and not realism.plain:
-        return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng)
+        cn = _world_corner_normals(tris, T[:3, :3]) if realism.shading == "smooth" else None
+        return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng, cn)
     if be == "gl":
         from ejsrl.world import _gl
 
@@ -165,9 +166,31 @@ def render_triangles(
     return zb.lookup(shaded, bg), zb.depth()
 
 
+_CN_CACHE: dict[bytes, NDArray[np.float64]] = {}
+
+
+def _world_corner_normals(tris: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Smooth-shading corner normals (3, 3, F) in the camera frame (rotation ``R`` of the camera in the world).
+
+    Computed in the world frame and kept for the last few triangle sets, so a still scene
+    seen by a moving camera computes them once.
+    """
+    import hashlib
+
+    key = hashlib.blake2b(np.ascontiguousarray(tris).tobytes(), digest_size=16).digest()
+    cnw = _CN_CACHE.pop(key, None)
+    if cnw is None:
+        Pw = np.ascontiguousarray(tris.transpose(1, 2, 0))
+        cnw = corner_normals(Pw, face_normals(Pw))
+    _CN_CACHE[key] = cnw
+    while len(_CN_CACHE) > 4:
+        del _CN_CACHE[next(iter(_CN_CACHE))]
+    return np.einsum("ij,vif->vjf", R, cnw)  # R^T n for every corner
+
+
 def _render_smooth_numpy(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
-    camera: CameraModel, bg: NDArray[np.uint8],
+    camera: CameraModel, bg: NDArray[np.uint8], cn: NDArray[np.float64],
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Gouraud-shaded NumPy render: corner colours interpolated with perspective-correct barycentrics."""
     W, H = camera.width, camera.height
@@ -179,7 +202,7 @@ def _render_smooth_numpy(
     pix = np.flatnonzero(face >= 0)
     if len(pix):
         f = face[pix]
-        corner = _shade_corners(corner_normals(P, n), cols, AMBIENT)[f].astype(np.float64)  # (N, 3 corners, 3)
+        corner = _shade_corners(cn, cols, AMBIENT)[f].astype(np.float64)  # (N, 3 corners, 3)
         K = camera.K
         v = (pix // W).astype(np.float64)
         u = (pix % W).astype(np.float64)
@@ -202,20 +225,21 @@ def _render_smooth_numpy(
 
 def _render_pinhole(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
-    camera: CameraModel, bg: NDArray[np.uint8], be: str, smooth: bool,
+    camera: CameraModel, bg: NDArray[np.uint8], be: str, cn: NDArray[np.float64] | None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
-    """The pinhole render of camera-frame faces, flat or smooth, on back end ``be``."""
+    """The pinhole render of camera-frame faces on back end ``be``: flat, or smooth with corner normals ``cn``."""
+    smooth = cn is not None
     if be == "gl":
         from ejsrl.world import _gl
 
         keep = np.flatnonzero(front) if front is not None else np.arange(P.shape[2])
         if smooth:
-            shaded = _shade_corners(corner_normals(P, n), cols, AMBIENT)[keep]
+            shaded = _shade_corners(cn, cols, AMBIENT)[keep]
         else:
             shaded = _shade(n.take(keep, axis=1), cols[keep], AMBIENT)
         return _gl.render_faces(P.take(keep, axis=2), shaded, camera, bg)
     if smooth:
-        return _render_smooth_numpy(P, n, cols, front, camera, bg)
+        return _render_smooth_numpy(P, n, cols, front, camera, bg, cn)
     zb = zbuffer(P, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, front=front)
     shaded = _shade(n.take(zb.ids, axis=1), cols[zb.ids], AMBIENT)
     return zb.lookup(shaded, bg), zb.depth()
@@ -224,6 +248,7 @@ def _render_pinhole(
 def _render_realistic(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
     camera: CameraModel, bg: NDArray[np.uint8], be: str, realism: Realism, rng: np.random.Generator | None,
+    cn: NDArray[np.float64] | None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """The pipeline of ``ejsrl.world._realism``: render finer and wider, average, distort, blur, add noise."""
     s = int(realism.antialias)
@@ -233,7 +258,7 @@ def _render_realistic(
         lens = CameraModel(W, H, K=camera.K, distortion=realism.distortion, near=camera.near, far=camera.far)
     m = margin_for(lens) if lens is not None else 0
     fine = CameraModel(s * (W + 2 * m), s * (H + 2 * m), K=supersampled_K(camera.K, s, m), near=camera.near, far=camera.far)
-    rgb, depth = _render_pinhole(P, n, cols, front, fine, bg, be, realism.shading == "smooth")
+    rgb, depth = _render_pinhole(P, n, cols, front, fine, bg, be, cn)
     img = block_mean(rgb, s)
     depth = centre_depth(depth, s)
     if lens is not None:
