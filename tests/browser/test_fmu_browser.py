@@ -31,8 +31,8 @@ def served(built):
 
 
 def scene_canvas(page) -> int | None:
-    """The index of the 3D view's canvas (the widest on the page), once it is laid out."""
-    widths = page.evaluate("() => [...document.querySelectorAll('canvas')].map(c => c.getBoundingClientRect().width)")
+    """The index of the 3D view's canvas (the widest outside the plots), once it is laid out."""
+    widths = page.evaluate("() => [...document.querySelectorAll('canvas')].map(c => c.closest('.uplot') ? 0 : c.getBoundingClientRect().width)")
     if not widths or max(widths) < 300:
         return None
     return widths.index(max(widths))
