@@ -169,7 +169,11 @@ def _compiled(real: Path, rel: str, md: Any, where: Location) -> Path:
             _build_binary(unz, md)
         except _BuildError as exc:
             raise SpecError(where, f"cannot compile the C sources of the FMU '{rel}': {exc}", "install a C compiler (e.g. apt-get install gcc), or export the FMU with a binary for this platform") from None
-        target.parent.mkdir(parents=True, exist_ok=True)
+        try:
+            target.parent.mkdir(parents=True, exist_ok=True)
+        except OSError:  # no writable cache (a read-only home): keep it with the system's temporary files
+            target = Path(tempfile.gettempdir()) / "ejsgen-fmu" / target.name
+            target.parent.mkdir(parents=True, exist_ok=True)
         part = target.with_name(f".{target.name}.{os.getpid()}")
         from fmpy.util import create_zip_archive
 
