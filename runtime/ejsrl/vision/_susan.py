@@ -224,7 +224,7 @@ def _smooth_similarity(lut: NDArray[np.uint8], nucleus: NDArray):
     return sim
 
 
-def _coverage_response(gray: NDArray[np.uint8], g100: float) -> NDArray[np.float32]:
+def _coverage_response(gray: NDArray[np.uint8], g100: float, where: tuple[NDArray, NDArray] | None = None) -> NDArray:
     """The corner response (x100) of each pixel judged as the dark side of its 7x7 neighbourhood
     (negative: the bright side's, of that size), from the pixels' dark shares.
 
@@ -240,6 +240,13 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float) -> NDArray[np.float
     lo = cv2.erode(levels, k7).astype(np.float32)
     hi = cv2.dilate(levels, k7).astype(np.float32)
     share = np.clip((hi - gray.astype(np.float32)) / np.maximum(hi - lo, 1.0), 0.0, 1.0)
+    if where is not None:  # only at these pixels (ys, xs): the shares summed over the mask there
+        ys, xs = where
+        sp = cv2.copyMakeBorder(share, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
+        Wp = sp.shape[1]
+        offs = SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0]
+        n_dark = sp.ravel()[((ys + _R) * Wp + (xs + _R))[:, None] + offs[None, :]].sum(axis=1)
+        return (g100 + _CHORD * _SCALE * (share[ys, xs] - 0.5)) - _SCALE * n_dark
     disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
     disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
     n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE)
@@ -310,8 +317,24 @@ def susan_corners(
     if H <= 2 * _R + 2 or W <= 2 * _R + 2:
         pts = np.zeros((0, 2))
         return (pts, np.zeros((H, W), np.float32)) if return_response else pts
-    acc, pad, lut = _usan(gray, t)
-    resp = np.float32(g100) - acc.astype(np.float32)  # g - n, x100
+    # only pixels whose 7x7 neighbourhood spans enough grey levels can have a small USAN (with
+    # every difference at most s, n >= 37 exp(-(s / t)^6)) or an in-between grey; where they
+    # are few (a rendered scene: flat faces), their USANs are gathered one by one, else the
+    # whole-image pass is cheaper. The same values either way.
+    k7 = np.ones((2 * _R + 1, 2 * _R + 1), np.uint8)
+    need = min(0.9 * float(t) * np.log(len(SUSAN_MASK) * _SCALE / g100) ** (1.0 / 6.0), float(t))
+    maybe = cv2.subtract(cv2.dilate(gray, k7), cv2.erode(gray, k7)) > need
+    _clear_border(maybe, _R + 1)
+    sparse = maybe.mean() <= 0.2
+    if sparse:
+        pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
+        lut = _lut(t)
+        my_, mx_ = np.nonzero(maybe)
+        resp = np.zeros((H, W), np.float32)
+        resp[my_, mx_] = g100 - _gather(pad, gray, lut, my_, mx_).sum(axis=1, dtype=np.int32)
+    else:
+        acc, pad, lut = _usan(gray, t)
+        resp = np.float32(g100) - acc.astype(np.float32)  # g - n, x100
     floor = float(min_response) * _SCALE
     resp[resp < floor] = 0
     _clear_border(resp, _R + 1)
@@ -330,7 +353,13 @@ def susan_corners(
     # X-junctions (saddles: the corner of a checkerboard) have an in-between centre pixel with a
     # small USAN of its own, its brighter and darker neighbours in opposite quadrants
     # (and, being half dark and half bright, no corner by the side it belongs to)
-    r_dark = _coverage_response(gray, g100)
+    if sparse:
+        mid &= maybe
+        r_dark = np.zeros((H, W), np.float32)
+        wy, wx = np.nonzero(mid)
+        r_dark[wy, wx] = _coverage_response(gray, g100, (wy, wx))
+    else:
+        r_dark = _coverage_response(gray, g100)
     flat_side = mid & (np.abs(r_dark) < floor - _MID_SLACK * _SCALE)
     own_mid = np.where(flat_side, resp, 0)
     sy, sx = np.nonzero((own_mid > 0) & (own_mid >= cv2.dilate(own_mid, k3)))
