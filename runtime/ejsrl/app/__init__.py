@@ -2,9 +2,13 @@
 
 - ``ejsrl.app._loop``: ``App`` (the model, one lock, one loop: stepping, realtime pacing,
   changes from the view, serving), ``SimConfig``, ``AppMeta``, ``load_app``;
+- ``ejsrl.app._sessions``: ``Classroom``, serving a simulation per browser tab (sessions
+  kept for a reload, a limit, a slow tab dropped), stepped by ``ejsrl.app._scheduler``'s
+  bounded, fair pool of stepper threads;
 - ``ejsrl.app.headless``: ``run_headless`` and the CSV columns;
 - ``ejsrl.app.cli``: ``main(Model, VIEW, ...)``, what a generated ``app.py`` calls: the
-  command line of the language's last section (``--host``, ``--port``, ``--headless
+  command line of the language's last section (``--host``, ``--port``, ``--shared``,
+  ``--max-sessions N``, ``--grace SECONDS``, ``--headless
   --duration T [--csv FILE] [--vars a,b,q] [--every N] [--set NAME=VALUE ...]``), and
   stopping cleanly on SIGINT/SIGTERM.
 """
