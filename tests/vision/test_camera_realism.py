@@ -264,6 +264,47 @@ def test_smooth_shading_rounds_a_sphere_and_leaves_a_box_flat(backend: str) -> N
     assert np.abs(b_flat.astype(int) - b_smooth).max() <= (0 if backend == "numpy" else 1)
 
 
+# -- checker texture -------------------------------------------------------------------------------
+def _checker_box(x: float = 0.0) -> World:
+    w = World()
+    w.add(Box("crate", size=(0.4, 0.4, 0.4), color=(1.0, 0.6, 0.2), texture="checker", texture_size=0.1,
+              T_parent_local=transl(x, 0.0, 0.2)))
+    return w
+
+
+def test_a_checker_texture_shows_squares_that_stay_on_the_object(backend: str) -> None:
+    # the box top, 0.6 m below the camera, seen head on: squares of 0.1 m are 25 px across
+    rgb, _ = render(_checker_box(), _cam(), _down(), backend=backend, background=BLACK)
+    px = 0.1 * F_PX / 0.6
+    centres = (np.arange(4) - 1.5) * px
+    level = np.array([[rgb[int(round((H - 1) / 2 + cy)), int(round((W - 1) / 2 + cx)), 0] for cx in centres] for cy in centres], dtype=float)
+    bright = level.max()
+    parity = (np.add.outer(np.arange(4), np.arange(4)) % 2).astype(bool)
+    # alternate squares, the dark ones 0.4 times as bright (to a grey level)
+    assert np.all(level[parity] == level[parity][0]) and np.all(level[~parity] == level[~parity][0])
+    assert min(level[parity][0], level[~parity][0]) == pytest.approx(0.4 * bright, abs=1.0)
+    # whole squares from the face's centre lines: the colour changes exactly there
+    row = rgb[int((H - 1) / 2 + 0.5 * px), :, 0].astype(int)  # through the middle of a row of squares
+    changes = np.flatnonzero(np.diff(row)) + 0.5
+    np.testing.assert_allclose(changes, (W - 1) / 2 + np.arange(-2, 3) * px, atol=1.0)
+    # moved by one square, the pattern moves with the box
+    moved, _ = render(_checker_box(0.1), _cam(), _down(), backend=backend, background=BLACK)
+    shift = int(round(0.1 * F_PX / 0.6))
+    a, b = rgb[30:90, 45:100], moved[30:90, 45 + shift : 100 + shift]
+    assert (a != b).any(axis=2).mean() < 0.03  # the same squares, 25 px (0.1 m) to the right
+    # without a texture the top is one colour
+    plain = World()
+    plain.add(Box("crate", size=(0.4, 0.4, 0.4), color=(1.0, 0.6, 0.2), T_parent_local=transl(0.0, 0.0, 0.2)))
+    assert len(np.unique(render(plain, _cam(), _down(), backend=backend, background=BLACK)[0][40:80, 60:100, 0])) == 1
+
+
+def test_an_unknown_texture_names_the_object_and_the_choices() -> None:
+    w = World()
+    w.add(Box("crate", size=(0.4, 0.4, 0.4), texture="marble"))
+    with pytest.raises(ValueError, match="'crate': texture 'marble' is not one of 'checker'"):
+        render(w, _cam(), _down(), backend="numpy")
+
+
 # -- the two back ends -----------------------------------------------------------------------------
 def test_gl_and_numpy_agree_with_every_option_on() -> None:
     if not _gl.available():
@@ -272,6 +313,7 @@ def test_gl_and_numpy_agree_with_every_option_on() -> None:
     w.add(Box("floor", size=(3, 3, 0.02), color="gray", T_parent_local=transl(0, 0, -0.01)))
     w.add(Box("crate", size=(0.25, 0.25, 0.25), color="blue", T_parent_local=transl(0.1, 0.05, 0.125)))
     w.add(Sphere("ball", radius=0.12, color="red", T_parent_local=transl(-0.2, 0.1, 0.12)))
+    w.add(Box("tiles", size=(0.3, 0.2, 0.1), color="white", texture="checker", texture_size=0.04, T_parent_local=transl(0.25, -0.2, 0.05)))
     T = np.array(_down())
     T[:3, :3] = T[:3, :3] @ np.array([[1, 0, 0], [0, math.cos(0.5), -math.sin(0.5)], [0, math.sin(0.5), math.cos(0.5)]])
     T[:3, 3] = (0.0, -0.6, 0.9)
@@ -319,6 +361,8 @@ def test_a_specs_camera_options_reach_capture_and_capture_depth(tmp_path: Path) 
           - scene:
               - box: {name: floor, size: [6, 6, 0.02], position: [0, 0, -0.01], color: white}
               - box: {name: marker, size: [0.2, 0.2, 0.002], position: [0.3, 0.2, 0.001], color: black}
+              - box: {name: tiles, size: [0.4, 0.4, 0.01], position: [-0.3, -0.2, 0.005], color: white,
+                      texture: checker, texture_size: 0.1}
               - camera: {name: cam, position: [0, 0, 1], rotation: [3.141592653589793, 0, 0], fov: 60,
                          resolution: [160, 120], antialias: 2, noise: sigma, blur: 0.5,
                          distortion: [-0.2, 0.05, 0, 0, 0], shading: smooth}
@@ -328,7 +372,10 @@ def test_a_specs_camera_options_reach_capture_and_capture_depth(tmp_path: Path) 
     depth = app.model.capture_depth("cam")
     assert img.shape == (120, 160, 3) and depth.shape == (120, 160) and depth.dtype == np.float32
     assert depth[60, 80] == pytest.approx(1.0, abs=1e-6)  # straight down onto the floor, 1 m
-    assert 1.5 < np.std(img[55:65, 20:40, 0].astype(float)) < 4.5  # the noise of sigma = 3 on white-ish floor
+    assert 1.5 < np.std(img[5:15, 60:90, 0].astype(float)) < 4.5  # the noise of sigma = 3 on white-ish floor
+    tiles = img[70:95, 35:62, 0].astype(float)  # the checkered tiles: two clusters of grey levels
+    assert np.percentile(tiles, 25) < 0.55 * np.percentile(tiles, 75)
+    assert app.world["tiles"].props["texture"] == "checker"
     node = app.world["cam"]
     assert node.props["antialias"] == 2 and node.props["shading"] == "smooth"
     assert list(node.props["distortion"]) == [-0.2, 0.05, 0, 0, 0] and node.props["noise"] == 3.0

@@ -43,8 +43,10 @@ uniform mat4 proj;
 in vec3 in_pos;
 in vec3 in_col;
 INTERP out vec3 v_col;
+TEX_DECL
 void main() {
     v_col = in_col;
+TEX_PASS
     gl_Position = proj * vec4(in_pos, 1.0);
 }
 """
@@ -53,10 +55,12 @@ _FRAGMENT_SHADER = """
 #version 330
 uniform float inv_far;  // 1 / far, or 0 for no far plane
 INTERP in vec3 v_col;
+TEX_DECL
 layout(location = 0) out vec4 out_rgb;
 layout(location = 1) out float out_inv_z;
 void main() {
     out_rgb = vec4(v_col, 1.0);
+TEX_APPLY
     out_inv_z = gl_FragCoord.w;  // 1 / w_clip = 1 / Z
     // depth-test on Z itself, not on the usual 1 - near / Z, whose steps at a near plane of
     // 1 cm are ~0.1 mm at 2 m and over 1 mm at 10 m
@@ -64,6 +68,18 @@ void main() {
     gl_FragDepth = inv_far > 0.0 ? z * inv_far : z / (z + 1.0);
 }
 """
+
+
+#: what the shaders get with and without a checker texture (without: the plain shaders, unchanged)
+_TEX_SUBS = {
+    False: {"v_decl": "", "pass": "", "f_decl": "", "apply": ""},
+    True: {
+        "v_decl": "in vec3 in_tex;\nsmooth out vec3 v_tex;",
+        "pass": "    v_tex = in_tex;",
+        "f_decl": "smooth in vec3 v_tex;\nuniform float dark;",
+        "apply": "    if (v_tex.z > 0.5 && mod(floor(v_tex.x) + floor(v_tex.y), 2.0) > 0.5) out_rgb.rgb *= dark;",
+    },
+}
 
 
 class GLUnavailableError(RuntimeError):
@@ -104,16 +120,21 @@ class _Renderer:
         self.ctx = moderngl.create_context(standalone=True, backend="egl", require=330)
         self.vbo = self.ctx.buffer(reserve=36 * 64, dynamic=True)
         self.cbo = self.ctx.buffer(reserve=9 * 64, dynamic=True)
-        # flat: one colour per face; smooth: per-corner colours interpolated (perspective-correct)
+        self.tbo = self.ctx.buffer(reserve=36 * 64, dynamic=True)
+        # flat: one colour per face; smooth: per-corner colours interpolated (perspective-correct);
+        # "+tex": a checker texture from per-corner coordinates (s, t, on) interpolated likewise
         self.progs = {}
         self.vaos = {}
-        for mode, qualifier in (("flat", "flat"), ("smooth", "smooth")):
-            prog = self.ctx.program(
-                vertex_shader=_VERTEX_SHADER.replace("INTERP", qualifier),
-                fragment_shader=_FRAGMENT_SHADER.replace("INTERP", qualifier),
-            )
-            self.progs[mode] = prog
-            self.vaos[mode] = self.ctx.vertex_array(prog, [(self.vbo, "3f", "in_pos"), (self.cbo, "3f1", "in_col")])
+        for qualifier in ("flat", "smooth"):
+            for tex in (False, True):
+                subs = _TEX_SUBS[tex]
+                vs, fs = _VERTEX_SHADER.replace("INTERP", qualifier), _FRAGMENT_SHADER.replace("INTERP", qualifier)
+                vs = vs.replace("TEX_DECL", subs["v_decl"]).replace("TEX_PASS", subs["pass"])
+                fs = fs.replace("TEX_DECL", subs["f_decl"]).replace("TEX_APPLY", subs["apply"])
+                mode = qualifier + ("+tex" if tex else "")
+                prog = self.progs[mode] = self.ctx.program(vertex_shader=vs, fragment_shader=fs)
+                attrs = [(self.vbo, "3f", "in_pos"), (self.cbo, "3f1", "in_col")] + ([(self.tbo, "3f", "in_tex")] if tex else [])
+                self.vaos[mode] = self.ctx.vertex_array(prog, attrs)
         self.targets: dict[tuple[int, int], tuple[Any, Any, Any]] = {}
         self.lock = threading.Lock()
         self.pid = os.getpid()
@@ -137,7 +158,8 @@ class _Renderer:
         return fbs
 
     def render(
-        self, P: NDArray[np.float64], shaded: NDArray[np.uint8], camera: Any, bg: NDArray[np.uint8]
+        self, P: NDArray[np.float64], shaded: NDArray[np.uint8], camera: Any, bg: NDArray[np.uint8],
+        tex: NDArray[np.float64] | None = None, dark: float = 1.0,
     ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
         W, H = int(camera.width), int(camera.height)
         F = P.shape[2]
@@ -147,6 +169,10 @@ class _Renderer:
             col = np.ascontiguousarray(shaded, dtype=np.uint8).reshape(-1, 3)
         else:
             col = np.repeat(shaded, 3, axis=0)  # one colour per vertex, the face's
+        bufs = [(self.vbo, pos), (self.cbo, col)]
+        if tex is not None:
+            mode += "+tex"
+            bufs.append((self.tbo, np.ascontiguousarray(tex, dtype=np.float32).reshape(-1, 3)))
         prog, vao = self.progs[mode], self.vaos[mode]
         proj = projection_matrix(camera.K, W, H, camera.near, camera.far)
         rgb = np.empty((H, W, 3), dtype=np.uint8)
@@ -154,12 +180,14 @@ class _Renderer:
         with self.lock, self.ctx:
             draw, colour_only, inv_z_depth = self._target(W, H)
             if F:
-                for buf, data in ((self.vbo, pos), (self.cbo, col)):
+                for buf, data in bufs:
                     if buf.size < data.nbytes:
                         buf.orphan(data.nbytes + data.nbytes // 4)
                     buf.write(data)
             prog["proj"].write(proj.T.astype(np.float32).tobytes())  # GL wants column-major
             prog["inv_far"].value = 1.0 / camera.far if np.isfinite(camera.far) else 0.0
+            if tex is not None:
+                prog["dark"].value = float(dark)
             colour_only.clear(*(bg / 255.0), 1.0)
             inv_z_depth.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
             draw.use()
@@ -215,12 +243,15 @@ def describe() -> str:
 
 
 def render_faces(
-    P: NDArray[np.float64], shaded: NDArray[np.uint8], camera: Any, bg: NDArray[np.uint8]
+    P: NDArray[np.float64], shaded: NDArray[np.uint8], camera: Any, bg: NDArray[np.uint8],
+    tex: NDArray[np.float64] | None = None, dark: float = 1.0,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Draw camera-frame faces ``P`` (3, 3, F) (vertex-major) with flat colours ``shaded`` (F, 3) uint8,
     or per-corner colours (F, 3 corners, 3) uint8 interpolated across each face (smooth shading).
 
+    ``tex`` (F, 3 corners, 3): checker coordinates (s, t) in squares and 1 on textured faces
+    (0 elsewhere); where floor(s) + floor(t) is odd the colour is multiplied by ``dark``.
     ``camera``: a ``CameraModel`` (K, width, height, near, far). ``bg`` (3,) uint8. Returns
     ``rgb`` (H, W, 3) uint8 and ``depth`` (H, W) float32, Z in metres, inf where empty.
     """
-    return _get().render(P, shaded, camera, bg)
+    return _get().render(P, shaded, camera, bg, tex, dark)

@@ -154,16 +154,25 @@ COMMON: tuple[Prop, ...] = (
     Prop("transform", "mat4", None, "A 4x4 homogeneous pose (instead of position/rotation)."),
 )
 
+#: the virtual camera's texture of a solid element (the browser view draws it plain)
+_TEXTURE: tuple[Prop, ...] = (
+    Prop("texture", "text", None, "checker: a checkerboard on each face, as the virtual camera sees it (capture)."),
+    Prop("texture_size", "num", 0.05, "The checker's squares, metres along the element's own axes."),
+)
+
 _KINDS: tuple[Kind, ...] = (
     Kind("box", "A box centred on its pose.", (
         Prop("size", "vec3", (1.0, 1.0, 1.0), "Edge lengths [x, y, z]."),
+        *_TEXTURE,
     ), draw="box", flat=True),
     Kind("sphere", "A sphere.", (
         Prop("radius", "num", 0.5, "Radius in metres."),
+        *_TEXTURE,
     ), draw="sphere"),
     Kind("cylinder", "A cylinder along its local z axis, centred on its pose.", (
         Prop("radius", "num", 0.5, "Radius in metres."),
         Prop("height", "num", 1.0, "Length along local z."),
+        *_TEXTURE,
     ), flat=True),
     Kind("arrow", "An arrow.", (
         Prop("start", "vec3", (0.0, 0.0, 0.0), "Tail point [x, y, z]."),
@@ -196,6 +205,7 @@ _KINDS: tuple[Kind, ...] = (
     Kind("mesh", "A mesh from a file (OBJ, STL, PLY, GLB/glTF, OFF or VRML97 .wrl).", (
         Prop("file", "file", REQUIRED, "Path relative to the spec.", node_default=""),
         Prop("scale", "num", 1.0, "Uniform scale."),
+        *_TEXTURE,
     ), two_sided=True, node_extra={"mesh_parts": ()}),
     Kind("group", "A group whose pose applies to its children.", (
         Prop("children", "children", (), "3D elements inside."),

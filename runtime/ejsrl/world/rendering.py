@@ -25,11 +25,14 @@ A more realistic camera (``realism=``, or a camera node's ``antialias``, ``shadi
 ``noise``, ``blur`` and ``distortion`` properties; all off by default, and then the render
 is the plain one, bit for bit): supersampling, smooth (Gouraud) shading, lens distortion
 through the camera's own ``CameraModel.distort``, defocus blur and Gaussian sensor noise,
-on both back ends (see ``ejsrl.world._realism``). ``render_depth`` is the depth image alone.
+on both back ends (see ``ejsrl.world._realism``). A solid node whose ``texture`` is
+``"checker"`` shows a checkerboard of ``texture_size`` squares in its own frame (see
+``texture_coords``). ``render_depth`` is the depth image alone.
 """
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from typing import Any
@@ -54,6 +57,10 @@ AMBIENT: float = 0.3
 LIGHT_DIR: NDArray[np.float64] = np.array([-0.25, -0.35, -1.0]) / np.linalg.norm([-0.25, -0.35, -1.0])
 #: the values ``backend`` takes
 BACKENDS: tuple[str, ...] = ("auto", "numpy", "gl")
+#: the textures a solid element may have (its ``texture`` property), as the virtual camera sees them
+TEXTURES: tuple[str, ...] = ("checker",)
+#: the dark squares of a checker texture: the face's colour times this
+CHECKER_DARK: float = 0.4
 
 
 def _shade(n: NDArray[np.float64], rgb: NDArray[np.float64], ambient: float) -> NDArray[np.uint8]:
@@ -135,13 +142,16 @@ def render_triangles(
     backend: str = "numpy",
     realism: Realism | None = None,
     rng: np.random.Generator | None = None,
+    texture: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Render world triangles (F, 3, 3) with colours (F, 3) in [0, 1] seen by ``camera``.
 
     ``T_world_camera``: (4, 4) pose of the camera in the world. ``backend``: "numpy", "gl"
     or "auto" (see the module docstring). ``realism``: anti-aliasing, smooth shading, lens
     distortion, blur and noise (``Realism``; None or all off: the plain pinhole render);
-    ``rng``: the generator of the noise (default: a fresh one). Returns ``rgb`` (H, W, 3)
+    ``rng``: the generator of the noise (default: a fresh one). ``texture`` (F, 3 corners,
+    3): checker coordinates (s, t), in squares, and 1 on textured faces, 0 elsewhere (see
+    ``texture_coords``); the dark squares are ``CHECKER_DARK`` times as bright. Returns ``rgb`` (H, W, 3)
     uint8 and ``depth`` (H, W) float32 (metres along the optical axis, inf where nothing is seen).
     """
     be = _pick_backend(backend)
@@ -152,9 +162,13 @@ def render_triangles(
     P = _to_camera(tris, T)
     n = face_normals(P)
     front = front_faces(P, n) if cull_backfaces else None
-    if realism is not None and not realism.plain:
+    if texture is not None and not np.any(np.asarray(texture)[:, :, 2] > 0.5):
+        texture = None
+    if texture is not None or (realism is not None and not realism.plain):
+        realism = realism or Realism()
         cn = _world_corner_normals(tris, T[:3, :3]) if realism.shading == "smooth" else None
-        return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng, cn)
+        tex = None if texture is None else np.asarray(texture, dtype=np.float64).reshape(-1, 3, 3)
+        return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng, cn, tex)
     if be == "gl":
         from ejsrl.world import _gl
 
@@ -188,11 +202,57 @@ def _world_corner_normals(tris: NDArray[np.float64], R: NDArray[np.float64]) -> 
     return np.einsum("ij,vif->vjf", R, cnw)  # R^T n for every corner
 
 
-def _render_smooth_numpy(
+def texture_coords(world: Any, exclude: Sequence[str], tris: NDArray[np.float64]) -> NDArray[np.float64] | None:
+    """Checker coordinates (F, 3 corners, 3) of ``world.triangles(exclude)`` = ``tris``; None if none is textured.
+
+    A textured node's face gets, at each corner, its coordinates in the node's frame along the
+    two axes most across the face, divided by the node's ``texture_size``, and a third
+    number 1 (0 on untextured faces). So a box face shows whole squares from its centre
+    lines, and the squares stay on the object as it moves.
+    """
+    skip = set(exclude)
+    entries: list[tuple[int, Any, float]] = []
+    textured = False
+    for node in world.walk():  # the walk of World.triangles
+        if node.name in skip or not world.is_visible(node) or node.opacity <= 0.0:
+            continue
+        parts = node.parts()
+        if not parts:
+            continue
+        count = sum(len(p.faces) for p in parts)
+        tex = node.props.get("texture")
+        if tex in (None, "", "none"):
+            entries.append((count, None, 0.0))
+            continue
+        if tex not in TEXTURES:
+            raise ValueError(f"'{node.name}': texture {tex!r} is not one of {', '.join(map(repr, TEXTURES))} (or leave it out)")
+        size = float(node.props.get("texture_size") or 0.0)
+        if not (math.isfinite(size) and size > 0):
+            raise ValueError(f"'{node.name}': texture_size must be a length > 0 in metres, got {node.props.get('texture_size')!r}")
+        entries.append((count, node.T_world(), size))
+        textured = True
+    if not textured or sum(c for c, _, _ in entries) != len(tris):
+        return None
+    out = np.zeros((len(tris), 3, 3))
+    i = 0
+    axes = np.array([[1, 2], [0, 2], [0, 1]])
+    for count, T, size in entries:
+        if T is not None:
+            local = (tris[i : i + count] - T[:3, 3]) @ T[:3, :3]  # (count, 3 corners, 3) in the node frame
+            nrm = np.cross(local[:, 1] - local[:, 0], local[:, 2] - local[:, 0])
+            keep = axes[np.argmax(np.abs(nrm), axis=1)]  # (count, 2): the two axes across the face
+            out[i : i + count, :, :2] = np.take_along_axis(local, keep[:, None, :], axis=2) / size
+            out[i : i + count, :, 2] = 1.0
+        i += count
+    return out
+
+
+def _render_per_pixel_numpy(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
-    camera: CameraModel, bg: NDArray[np.uint8], cn: NDArray[np.float64],
+    camera: CameraModel, bg: NDArray[np.uint8], cn: NDArray[np.float64] | None, tex: NDArray[np.float64] | None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
-    """Gouraud-shaded NumPy render: corner colours interpolated with perspective-correct barycentrics."""
+    """NumPy render with per-pixel colours: Gouraud shading (corner colours interpolated with
+    perspective-correct barycentrics) when ``cn`` is given, else flat; a checker where ``tex`` says."""
     W, H = camera.width, camera.height
     zb = zbuffer(P, camera.K, W, H, near=camera.near, far=camera.far, front=front)
     depth = zb.depth()
@@ -202,7 +262,6 @@ def _render_smooth_numpy(
     pix = np.flatnonzero(face >= 0)
     if len(pix):
         f = face[pix]
-        corner = _shade_corners(cn, cols, AMBIENT)[f].astype(np.float64)  # (N, 3 corners, 3)
         K = camera.K
         v = (pix // W).astype(np.float64)
         u = (pix % W).astype(np.float64)
@@ -219,15 +278,27 @@ def _render_smooth_numpy(
         b0, b1 = np.nan_to_num(b0, nan=1 / 3), np.nan_to_num(b1, nan=1 / 3)
         b = np.clip(np.stack([b0, b1, 1.0 - b0 - b1], axis=1), 0.0, 1.0)
         b /= b.sum(axis=1, keepdims=True)
-        out[pix] = np.clip(np.rint(np.einsum("nv,nvc->nc", b, corner)), 0, 255).astype(np.uint8)
+        if cn is not None:
+            corner = _shade_corners(cn, cols, AMBIENT)[f].astype(np.float64)  # (N, 3 corners, 3)
+            col = np.einsum("nv,nvc->nc", b, corner)
+        else:
+            col = _shade(n[:, f], cols[f], AMBIENT).astype(np.float64)
+        if tex is not None:
+            t = tex[f]  # (N, 3 corners, 3)
+            st = np.einsum("nv,nvc->nc", b, t[:, :, :2])
+            odd = (t[:, 0, 2] > 0.5) & (np.mod(np.floor(st[:, 0]) + np.floor(st[:, 1]), 2.0) > 0.5)
+            col[odd] *= np.float32(CHECKER_DARK)  # the GL shader multiplies in float32
+        out[pix] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
     return out.reshape(H, W, 3), depth
 
 
 def _render_pinhole(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
     camera: CameraModel, bg: NDArray[np.uint8], be: str, cn: NDArray[np.float64] | None,
+    tex: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
-    """The pinhole render of camera-frame faces on back end ``be``: flat, or smooth with corner normals ``cn``."""
+    """The pinhole render of camera-frame faces on back end ``be``: flat, or smooth with corner
+    normals ``cn``; a checker texture where ``tex`` says."""
     smooth = cn is not None
     if be == "gl":
         from ejsrl.world import _gl
@@ -237,9 +308,9 @@ def _render_pinhole(
             shaded = _shade_corners(cn, cols, AMBIENT)[keep]
         else:
             shaded = _shade(n.take(keep, axis=1), cols[keep], AMBIENT)
-        return _gl.render_faces(P.take(keep, axis=2), shaded, camera, bg)
-    if smooth:
-        return _render_smooth_numpy(P, n, cols, front, camera, bg, cn)
+        return _gl.render_faces(P.take(keep, axis=2), shaded, camera, bg, None if tex is None else tex[keep], CHECKER_DARK)
+    if smooth or tex is not None:
+        return _render_per_pixel_numpy(P, n, cols, front, camera, bg, cn, tex)
     zb = zbuffer(P, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, front=front)
     shaded = _shade(n.take(zb.ids, axis=1), cols[zb.ids], AMBIENT)
     return zb.lookup(shaded, bg), zb.depth()
@@ -248,7 +319,7 @@ def _render_pinhole(
 def _render_realistic(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
     camera: CameraModel, bg: NDArray[np.uint8], be: str, realism: Realism, rng: np.random.Generator | None,
-    cn: NDArray[np.float64] | None,
+    cn: NDArray[np.float64] | None, tex: NDArray[np.float64] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """The pipeline of ``ejsrl.world._realism``: render finer and wider, average, distort, blur, add noise."""
     s = int(realism.antialias)
@@ -258,7 +329,7 @@ def _render_realistic(
         lens = CameraModel(W, H, K=camera.K, distortion=realism.distortion, near=camera.near, far=camera.far)
     m = margin_for(lens) if lens is not None else 0
     fine = CameraModel(s * (W + 2 * m), s * (H + 2 * m), K=supersampled_K(camera.K, s, m), near=camera.near, far=camera.far)
-    rgb, depth = _render_pinhole(P, n, cols, front, fine, bg, be, cn)
+    rgb, depth = _render_pinhole(P, n, cols, front, fine, bg, be, cn, tex)
     img = block_mean(rgb, s)
     depth = centre_depth(depth, s)
     if lens is not None:
@@ -342,7 +413,8 @@ def render(
         raise TypeError(f"camera must be a CameraModel or a camera name, not {type(camera).__name__}")
     tris, rgb = world.triangles(exclude=tuple(exclude))
     return render_triangles(
-        tris, rgb, cam, T, background=background, cull_backfaces=cull_backfaces, backend=backend, realism=realism, rng=rng
+        tris, rgb, cam, T, background=background, cull_backfaces=cull_backfaces, backend=backend, realism=realism, rng=rng,
+        texture=texture_coords(world, tuple(exclude), tris),
     )
 
 
