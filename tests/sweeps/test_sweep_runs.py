@@ -229,3 +229,21 @@ def test_a_run_that_pauses_itself_is_stopped_not_failed(tmp_path: Path) -> None:
     assert summary["status"] == ["stopped", "ok"]
     assert summary["t.final"][0] == pytest.approx(0.79, abs=0.006)  # the step in which x[0] crossed zero
     assert summary["t.final"][1] == pytest.approx(2.0)
+
+
+def test_a_single_file_bundle_sweeps_itself(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    from ejsgen.cli import build
+
+    folder = build(SPECS / "springs.ejs.yaml", tmp_path / "lab", bundle=True)
+    args = ["--sweep", "--values", "k=1,4", "--duration", "0.2", "--workers", "2"]
+    pyz = subprocess.run([sys.executable, str(folder / "lab.pyz"), *args, "--out", str(tmp_path / "pyz.csv")],
+                         capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert pyz.returncode == 0, pyz.stderr
+    app = subprocess.run([sys.executable, str(folder / "app.py"), *args, "--out", str(tmp_path / "app.csv")],
+                         capture_output=True, text=True, timeout=300)
+    assert app.returncode == 0, app.stderr
+    assert (tmp_path / "pyz.csv").read_text() == (tmp_path / "app.csv").read_text()
+    assert read(tmp_path / "pyz.summary.csv")["status"] == ["ok", "ok"]

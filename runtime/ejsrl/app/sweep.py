@@ -298,7 +298,25 @@ def app_sweep(
     """``python app.py --sweep ...``: a sweep of this app (its folder is what workers import)."""
     prog = f"{Path(sys.argv[0]).name} --sweep"
     args = sweep_parser(prog, f"{meta.title}: run the model over many parameter values (an ejsgen sweep).").parse_args(list(argv))
-    ref = app_ref(base_dir)
-    app = LoadedApp(model_cls, view, sim, meta, Path(base_dir))
-    register(ref, app)
-    return sweep_main(ref, app, args, label=meta.title)
+    import tempfile
+
+    with tempfile.TemporaryDirectory(prefix="ejsrl-sweep-") as tmp:
+        folder = Path(base_dir)
+        if not (folder / "app.py").is_file():  # a single-file bundle (.pyz): app.py is inside the archive
+            folder = _unpacked_app(model_cls, folder, Path(tmp))
+        ref = app_ref(folder)
+        app = LoadedApp(model_cls, view, sim, meta, Path(base_dir))
+        register(ref, app)
+        return sweep_main(ref, app, args, label=meta.title)
+
+
+def _unpacked_app(model_cls: type, assets: Path, into: Path) -> Path:
+    """A folder holding the app's ``app.py`` (from its module's source) and its assets, for workers to import."""
+    import inspect
+    import shutil
+
+    module = sys.modules[model_cls.__module__]
+    if assets.is_dir():
+        shutil.copytree(assets, into, dirs_exist_ok=True)
+    (into / "app.py").write_text(inspect.getsource(module), encoding="utf-8")
+    return into
