@@ -157,7 +157,7 @@ COMMON: tuple[Prop, ...] = (
 #: the virtual camera's texture of a solid element (the browser view draws it plain)
 _TEXTURE: tuple[Prop, ...] = (
     Prop("texture", "text", None, "checker: a checkerboard on each face, as the virtual camera sees it (capture)."),
-    Prop("texture_size", "num", 0.05, "The checker's squares, metres along the element's own axes."),
+    Prop("texture_size", "num", None, "The checker's squares, metres along the element's own axes (default 0.05)."),
 )
 
 _KINDS: tuple[Kind, ...] = (
@@ -221,11 +221,11 @@ _KINDS: tuple[Kind, ...] = (
         Prop("fov", "num", 60.0, "Vertical field of view in degrees."),
         Prop("intrinsics", "mat3", None, "3x3 intrinsic matrix (instead of fov)."),
         Prop("resolution", "ints2", (320, 240), "Image size [width, height] in pixels."),
-        Prop("antialias", "int", 1, "Supersampling: each pixel is the mean of antialias x antialias samples (1: off).", ge=1, le=8),
-        Prop("shading", "text", "flat", "flat (one shade per face) or smooth (normals interpolated: curved surfaces look round)."),
+        Prop("antialias", "int", None, "Supersampling: each pixel is the mean of antialias x antialias samples (1 or left out: off).", ge=1, le=8),
+        Prop("shading", "text", None, "flat (left out: one shade per face) or smooth (normals interpolated: curved surfaces look round)."),
         Prop("distortion", "vec", None, "Lens distortion [k1, k2, p1, p2, k3], OpenCV's order, applied by the camera's own model."),
-        Prop("blur", "num", 0.0, "Defocus blur: a Gaussian of this standard deviation in pixels (0: off)."),
-        Prop("noise", "num", 0.0, "Gaussian sensor noise: standard deviation in grey levels, 0-255 (0: off)."),
+        Prop("blur", "num", None, "Defocus blur: a Gaussian of this standard deviation in pixels (0 or left out: off)."),
+        Prop("noise", "num", None, "Gaussian sensor noise: standard deviation in grey levels, 0-255 (0 or left out: off)."),
     ), draw="camera", node_extra={"near": 0.01, "far": 100.0}),
     Kind("gizmo", "A draggable transform handle bound to a 4x4 pose variable.", (
         Prop("bind", "bind", REQUIRED, "The 4x4 pose variable."),

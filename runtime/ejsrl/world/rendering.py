@@ -59,6 +59,8 @@ LIGHT_DIR: NDArray[np.float64] = np.array([-0.25, -0.35, -1.0]) / np.linalg.norm
 BACKENDS: tuple[str, ...] = ("auto", "numpy", "gl")
 #: the textures a solid element may have (its ``texture`` property), as the virtual camera sees them
 TEXTURES: tuple[str, ...] = ("checker",)
+#: the side of a checker's squares (metres) when a node gives no ``texture_size``
+DEFAULT_TEXTURE_SIZE: float = 0.05
 #: the dark squares of a checker texture: the face's colour times this
 CHECKER_DARK: float = 0.4
 
@@ -226,7 +228,8 @@ def texture_coords(world: Any, exclude: Sequence[str], tris: NDArray[np.float64]
             continue
         if tex not in TEXTURES:
             raise ValueError(f"'{node.name}': texture {tex!r} is not one of {', '.join(map(repr, TEXTURES))} (or leave it out)")
-        size = float(node.props.get("texture_size") or 0.0)
+        raw = node.props.get("texture_size")
+        size = DEFAULT_TEXTURE_SIZE if raw is None else float(raw)
         if not (math.isfinite(size) and size > 0):
             raise ValueError(f"'{node.name}': texture_size must be a length > 0 in metres, got {node.props.get('texture_size')!r}")
         entries.append((count, node.T_world(), size))
