@@ -63,7 +63,8 @@ class Realism:
         d = tuple(float(x) for x in self.distortion)
         if len(d) not in (2, 4, 5) or not all(math.isfinite(x) for x in d):
             raise ValueError(
-                f"camera distortion takes [k1, k2, p1, p2, k3] (OpenCV's order; or the first 2 or 4 of them), finite numbers, got {list(self.distortion)}"
+                "camera distortion takes [k1, k2, p1, p2, k3] (OpenCV's order; or the first 2 or 4 of them), "
+                f"finite numbers, got {list(self.distortion)}"
             )
         object.__setattr__(self, "distortion", d + (0.0,) * (5 - len(d)))
 
@@ -103,7 +104,8 @@ def margin_for(camera: Any) -> int:
     ideal = ideal[np.all(np.isfinite(ideal), axis=1)]
     if not len(ideal):
         return 0
-    over = max(0.0, float(-ideal[:, 0].min()), float(ideal[:, 0].max() - (W - 1)), float(-ideal[:, 1].min()), float(ideal[:, 1].max() - (H - 1)))
+    lo, hi = ideal.min(axis=0), ideal.max(axis=0)
+    over = max(0.0, float(-lo[0]), float(hi[0] - (W - 1)), float(-lo[1]), float(hi[1] - (H - 1)))
     return int(min(math.ceil(over) + 2, _MAX_MARGIN_SHARE * max(W, H)))
 
 

@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 import os
+import threading
 from collections.abc import Sequence
 from typing import Any
 
@@ -183,6 +184,7 @@ def render_triangles(
 
 
 _CN_CACHE: dict[bytes, NDArray[np.float64]] = {}
+_CN_LOCK = threading.Lock()
 
 
 def _world_corner_normals(tris: NDArray[np.float64], R: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -194,13 +196,15 @@ def _world_corner_normals(tris: NDArray[np.float64], R: NDArray[np.float64]) -> 
     import hashlib
 
     key = hashlib.blake2b(np.ascontiguousarray(tris).tobytes(), digest_size=16).digest()
-    cnw = _CN_CACHE.pop(key, None)
+    with _CN_LOCK:
+        cnw = _CN_CACHE.pop(key, None)
     if cnw is None:
         Pw = np.ascontiguousarray(tris.transpose(1, 2, 0))
         cnw = corner_normals(Pw, face_normals(Pw))
-    _CN_CACHE[key] = cnw
-    while len(_CN_CACHE) > 4:
-        del _CN_CACHE[next(iter(_CN_CACHE))]
+    with _CN_LOCK:  # renders may run on several threads
+        _CN_CACHE[key] = cnw
+        while len(_CN_CACHE) > 4:
+            del _CN_CACHE[next(iter(_CN_CACHE))]
     return np.einsum("ij,vif->vjf", R, cnw)  # R^T n for every corner
 
 
