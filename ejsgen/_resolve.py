@@ -444,8 +444,11 @@ def rewrite_source(snippet: Snippet, tree: ast.AST, lines: tuple[int, int] | Non
         if not line[col:].startswith(name):
             return None
         edits.append((row, col, prefix))
+    shift = _continuation_shift(lines, edits)
     for row, col, prefix in sorted(edits, reverse=True):
         lines[row] = lines[row][:col] + prefix + lines[row][col:]
+    for row, extra in shift.items():
+        lines[row] = " " * extra + lines[row]
     text = "\n".join(lines if span is None else lines[span[0] - 1 : span[1]])
     if snippet.mode == "eval":
         text = text.strip()
@@ -488,3 +491,39 @@ def _has_comment(text: str) -> bool:
         return any(tok.type == tokenize.COMMENT for tok in tokenize.generate_tokens(io.StringIO(text).readline))
     except (tokenize.TokenError, SyntaxError):
         return True
+
+
+def _continuation_shift(lines: list[str], edits: list[tuple[int, int, str]]) -> dict[int, int]:
+    """How far to move each continuation line (inside brackets) so that it stays aligned under
+    the text of the line above once ``self.`` has been put into that line before its column."""
+    import io
+    import tokenize
+
+    depth_at: dict[int, int] = {}
+    in_string: set[int] = set()
+    depth = 0
+    try:
+        for tok in tokenize.generate_tokens(io.StringIO("\n".join(lines)).readline):
+            row = tok.start[0] - 1
+            depth_at.setdefault(row, depth)
+            if tok.type == tokenize.OP and tok.string in "([{":
+                depth += 1
+            elif tok.type == tokenize.OP and tok.string in ")]}":
+                depth -= 1
+            elif tok.type == tokenize.STRING and tok.end[0] > tok.start[0]:
+                in_string.update(range(tok.start[0], tok.end[0]))
+    except (tokenize.TokenError, SyntaxError):
+        return {}
+    added: dict[int, list[tuple[int, int]]] = {}
+    for row, col, prefix in edits:
+        added.setdefault(row, []).append((col, len(prefix)))
+    shift: dict[int, int] = {}
+    for row in range(1, len(lines)):
+        if depth_at.get(row, 0) <= 0 or row in in_string or not lines[row].strip():
+            continue
+        indent = len(lines[row]) - len(lines[row].lstrip())
+        above = row - 1
+        extra = shift.get(above, 0) + sum(n for c, n in added.get(above, []) if c < indent - shift.get(above, 0))
+        if extra:
+            shift[row] = extra
+    return shift

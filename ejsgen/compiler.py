@@ -396,12 +396,13 @@ class Compiler:
                 self.var_types[s] = "float"
         prefix = f"_{base}_" if base else "_"
         # rates: one per state, in order
-        one = f"return [{', '.join(r.source for r in rates.values())}]  # " + ", ".join(f"d{s}/d{ind}" for s in rates)
-        if len(one) + 8 <= WIDTH and all("\n" not in r.source for r in rates.values()):
-            rate_lines = [Line(one, next(iter(rates.values())).where)]
+        listed = f"[{', '.join(r.source for r in rates.values())}]"
+        rates_fn: Expr | str
+        if len(listed) <= 60 and all("\n" not in r.source for r in rates.values()):  # short: inline, next to its states
+            rates_fn = Expr(listed, next(iter(rates.values())).where, "", "")
         else:
             rate_lines = [Line("return [")] + [Line(f"    {r.source},  # d{s}/d{ind}", r.where) for s, r in rates.items()] + [Line("]")]
-        rates_name = self.add_method(self.method_name(f"{prefix}rates"), "self", "", rate_lines)
+            rates_fn = self.add_method(self.method_name(f"{prefix}rates"), "self", "", rate_lines)
         preliminary = None
         if ode.preliminary is not None:
             pre = self.code_lines(ode.preliminary, path + ("preliminary",), f"the preliminary code of {title}")
@@ -433,7 +434,7 @@ class Compiler:
             rates=rates,
             method=ode.method,
             step=step,
-            rates_method=rates_name,
+            rates_method=rates_fn,
             preliminary=preliminary,
             events=events,
             tolerance=ode.tolerance,

@@ -120,13 +120,15 @@ def _fill(head: str, parts: list[tuple[str, Any]], tail: str, indent: int) -> li
     first = True
     for i, (text, value) in enumerate(parts):
         piece = text + (", " if i < len(parts) - 1 else "")
-        if not first and len(cur) + len(piece.rstrip()) > WIDTH:
+        if not first and len((cur + piece).rstrip()) + (len(tail) if i == len(parts) - 1 else 0) > WIDTH:
             lines.append(Line(cur.rstrip(), where))
             cur, where = hang, None
-        if len(hang) + len(text) > WIDTH and (block := _block(text, value, col)) is not None:
-            if cur.strip():
+        if len(hang) + len(piece.rstrip()) > WIDTH and (block := _block(text, value, col)) is not None:
+            if not cur.strip() or cur.strip() == head.strip():  # the part starts the line
+                block[0].text = cur + block[0].text.lstrip()
+            else:
                 lines.append(Line(cur.rstrip(), where))
-            block[0].text = hang + block[0].text.lstrip()
+                block[0].text = hang + block[0].text.lstrip()
             lines.extend(block[:-1])
             cur, where = block[-1].text + piece[len(text):], block[-1].where
             first = False
@@ -146,6 +148,11 @@ def _block(text: str, value: Any, col: int) -> list[Line] | None:
         for v in value:
             lines.extend(call_lines(v, col + 4))
         return lines + [Line(" " * col + "]")]
+    if isinstance(value, Call):
+        return call_lines(value, col, key, "")
+    if isinstance(value, list) and value:
+        items = [(flat(v), v) for v in value]
+        return _fill(key + "[", items, "]", col)
     if isinstance(value, dict) and value:
         lines = [Line(" " * col + key + "{")]
         for k, v in value.items():
@@ -263,8 +270,9 @@ def page_call(page: OdePlan) -> Call:
     kw["where"] = page.where
     if page.events:
         kw["event_where"] = {e.name: e.where for e in page.events}
-    args = [Src("self"), page.title, page.independent, list(page.rates), Ref(page.rates_method, "self")]
-    return Call("OdePage.of", args, kw)
+    rates = page.rates_method if isinstance(page.rates_method, Expr) else Ref(page.rates_method, "self")
+    args = [Src("self"), page.title, page.independent]
+    return Call("OdePage.of", args, {"states": list(page.rates), "rates": rates} | kw)
 
 
 def _event_call(e: EventPlan) -> Call:

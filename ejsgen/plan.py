@@ -143,14 +143,15 @@ class EventPlan:
 
 @dataclass
 class OdePlan:
-    """An ODE page: ``rates`` maps each state variable to its rewritten rate expression."""
+    """An ODE page: ``rates`` maps each state variable to its rewritten rate expression (the
+    states in order); ``rates_method`` computes them all (a method, or a lambda when short)."""
 
     title: str
     independent: str
     rates: dict[str, Expr]
     method: str
     step: Expr | float
-    rates_method: str
+    rates_method: str | Expr  # a method's name, or a short list of the rates inline
     preliminary: str | None = None
     events: list[EventPlan] = field(default_factory=list)
     tolerance: float = 1e-6
