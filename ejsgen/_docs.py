@@ -299,7 +299,7 @@ def _reserved() -> str:
         "- Python's keywords: " + ", ".join(f"`{w}`" for w in words) + ".\n"
         "- The names the generated model's base class defines: " + ", ".join(f"`{n}`" for n in model) + ", and `self`.\n"
         "- Names starting with `_ejs` (the runtime's own) or `__` (Python's own).\n"
-        "- A variable may not have the name of a method the generated model defines for the spec (`_ode0_rates`, ...).\n"
+        "- A variable may not have the name of a method the generated model defines for the spec (`_rates`, `_page1`, `_button_go`, ...).\n"
         "\nAn import (`import m as NAME`, `from m import NAME`) may not bind a variable's or custom function's name, "
         "a prelude name, or a name of the generated app's module or methods: " + ", ".join(f"`{n}`" for n in app) + ".\n"
         "\nNot available in spec code (an error says so): " + ", ".join(f"`{n}`" for n in sorted(hidden)) + ".\n"
