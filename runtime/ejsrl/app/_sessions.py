@@ -167,10 +167,10 @@ class Classroom:
         """How many messages wait to be sent to client ``client_id`` (0 if unknown)."""
         if client_id is None:
             return 0
-        state = self.server._websock_server._client_state_from_id.get(client_id)
-        if state is None:
-            return 0
-        return len(state.message_buffer.message_from_id)
+        states = getattr(self.server._websock_server, "_client_state_from_id", {})  # viser 1.1's internals
+        state = states.get(client_id)
+        buffer = getattr(state, "message_buffer", None)
+        return len(getattr(buffer, "message_from_id", ()))
 
     # -- connecting and leaving -------------------------------------------------------------------
     def _connect(self, client: Any) -> None:
