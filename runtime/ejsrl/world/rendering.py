@@ -254,6 +254,19 @@ def texture_coords(world: Any, exclude: Sequence[str], tris: NDArray[np.float64]
     return out
 
 
+def _barycentric_planes(P: NDArray[np.float64], n: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per face (12, F): n (3), d = n.V0, then c0, g0 (3), c1, g1 (3) of ``_render_per_pixel_numpy``."""
+    V0, V1, V2 = P[0], P[1], P[2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv_n2 = 1.0 / np.einsum("cf,cf->f", n, n)
+    g0 = np.cross(V1 - V2, n, axis=0) * inv_n2
+    g1 = np.cross(V2 - V0, n, axis=0) * inv_n2
+    c0 = np.einsum("cf,cf->f", n, np.cross(V1, V2, axis=0)) * inv_n2
+    c1 = np.einsum("cf,cf->f", n, np.cross(V2, V0, axis=0)) * inv_n2
+    d = np.einsum("cf,cf->f", n, V0)
+    return np.vstack([n, d[None], c0[None], g0, c1[None], g1])
+
+
 def _render_per_pixel_numpy(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
     camera: CameraModel, bg: NDArray[np.uint8], cn: NDArray[np.float64] | None, tex: NDArray[np.float64] | None,
@@ -274,14 +287,14 @@ def _render_per_pixel_numpy(
         u = (pix % W).astype(np.float64)
         yn = (v - K[1, 2]) / K[1, 1]
         xn = (u - K[0, 2] - K[0, 1] * yn) / K[0, 0]
-        r = np.stack([xn, yn, np.ones_like(xn)])  # (3, N) the pixel centre's ray
-        V0, V1, V2 = P[0][:, f], P[1][:, f], P[2][:, f]
-        nf = n[:, f]
+        # Per face: the ray r = (xn, yn, 1) meets the face's plane n.X = d at X = r d / (n.r), where
+        # its barycentrics are b0 = c0 + g0.X and b1 = c1 + g1.X, with
+        # c0 = n.(V1 x V2) / |n|^2, g0 = (V1 - V2) x n / |n|^2 (and V2, V0 for b1).
+        tab = _barycentric_planes(P, n).take(f, axis=1)  # (12, N)
         with np.errstate(divide="ignore", invalid="ignore"):
-            X = r * (np.einsum("cn,cn->n", nf, V0) / np.einsum("cn,cn->n", nf, r))
-            n2 = np.einsum("cn,cn->n", nf, nf)
-            b0 = np.einsum("cn,cn->n", nf, np.cross(V1 - X, V2 - X, axis=0)) / n2
-            b1 = np.einsum("cn,cn->n", nf, np.cross(V2 - X, V0 - X, axis=0)) / n2
+            scale = tab[3] / (tab[0] * xn + tab[1] * yn + tab[2])
+            b0 = tab[4] + scale * (tab[5] * xn + tab[6] * yn + tab[7])
+            b1 = tab[8] + scale * (tab[9] * xn + tab[10] * yn + tab[11])
         b0, b1 = np.nan_to_num(b0, nan=1 / 3), np.nan_to_num(b1, nan=1 / 3)
         b = np.clip(np.stack([b0, b1, 1.0 - b0 - b1], axis=1), 0.0, 1.0)
         b /= b.sum(axis=1, keepdims=True)
@@ -289,7 +302,7 @@ def _render_per_pixel_numpy(
             corner = _shade_corners(cn, cols, AMBIENT)[f].astype(np.float64)  # (N, 3 corners, 3)
             col = np.einsum("nv,nvc->nc", b, corner)
         else:
-            col = _shade(n[:, f], cols[f], AMBIENT).astype(np.float64)
+            col = _shade(n, cols, AMBIENT)[f].astype(np.float64)
         if tex is not None:
             t = tex[f]  # (N, 3 corners, 3)
             st = np.einsum("nv,nvc->nc", b, t[:, :, :2])
