@@ -19,7 +19,7 @@ from ejsgen._interpolate import BraceError, split_fields
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError
-from ejsgen.plan import Call, Expr, Line, Ref, Src, py
+from ejsgen.plan import Call, Expr, Ref, Src
 from ejsgen.validate import ViewItem
 from ejsgen.yamlload import Path_, TextOrigin
 from ejsrl.world.kinds import KINDS
@@ -38,7 +38,6 @@ def own_props() -> dict[str, dict[str, str]]:
 
 
 _OWN_PROPS: dict[str, dict[str, str]] = own_props()
-_MAX_LEN = 100
 
 
 def _slug(text: str) -> str:
@@ -62,7 +61,6 @@ class ViewCompiler:
         self.n = 0
         self.scene_names: set[str] = set()
         self.auto_counts: dict[str, int] = {}
-        self.binds: dict[str, tuple[str, str, str]] = {}
 
     # -- properties --------------------------------------------------------------------------------
     def dynamic(self, path: Path_, base: str, what: str, text: str) -> Call | None:
@@ -275,7 +273,7 @@ class ViewCompiler:
 
     # -- binds ------------------------------------------------------------------------------------------
     def bind(self, text: str, path: Path_, kind: str) -> tuple[str, str, str] | None:
-        """Getter and setter methods for a bind target; returns (getter, setter, vtype)."""
+        """Check a bind target (a variable or one element, q[2]: the runtime reads and writes it); returns (text, text, vtype)."""
         c = self.c
         before = len(c.errors)
         tree = c.parse_rewrite(c.snippet(path, f"the bind target of a {kind}", "eval"))

@@ -16,7 +16,7 @@ from ejsgen._resolve import Names, Snippet, parse_snippet, rewrite, rewrite_sour
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError, SpecErrors
-from ejsgen.emit import WIDTH, declare_method, list_lines, page_call
+from ejsgen.emit import declare_method, list_lines, page_call
 from ejsgen.plan import AppPlan, Call, EventPlan, Expr, Line, Method, OdePlan, ProgramPlan, Ref, Variable, body_lines, py
 from ejsgen.spec import Code, CodeEvolutionPage, OdePage
 from ejsgen.validate import CONTROL_NAMES, MATH_NAMES, PRELUDE_NAMES, Checked, free_name, import_name_clash, model_name_clash
