@@ -160,57 +160,66 @@ def _clear_border(resp: NDArray, b: int) -> None:
     resp[:, -b:] = 0
 
 
+#: (37, 3) float32: each mask pixel's 1, dx, dy (a matrix product gives the sum, x and y moments)
+_MOMENTS = np.column_stack([np.ones(len(SUSAN_MASK)), SUSAN_MASK[:, 0], SUSAN_MASK[:, 1]]).astype(np.float32)
+
+
 def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, *, return_saddle: bool = False):
     """The false-positive tests on the pixels (ys, xs); returns which pass and their USAN areas n (x100).
 
-    ``similarity(values)`` gives c (x100, float) for grey values (K, m) of the pixels around
-    each nucleus, with their sign (brighter > 0, darker < 0, alike 0) as a second array.
+    ``similarity(values)`` gives, for the grey values (K, m) int16 of the pixels around each
+    nucleus, c (x100, float32; at most 100) and which of them are brighter than the nucleus
+    (bool; a pixel with c = 100 counts as alike, whatever it says).
 
     1. (Smith and Brady) the USAN centroid lies more than 1/sqrt(2) pixel from the nucleus;
     2. (Smith and Brady) the three pixels from the nucleus towards the centroid are in the USAN;
     3. (one-sided) the pixels unlike the nucleus are not split into brighter ones on one side
        and darker ones on the other, as around a nucleus inside an anti-aliased edge.
+
+    All K pixels are tested at once: the sums and moments over the mask are two matrix
+    products; the mask is symmetric, so the unlike pixels' moments follow from the USAN's.
     """
     if len(ys) == 0:
         return (np.zeros(0, bool), np.zeros(0), np.zeros(0, bool)) if return_saddle else (np.zeros(0, bool), np.zeros(0))
     Wp = pad.shape[1]
     offs = SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0]
-    cast = np.int16 if pad.dtype == np.uint8 else np.float64
-    vals = pad.ravel()[((ys + _R) * Wp + (xs + _R))[:, None] + offs[None, :]].astype(cast)
-    c, sign = similarity(vals)
-    n = c.sum(axis=1)
-    mx, my = SUSAN_MASK[:, 0].astype(np.float64), SUSAN_MASK[:, 1].astype(np.float64)
-    sx, sy = c @ mx, c @ my
+    centre = (ys + _R) * Wp + (xs + _R)
+    vals = pad.ravel().take(centre[:, None] + offs[None, :]).astype(np.int16)
+    c, brighter = similarity(vals)
+    usan = (c @ _MOMENTS).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
+    n, sx, sy = usan[:, 0], usan[:, 1], usan[:, 2]
     far_enough = sx * sx + sy * sy > 0.5 * n * n
     ax, ay = np.abs(sx), np.abs(sy)
     along_x = ay < ax
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.where(along_x, sy / np.where(ax > 0, ax, 1), sx / np.where(ay > 0, ay, 1))
     sgn = np.where(along_x, np.sign(sx), np.sign(sy)).astype(np.int64)
-    steps = []
+    steps = np.empty((len(ys), 3), np.int16)
     for k in (1, 2, 3):
         off = (np.sign(k * slope) * np.floor(np.abs(k * slope) + 0.5)).astype(np.int64)
         oy = np.where(along_x, off, k * sgn)
         ox = np.where(along_x, k * sgn, off)
-        steps.append(pad[ys + _R + oy, xs + _R + ox].astype(cast))
-    total = similarity(np.column_stack(steps))[0].sum(axis=1)
+        steps[:, k - 1] = pad.ravel().take(centre + oy * Wp + ox)
+    total = similarity(steps)[0].sum(axis=1, dtype=np.float64)
     contiguous = total > 2.9 * _SCALE
-    unlike = _SCALE - c
-    bright, dark = unlike * (sign > 0), unlike * (sign < 0)
-    mb, md = bright.sum(axis=1), dark.sum(axis=1)
-    bx, by, dx_, dy_ = bright @ mx, bright @ my, dark @ mx, dark @ my
+    # the moments of the unlike pixels (weights 100 - c), split into brighter and darker ones
+    unlike = np.subtract(np.float32(_SCALE), c)
+    bright_m = (np.where(brighter, unlike, np.float32(0)) @ _MOMENTS).astype(np.float64)
+    mb, bx, by = bright_m[:, 0], bright_m[:, 1], bright_m[:, 2]
+    md, dx_, dy_ = _SCALE * len(SUSAN_MASK) - n - mb, -sx - bx, -sy - by
     opposite = bx * dx_ + by * dy_ < 0
     balanced = np.minimum(mb, md) > 0.25 * (mb + md)
     two_sided = opposite & balanced
+    ok = far_enough & contiguous & ~two_sided
+    if not return_saddle:
+        return ok, n
     # an X-junction (a saddle: the corner of a checkerboard) is two-sided too, but its brighter
     # and its darker pixels each lie in two opposite quadrants, centred on the nucleus
     with np.errstate(divide="ignore", invalid="ignore"):
         off_b = np.hypot(bx, by) / np.where(mb > 0, mb, 1)
         off_d = np.hypot(dx_, dy_) / np.where(md > 0, md, 1)
     saddle = (np.minimum(mb, md) > 0.3 * (mb + md)) & (mb + md > 0.35 * _SCALE * len(SUSAN_MASK)) & (off_b < 0.8) & (off_d < 0.8)
-    if return_saddle:
-        return far_enough & contiguous & ~two_sided, n, saddle
-    return far_enough & contiguous & ~two_sided, n
+    return ok, n, saddle
 
 
 def _smooth_similarity(lut: NDArray[np.uint8], nucleus: NDArray):
@@ -219,7 +228,7 @@ def _smooth_similarity(lut: NDArray[np.uint8], nucleus: NDArray):
 
     def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
         d = vals - g0[: len(vals)]
-        return np.take(lut, np.abs(d)).astype(np.float64), np.sign(d)
+        return lut.take(np.abs(d)).astype(np.float32), d > 0
 
     return sim
 
@@ -256,13 +265,14 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, where: tuple[NDArra
 def _coverage_similarity(lo: NDArray, hi: NDArray, dark: bool):
     """For a nucleus inside an anti-aliased edge between grey levels lo and hi: each pixel's
     share of the dark (or bright) side, ``(hi - I) / (hi - lo)`` clipped to [0, 1] (x100)."""
-    lo_ = lo.astype(np.float64)[:, None]
-    span = np.maximum(hi.astype(np.float64)[:, None] - lo_, 1.0)
+    lo_ = lo.astype(np.float32)[:, None]
+    span = np.maximum(hi.astype(np.float32)[:, None] - lo_, np.float32(1.0))
 
     def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
-        share = np.clip((vals - lo_[: len(vals)]) / span[: len(vals)], 0.0, 1.0)
-        c = _SCALE * (1.0 - share if dark else share)
-        return c, (1 if dark else -1) * np.sign(_SCALE - c)  # the other side: brighter if dark
+        share = np.clip((vals - lo_[: len(vals)]) / span[: len(vals)], np.float32(0.0), np.float32(1.0))
+        c = np.float32(_SCALE) * (np.float32(1.0) - share if dark else share)
+        # the other side is brighter if this is the dark one (darker otherwise)
+        return c, (c < _SCALE) if dark else np.zeros(c.shape, bool)
 
     return sim
 
@@ -370,42 +380,53 @@ def susan_corners(
     tested[sy, sx] = True
     passed_y.append(sy)
     passed_x.append(sx)
-    untested = np.where(tested, 0, 255).astype(np.uint8)
-    for _ in range(_ROUNDS):
-        # the untested local maxima, with OpenCV's whole-image operations (NumPy's are slower here)
-        peak = cv2.bitwise_and(cv2.compare(resp, cv2.dilate(resp, kernel), cv2.CMP_GE), cv2.compare(resp, 0.0, cv2.CMP_GT))
-        found = cv2.findNonZero(cv2.bitwise_and(peak, untested))
-        if found is None:
+    # every other pixel with a response is tested at once (as Smith and Brady test every pixel
+    # before the suppression); those that fail are removed, or, inside an anti-aliased edge,
+    # judged again as the side they belong to
+    ys, xs = np.nonzero((resp > 0) & ~tested)
+    v = gray[ys, xs]
+    ok, _ = _corner_tests(pad, ys, xs, _smooth_similarity(lut, v))
+    m = mid[ys, xs] & ~ok
+    new = np.zeros(len(ys))
+    if m.any():
+        my, mx, lo, hi = ys[m], xs[m], lo3[ys[m], xs[m]], hi3[ys[m], xs[m]]
+        # judged as the side that falls short of its share (the sign of the whole-image
+        # estimate): a straight edge cutting the nucleus pixel so that a share a of it lies on
+        # one side leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord
+        # is 6.8 pixels long); only what falls short of that is a corner
+        dark = r_dark[my, mx] > 0
+        a_dark = (hi.astype(np.float64) - v[m]) / np.maximum(hi.astype(np.float64) - lo, 1.0)
+        a_side = np.where(dark, a_dark, 1.0 - a_dark)
+        ok_m = np.zeros(len(my), bool)
+        n_m = np.zeros(len(my))
+        for side in (True, False):
+            k = dark == side
+            if k.any():
+                ok_m[k], n_m[k] = _corner_tests(pad, my[k], mx[k], _coverage_similarity(lo[k], hi[k], dark=side))
+        r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
+        new[m] = np.where(r_mid >= floor, r_mid, 0.0)
+        ok |= new > 0
+    # a pixel that fails is dropped where it is the largest in its window, as a maximum that
+    # fails is; where a larger pixel that stays is in its window, it stays too (hidden under
+    # that maximum, not a corner) and still suppresses the weaker pixels around it. Which
+    # stay is found from the strongest down, a chain of such pixels at a time
+    fail = ~ok
+    resp[ys[new > 0], xs[new > 0]] = new[new > 0].astype(np.float32)
+    fy, fx = ys[fail], xs[fail]
+    fv = resp[fy, fx]
+    stay = np.zeros(len(fy), bool)
+    live = resp.copy()
+    live[fy, fx] = 0
+    while len(fy):
+        hidden = cv2.dilate(live, kernel)[fy, fx] > fv
+        grown = hidden & ~stay
+        if not grown.any():
             break
-        found = found.reshape(-1, 2)
-        xs, ys = found[:, 0].astype(np.int64), found[:, 1].astype(np.int64)
-        untested[ys, xs] = 0
-        v = gray[ys, xs]
-        ok, _ = _corner_tests(pad, ys, xs, _smooth_similarity(lut, v))
-        m = mid[ys, xs] & ~ok
-        new = np.zeros(len(ys))
-        if m.any():
-            my, mx, lo, hi = ys[m], xs[m], lo3[ys[m], xs[m]], hi3[ys[m], xs[m]]
-            # judged as the side that falls short of its share (the sign of the whole-image
-            # estimate): a straight edge cutting the nucleus pixel so that a share a of it lies on
-            # one side leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord
-            # is 6.8 pixels long); only what falls short of that is a corner
-            dark = r_dark[my, mx] > 0
-            a_dark = (hi.astype(np.float64) - v[m]) / np.maximum(hi.astype(np.float64) - lo, 1.0)
-            a_side = np.where(dark, a_dark, 1.0 - a_dark)
-            ok_m = np.zeros(len(my), bool)
-            n_m = np.zeros(len(my))
-            for side in (True, False):
-                k = dark == side
-                if k.any():
-                    ok_m[k], n_m[k] = _corner_tests(pad, my[k], mx[k], _coverage_similarity(lo[k], hi[k], dark=side))
-            r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
-            new[m] = np.where(r_mid >= floor, r_mid, 0.0)
-            ok |= new > 0
-        lowered = ~ok | (new > 0)
-        resp[ys[lowered], xs[lowered]] = new[lowered].astype(np.float32)
-        passed_y.append(ys[ok])
-        passed_x.append(xs[ok])
+        stay |= hidden
+        live[fy[grown], fx[grown]] = fv[grown]
+    resp[fy[~stay], fx[~stay]] = 0
+    passed_y.append(ys[ok])
+    passed_x.append(xs[ok])
     cy, cx = np.concatenate(passed_y), np.concatenate(passed_x)
     keep = _local_max(resp, r, cy, cx)
     py, px = cy[keep], cx[keep]
