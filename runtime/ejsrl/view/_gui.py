@@ -481,6 +481,8 @@ class Panel:
                 p.append(x, ys)
             p.push(force=not playing)
         for im in self.images:
+            if not im.due():
+                continue  # not rendered for nothing: the picture could not be sent yet
             src = app.safe_value(im.image.source, im.image.where)
             pts = app.safe_value(im.image.points, im.image.where) if im.image.points is not None else None
             im.update(src, pts)

@@ -405,10 +405,17 @@ class ImageBinding:
         self._last_src: np.ndarray | None = None
         self._last_pts: np.ndarray | None = None
         self._last_push = -math.inf
+        #: when a source was last looked at (sent or not): read again at most max_rate a second
+        self._last_read = -math.inf
         self.pushes = 0
         placeholder = np.full((2, 2, 3), 40, dtype=np.uint8)
         label = str(image.label or "") if label is None else label
         self.handle = gui.add_image(placeholder, label=label or None, format="jpeg", jpeg_quality=85)
+
+    def due(self) -> bool:
+        """Whether the rate allows a new picture now: if not, the source need not be read
+        (a virtual camera's picture is the costliest thing a frame computes)."""
+        return self.clock() - max(self._last_push, self._last_read) >= 1.0 / self.max_rate
 
     def update(self, src: Any, pts: Any) -> bool:
         """Send the image if it changed (at most ``max_rate`` a second); True if sent."""
@@ -417,6 +424,7 @@ class ImageBinding:
         now = self.clock()
         if now - self._last_push < 1.0 / self.max_rate:
             return False
+        self._last_read = now
         a = np.asarray(src)
         p = None if pts is None else np.asarray(pts, dtype=float)
         same_src = self._last_src is not None and self._last_src.shape == a.shape and np.array_equal(self._last_src, a)
@@ -440,3 +448,4 @@ class ImageBinding:
         self._last_src = None
         self._last_pts = None
         self._last_push = 0.0
+        self._last_read = -math.inf
