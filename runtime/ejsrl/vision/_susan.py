@@ -167,7 +167,7 @@ _MOMENTS = np.column_stack([np.ones(len(SUSAN_MASK)), SUSAN_MASK[:, 0], SUSAN_MA
 def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, *, return_saddle: bool = False):
     """The false-positive tests on the pixels (ys, xs); returns which pass and their USAN areas n (x100).
 
-    ``similarity(values)`` gives, for the grey values (K, m) int16 of the pixels around each
+    ``similarity(values)`` gives, for the grey values (K, m) uint8 of the pixels around each
     nucleus, c (x100, float32; at most 100) and which of them are brighter than the nucleus
     (bool; a pixel with c = 100 counts as alike, whatever it says).
 
@@ -177,16 +177,17 @@ def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, 
        and darker ones on the other, as around a nucleus inside an anti-aliased edge.
 
     All K pixels are tested at once: the sums and moments over the mask are two matrix
-    products; the mask is symmetric, so the unlike pixels' moments follow from the USAN's.
+    products (OpenCV's: NumPy's BLAS threads stall on a shared machine); the mask is
+    symmetric, so the unlike pixels' moments follow from the USAN's.
     """
     if len(ys) == 0:
         return (np.zeros(0, bool), np.zeros(0), np.zeros(0, bool)) if return_saddle else (np.zeros(0, bool), np.zeros(0))
     Wp = pad.shape[1]
     offs = SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0]
     centre = (ys + _R) * Wp + (xs + _R)
-    vals = pad.ravel().take(centre[:, None] + offs[None, :]).astype(np.int16)
+    vals = pad.ravel().take(centre[:, None] + offs[None, :])
     c, brighter = similarity(vals)
-    usan = (c @ _MOMENTS).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
+    usan = cv2.gemm(c, _MOMENTS, 1.0, None, 0.0).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
     n, sx, sy = usan[:, 0], usan[:, 1], usan[:, 2]
     far_enough = sx * sx + sy * sy > 0.5 * n * n
     ax, ay = np.abs(sx), np.abs(sy)
@@ -194,7 +195,7 @@ def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, 
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.where(along_x, sy / np.where(ax > 0, ax, 1), sx / np.where(ay > 0, ay, 1))
     sgn = np.where(along_x, np.sign(sx), np.sign(sy)).astype(np.int64)
-    steps = np.empty((len(ys), 3), np.int16)
+    steps = np.empty((len(ys), 3), np.uint8)
     for k in (1, 2, 3):
         off = (np.sign(k * slope) * np.floor(np.abs(k * slope) + 0.5)).astype(np.int64)
         oy = np.where(along_x, off, k * sgn)
@@ -203,8 +204,9 @@ def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, 
     total = similarity(steps)[0].sum(axis=1, dtype=np.float64)
     contiguous = total > 2.9 * _SCALE
     # the moments of the unlike pixels (weights 100 - c), split into brighter and darker ones
-    unlike = np.subtract(np.float32(_SCALE), c)
-    bright_m = (np.where(brighter, unlike, np.float32(0)) @ _MOMENTS).astype(np.float64)
+    bright = np.subtract(np.float32(_SCALE), c)
+    np.multiply(bright, brighter, out=bright)
+    bright_m = cv2.gemm(bright, _MOMENTS, 1.0, None, 0.0).astype(np.float64)
     mb, bx, by = bright_m[:, 0], bright_m[:, 1], bright_m[:, 2]
     md, dx_, dy_ = _SCALE * len(SUSAN_MASK) - n - mb, -sx - bx, -sy - by
     opposite = bx * dx_ + by * dy_ < 0
@@ -224,11 +226,12 @@ def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, 
 
 def _smooth_similarity(lut: NDArray[np.uint8], nucleus: NDArray):
     """SUSAN's test ``c = exp(-((I - I0) / t)^6)`` (the LUT) around the nuclei's own grey levels."""
-    g0 = np.asarray(nucleus).astype(np.int16)[:, None]
+    g0 = np.ascontiguousarray(nucleus, dtype=np.uint8)[:, None]
 
     def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
-        d = vals - g0[: len(vals)]
-        return lut.take(np.abs(d)).astype(np.float32), d > 0
+        g = g0[: len(vals)]
+        d = cv2.absdiff(vals, np.repeat(g, vals.shape[1], axis=1))
+        return cv2.LUT(d, lut).astype(np.float32), vals > g
 
     return sim
 
@@ -269,7 +272,7 @@ def _coverage_similarity(lo: NDArray, hi: NDArray, dark: bool):
     span = np.maximum(hi.astype(np.float32)[:, None] - lo_, np.float32(1.0))
 
     def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
-        share = np.clip((vals - lo_[: len(vals)]) / span[: len(vals)], np.float32(0.0), np.float32(1.0))
+        share = np.clip((vals.astype(np.float32) - lo_[: len(vals)]) / span[: len(vals)], np.float32(0.0), np.float32(1.0))
         c = np.float32(_SCALE) * (np.float32(1.0) - share if dark else share)
         # the other side is brighter if this is the dark one (darker otherwise)
         return c, (c < _SCALE) if dark else np.zeros(c.shape, bool)
