@@ -420,13 +420,15 @@ def susan_corners(
     stay = np.zeros(len(fy), bool)
     live = resp.copy()
     live[fy, fx] = 0
-    while len(fy):
-        hidden = cv2.dilate(live, kernel)[fy, fx] > fv
-        grown = hidden & ~stay
-        if not grown.any():
+    und = np.arange(len(fy))  # the failing pixels not yet found hidden
+    while len(und):
+        uy, ux = fy[und], fx[und]
+        hidden = cv2.dilate(live, kernel)[uy, ux] > fv[und]
+        if not hidden.any():
             break
-        stay |= hidden
-        live[fy[grown], fx[grown]] = fv[grown]
+        stay[und[hidden]] = True
+        live[uy[hidden], ux[hidden]] = fv[und[hidden]]
+        und = und[~hidden]
     resp[fy[~stay], fx[~stay]] = 0
     passed_y.append(ys[ok])
     passed_x.append(xs[ok])
