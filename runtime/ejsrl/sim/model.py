@@ -11,6 +11,7 @@ methods of the model.
 from __future__ import annotations
 
 import math
+import operator
 import sys
 import traceback
 from collections.abc import Callable, Sequence
@@ -202,20 +203,23 @@ class OdePage:
         from ejsrl.sim.ode import EventDef
 
         names = tuple(states)
-        layout: list[StateLayout | None] = [None]
+        read = operator.attrgetter(*names) if len(names) > 1 else (lambda m: (getattr(m, names[0]),))
+        layout: list[StateLayout | None] = [None]  # stays None when every state is a number
+        numbers: list[bool | None] = [None]  # decided by the first state read, as a state keeps its kind
 
         def state() -> tuple[float, np.ndarray]:
-            values = [getattr(model, n) for n in names]
-            lay = layout[0] = StateLayout.of(layout[0], *values)
-            if not any(lay.shapes):
+            values = read(model)
+            if numbers[0] is None:
+                numbers[0] = all(np.ndim(v) == 0 and not isinstance(v, np.ndarray) for v in values)
+            if numbers[0]:
                 return getattr(model, independent), np.array(values, dtype=float)
-            return getattr(model, independent), np.concatenate([np.ravel(v) for v in values]).astype(float)
+            layout[0] = StateLayout.of(layout[0], *values)
+            return getattr(model, independent), np.concatenate([np.ravel(v) for v in values]).astype(float, copy=False)
 
         def load(t: float, y: np.ndarray) -> None:
             setattr(model, independent, t)
             lay = layout[0]
-            values = y.tolist() if lay is None or not any(lay.shapes) else lay.unpack(y)
-            for n, v in zip(names, values):
+            for n, v in zip(names, y.tolist() if lay is None else lay.unpack(y)):
                 setattr(model, n, v)
 
         def page_rates(t: float, y: np.ndarray) -> np.ndarray:
@@ -224,8 +228,8 @@ class OdePage:
                 preliminary()
             got = rates()
             lay = layout[0]
-            if lay is None or not any(lay.shapes):
-                return np.array(tuple(got), dtype=float)
+            if lay is None:
+                return np.array(got, dtype=float)
             out = np.empty(lay.size)
             for view, rate in zip(lay.views(out), got):
                 view[...] = rate
