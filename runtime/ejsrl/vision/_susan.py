@@ -349,17 +349,20 @@ def susan_corners(
         acc, pad, lut = _usan(gray, t)
         resp = np.float32(g100) - acc.astype(np.float32)  # g - n, x100
     floor = float(min_response) * _SCALE
-    resp[resp < floor] = 0
+    # keep what reaches the floor: OpenCV's threshold keeps what exceeds the largest float32 below it
+    below = np.float32(floor)
+    if below >= floor:
+        below = np.nextafter(below, np.float32(-np.inf))
+    resp = cv2.threshold(resp, float(below), 0.0, cv2.THRESH_TOZERO)[1]
     _clear_border(resp, _R + 1)
     # pixels with an in-between grey (inside an anti-aliased or blurred edge) have a tiny USAN of
     # their own that means nothing: they are judged as the side they belong to would be. Those
     # that cannot be a corner that way (a straight edge: the whole-image estimate of
     # _coverage_response) are dropped at once; the others are judged one by one below
     k3 = np.ones((3, 3), np.uint8)
-    grayf = gray.astype(np.float32)
-    half_t = np.float32(0.5 * float(t))
+    half_t = 0.5 * float(t)
     lo3, hi3 = cv2.erode(gray, k3), cv2.dilate(gray, k3)
-    mid = (grayf - lo3 > half_t) & (hi3 - grayf > half_t)
+    mid = (cv2.subtract(gray, lo3) > half_t) & (cv2.subtract(hi3, gray) > half_t)
     kernel = np.ones((2 * r + 1, 2 * r + 1), np.uint8)
     tested = np.zeros((H, W), bool)
     passed_y, passed_x = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
