@@ -39,8 +39,7 @@ SUSAN_MASK: NDArray[np.int64] = np.array(
 )
 _R = 3  # mask radius in whole pixels
 _CHORD = 6.8  # the mask's diameter in pixels
-_MID_SLACK = 1.0  # in-between pixels kept for the one-by-one test: whole-image estimate >= min_response - this
-_ROUNDS = 12  # rounds of testing maxima and searching the windows of the rejected ones again
+_MID_SLACK = 1.0  # in-between pixels kept for the test as the side they belong to: whole-image estimate >= min_response - this
 _SCALE = 100  # c is stored as round(100 c) in a uint8 look-up table, as in the original code
 
 
@@ -311,10 +310,12 @@ def susan_corners(
 
     The response is ``g - n`` where the USAN area ``n < g``. The false-positive tests
     (see ``_corner_tests``: the centroid and contiguity tests of the original, and a test
-    that rejects pixels inside anti-aliased edges) are applied to the local maxima of the
-    response; a maximum that fails is removed and its window searched again, until every
-    maximum passes (the original tests every pixel first, the same result but for a weaker
-    pixel beside a rejected one in a chain of suppressions).
+    that rejects pixels inside anti-aliased edges) are applied to every pixel with a
+    response, all at once (as in the original); a pixel that fails is removed where it is
+    the largest in its window, and otherwise stays, hidden under a larger pixel, and still
+    suppresses weaker ones around it (as when local maxima are tested and the windows of
+    the rejected ones searched again until every maximum passes). Every peak of the
+    returned response is then a corner.
 
     Returns the corners (N, 2) float64 as ``(x, y)`` pixel coordinates, strongest first
     (ties in raster order); with ``return_response`` also the response map (H, W) float32
