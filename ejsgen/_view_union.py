@@ -21,7 +21,7 @@ from typing import Annotated, Any, Union
 from pydantic import Discriminator, Field, Tag, TypeAdapter, create_model
 
 from ejsgen import spec
-from ejsgen.spec import GUI_ELEMENT_MODELS, Strict
+from ejsgen.spec import GUI_ELEMENT_MODELS, Derived, Strict
 
 __all__ = ["VIEW_ELEMENT", "SCENE_ELEMENT", "view_adapter", "gui_models", "scene_models", "element_key"]
 
@@ -47,7 +47,7 @@ def element_key(kinds: Any) -> Any:
 
 def _items(models: dict[str, Any], error_type: str, what: str) -> Any:
     tagged = [
-        Annotated[create_model(f"{name.capitalize()}Item", __base__=Strict, **{name: (model, ...)}), Tag(name)]  # type: ignore[call-overload]
+        Annotated[create_model(f"{name.capitalize()}Item", __base__=Derived, **{name: (model, ...)}), Tag(name)]  # type: ignore[call-overload]
         for name, model in models.items()
     ]
     return Annotated[Union[tuple(tagged)], Discriminator(element_key(set(models)), custom_error_type=error_type, custom_error_message=what)]
@@ -58,8 +58,8 @@ def _build() -> tuple[dict[str, Any], dict[str, Any], Any]:
     gui_models: dict[str, Any] = dict(GUI_ELEMENT_MODELS)
     # the lists refer to the models that hold lists: declared by name, resolved below
     scene_models["group"] = create_model("GroupEl", __base__=scene_models["group"], children=("list[SceneElement]", Field(default_factory=list)))
-    gui_models["folder"] = create_model("FolderEl", __base__=gui_models["folder"], children=("list[ViewElement]", Field(default_factory=list)))
-    gui_models["tabs"] = create_model("TabsEl", __base__=gui_models["tabs"], tabs=("dict[str, list[ViewElement]]", ...))
+    gui_models["folder"] = create_model("FolderEl", __base__=(gui_models["folder"], Derived), children=("list[ViewElement]", Field(default_factory=list)))
+    gui_models["tabs"] = create_model("TabsEl", __base__=(gui_models["tabs"], Derived), tabs=("dict[str, list[ViewElement]]", ...))
     scene_element = _items(scene_models, SCENE_ELEMENT, "not a 3D element")
     gui_models["scene"] = list[scene_element]  # type: ignore[valid-type]
     view_element = _items(gui_models, VIEW_ELEMENT, "not a view element")

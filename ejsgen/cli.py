@@ -223,7 +223,8 @@ def _cmd_schema(args: argparse.Namespace) -> int:
     return 0
 
 
-def _parser() -> argparse.ArgumentParser:
+def _parser(sweep: bool = True) -> argparse.ArgumentParser:
+    """The command line; ``sweep=False`` leaves out the sweep's options (they load the runtime)."""
     p = argparse.ArgumentParser(prog="ejsgen", description="Turn .ejs.yaml simulation specs into interactive apps.")
     p.add_argument("--version", action="version", version=f"ejsgen {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
@@ -245,7 +246,7 @@ def _parser() -> argparse.ArgumentParser:
     _add_docs_parser(sub)
     from ejsgen.sweep import add_parser as _add_sweep_parser
 
-    _add_sweep_parser(sub)
+    _add_sweep_parser(sub, options=sweep)
     return p
 
 
@@ -259,7 +260,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             head += rest[:2]
             rest = rest[2:]
         argv, app_args = head, rest
-    args = _parser().parse_args(argv)
+    args = _parser(sweep=argv[:1] == ["sweep"]).parse_args(argv)
     try:
         if args.command == "new":
             return _cmd_new(args)

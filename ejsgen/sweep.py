@@ -15,10 +15,12 @@ from typing import Any
 __all__ = ["add_parser", "cmd_sweep"]
 
 
-def add_parser(sub: Any) -> None:
-    """Add the ``sweep`` subcommand to ``ejsgen``'s subparsers."""
-    from ejsrl.app.sweep import add_sweep_options
+def add_parser(sub: Any, *, options: bool = True) -> None:
+    """Add the ``sweep`` subcommand to ``ejsgen``'s subparsers.
 
+    Its options come from the runtime (``ejsrl.app``, which loads the web UI's libraries), so
+    the other commands leave them out (``options=False``) and start quickly.
+    """
     s = sub.add_parser(
         "sweep",
         help="run a spec over a grid, lists, a table or samples of parameter values; collect the results in tables",
@@ -28,7 +30,10 @@ def add_parser(sub: Any) -> None:
     )
     s.add_argument("spec", metavar="SPEC")
     s.add_argument("-o", "--output", metavar="DIR", help="keep the built app in this folder (default: a temporary one)")
-    add_sweep_options(s)
+    if options:
+        from ejsrl.app.sweep import add_sweep_options
+
+        add_sweep_options(s)
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
