@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ejsrl.vision._util import as_gray
-from ejsrl.vision.camera import CameraModel, pose_from_rvec
+from ejsrl.vision.camera import CameraModel, Intrinsics, pose_from_rvec
 
 __all__ = ["Calibration", "chessboard_points", "find_chessboard", "draw_chessboard", "calibrate_camera", "calibrate_chessboard"]
 
@@ -29,7 +29,7 @@ Array = NDArray[np.float64]
 
 
 @dataclass(frozen=True)
-class Calibration:
+class Calibration(Intrinsics):
     """The result of a calibration.
 
     ``K`` (3, 3) intrinsics; ``distortion`` (5,) ``(k1, k2, p1, p2, k3)``; ``rms``: the
@@ -49,22 +49,6 @@ class Calibration:
         """The calibrated camera as a :class:`CameraModel`."""
         w, h = self.image_size
         return CameraModel(w, h, K=self.K, distortion=self.distortion)
-
-    @property
-    def fx(self) -> float:
-        return float(self.K[0, 0])
-
-    @property
-    def fy(self) -> float:
-        return float(self.K[1, 1])
-
-    @property
-    def cx(self) -> float:
-        return float(self.K[0, 2])
-
-    @property
-    def cy(self) -> float:
-        return float(self.K[1, 2])
 
 
 def _pattern(pattern: Sequence[int]) -> tuple[int, int]:

@@ -104,7 +104,30 @@ def _points(P: ArrayLike) -> Array:
     return arr.reshape(-1, 3)
 
 
-class CameraModel:
+class Intrinsics:
+    """``fx``, ``fy`` (focal lengths) and ``cx``, ``cy`` (principal point), in pixels, read from
+    the 3x3 camera matrix ``K`` of a camera model or a calibration."""
+
+    K: NDArray[np.float64]
+
+    @property
+    def fx(self) -> float:
+        return float(self.K[0, 0])
+
+    @property
+    def fy(self) -> float:
+        return float(self.K[1, 1])
+
+    @property
+    def cx(self) -> float:
+        return float(self.K[0, 2])
+
+    @property
+    def cy(self) -> float:
+        return float(self.K[1, 2])
+
+
+class CameraModel(Intrinsics):
     """A pinhole camera: ``width`` x ``height`` pixels and intrinsics ``K`` (3, 3).
 
     Give either ``fov_deg`` (vertical field of view in degrees, square pixels, centred
@@ -155,21 +178,6 @@ class CameraModel:
         return cls(w, h, fov_deg=float(node.props["fov"]), near=node.props["near"], far=node.props["far"])
 
     # -- intrinsics -------------------------------------------------------------------------
-    @property
-    def fx(self) -> float:
-        return float(self.K[0, 0])
-
-    @property
-    def fy(self) -> float:
-        return float(self.K[1, 1])
-
-    @property
-    def cx(self) -> float:
-        return float(self.K[0, 2])
-
-    @property
-    def cy(self) -> float:
-        return float(self.K[1, 2])
 
     @property
     def k1(self) -> float:
