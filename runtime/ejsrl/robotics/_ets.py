@@ -18,7 +18,7 @@ from typing import Any, Sequence
 
 from . import _kernels
 from ._codegen import Scalar
-from ._kernels import Frame, Vec, _add, _combo, _cross, _dot, _joint, _mtv, _mv, _scale, compose
+from ._kernels import Frame, Vec, _add, _combo, _cross, _dot, _joint, _mv, compose, craig_outward, link_wrench
 
 __all__ = ["Params"]
 
@@ -62,20 +62,12 @@ class Params(_kernels.Params):
             R = [[Ro[k][0] * ct + Ro[k][1] * st, Ro[k][1] * ct - Ro[k][0] * st, Ro[k][2]] for k in range(3)]
             po = self.origins[i][3]
             p = [po[k] + Ro[k][2] * d for k in range(3)]  # origin i-1 -> i in frame i-1
-            a_t = _mtv(R, _add(acc, _cross(wd, p), _cross(w, _cross(w, p))))
-            w_t, wd_t = _mtv(R, w), _mtv(R, wd)
-            if self.prism[i]:
-                w, wd = w_t, wd_t
-                acc = _add(a_t, _scale(2.0, _cross(w, _scale(qd[i], z))), _scale(qdd[i], z))
-            else:
-                w = _add(w_t, _scale(qd[i], z))
-                wd = _add(wd_t, _cross(w_t, _scale(qd[i], z)), _scale(qdd[i], z))
-                acc = a_t
+            w, wd, acc = craig_outward(R, p, self.prism[i], qd[i], qdd[i], w, wd, acc)
             Rs.append(R)
             ps.append(p)
-            r = self.r[i]
-            Fs.append(_scale(self.m[i], _add(acc, _cross(wd, r), _cross(w, _cross(w, r)))))
-            Ns.append(_add(_mv(self.I[i], wd), _cross(w, _mv(self.I[i], w))))
+            F, N = link_wrench(self.m[i], self.r[i], self.I[i], w, wd, acc)
+            Fs.append(F)
+            Ns.append(N)
         tau: list[Scalar] = [0.0] * n
         f: Vec = [0.0, 0.0, 0.0]
         nn: Vec = [0.0, 0.0, 0.0]

@@ -205,6 +205,25 @@ def _local(P: Params, i: int, ct: Scalar, st: Scalar) -> list[Vec]:
     return [[ct, -st, 0.0], [ca * st, ca * ct, -sa], [sa * st, sa * ct, ca]]
 
 
+def craig_outward(R: list[Vec], p: Vec, prism: bool, qd: Scalar, qdd: Scalar, w: Vec, wd: Vec, acc: Vec) -> tuple[Vec, Vec, Vec]:
+    """One outward step of Newton-Euler in Craig's link frames (modified DH, elementary
+    transforms): link i's angular velocity, angular and linear acceleration in frame i, from
+    link i-1's, with ``R`` the rotation from frame i-1 to i, ``p`` origin i in frame i-1 and
+    the joint turning about (or sliding along) z of frame i."""
+    z = [0.0, 0.0, 1.0]
+    a_t = _mtv(R, _add(acc, _cross(wd, p), _cross(w, _cross(w, p))))
+    w_t, wd_t = _mtv(R, w), _mtv(R, wd)
+    if prism:
+        return w_t, wd_t, _add(a_t, _scale(2.0, _cross(w_t, _scale(qd, z))), _scale(qdd, z))
+    return _add(w_t, _scale(qd, z)), _add(wd_t, _cross(w_t, _scale(qd, z)), _scale(qdd, z)), a_t
+
+
+def link_wrench(m: Scalar, r: Vec, I: list[Vec], w: Vec, wd: Vec, acc: Vec) -> tuple[Vec, Vec]:
+    """The force and moment (about the centre of mass ``r``) that move a link of mass ``m`` and
+    inertia ``I`` (about its centre of mass) with ``w``, ``wd`` and origin acceleration ``acc``."""
+    return _scale(m, _add(acc, _cross(wd, r), _cross(w, _cross(w, r)))), _add(_mv(I, wd), _cross(w, _mv(I, w)))
+
+
 def rne(P: Params, q: Sequence[Scalar], qd: Sequence[Scalar], qdd: Sequence[Scalar], a0: Vec) -> list[Scalar]:
     """Rigid-body joint forces by recursive Newton-Euler, link quantities in link frames
     (the recursion of :func:`._dynamics.rne_rigid_single`). ``a0``: base acceleration
@@ -236,20 +255,12 @@ def rne(P: Params, q: Sequence[Scalar], qd: Sequence[Scalar], qdd: Sequence[Scal
         else:
             z = [0.0, 0.0, 1.0]
             p = [a, -sa * d, ca * d]  # origin i-1 -> i in frame i-1
-            a_t = _mtv(R, _add(acc, _cross(wd, p), _cross(w, _cross(w, p))))
-            w_t, wd_t = _mtv(R, w), _mtv(R, wd)
-            if P.prism[i]:
-                w, wd = w_t, wd_t
-                acc = _add(a_t, _scale(2.0, _cross(w, _scale(qd[i], z))), _scale(qdd[i], z))
-            else:
-                w = _add(w_t, _scale(qd[i], z))
-                wd = _add(wd_t, _cross(w_t, _scale(qd[i], z)), _scale(qdd[i], z))
-                acc = a_t
+            w, wd, acc = craig_outward(R, p, P.prism[i], qd[i], qdd[i], w, wd, acc)
         ps.append(p)
         zs.append(z)
-        r = P.r[i]
-        Fs.append(_scale(P.m[i], _add(acc, _cross(wd, r), _cross(w, _cross(w, r)))))
-        Ns.append(_add(_mv(P.I[i], wd), _cross(w, _mv(P.I[i], w))))
+        F, N = link_wrench(P.m[i], P.r[i], P.I[i], w, wd, acc)
+        Fs.append(F)
+        Ns.append(N)
     tau: list[Scalar] = [0.0] * n
     f: Vec = [0.0, 0.0, 0.0]
     nn: Vec = [0.0, 0.0, 0.0]
