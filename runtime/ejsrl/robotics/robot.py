@@ -40,6 +40,15 @@ def _parallel_axis(d: Array) -> Array:
     return float(d @ d) * np.eye(3) - np.outer(d, d)
 
 
+
+def _qlim_text(link: Any) -> str:
+    """A joint's limits as the robot's table prints them (degrees, or metres if prismatic)."""
+    if link.qlim is None:
+        return "-"
+    if link.isprismatic:
+        return f"[{link.qlim[0]:.3g}, {link.qlim[1]:.3g}]"
+    return f"[{np.degrees(link.qlim[0]):.0f}, {np.degrees(link.qlim[1]):.0f}]"
+
 class Robot:
     """A serial-link arm.
 
@@ -650,21 +659,9 @@ class Robot:
             off = f"{k.offset:+.4g}" if k.offset else ""
             theta = f"{k.theta:.4g}" if k.isprismatic else f"q{j}{off}"
             d = f"q{j}{off}" if k.isprismatic else f"{k.d:.5g}"
-            if k.qlim is None:
-                lim = "-"
-            elif k.isprismatic:
-                lim = f"[{k.qlim[0]:.3g}, {k.qlim[1]:.3g}]"
-            else:
-                lim = f"[{np.degrees(k.qlim[0]):.0f}, {np.degrees(k.qlim[1]):.0f}]"
+            lim = _qlim_text(k)
             rows.append(f"{j:>2} | {theta:>12} | {d:>12} | {k.a:>9.5g} | {np.degrees(k.alpha):>8.4g}° | {lim:>19}")
-        extra = []
-        if not self._base_is_eye:
-            extra.append(f"base t = {np.round(self.base[:3, 3], 4).tolist()}")
-        if not self._tool_is_eye:
-            extra.append(f"tool t = {np.round(self.tool[:3, 3], 4).tolist()}")
-        if self.poses:
-            extra.append("poses: " + ", ".join(self.poses))
-        return "\n".join([head, *rows, *extra])
+        return "\n".join([head, *rows, *self._repr_extra()])
 
     def _repr_ets(self) -> str:
         from .transforms import tr2rpy
@@ -676,13 +673,12 @@ class Robot:
         for j, k in enumerate(self.links, start=1):
             xyz = ", ".join(f"{v:.4g}" for v in k.origin[:3, 3])
             rpy = ", ".join(f"{v:.4g}" for v in np.degrees(tr2rpy(k.origin)))
-            if k.qlim is None:
-                lim = "-"
-            elif k.isprismatic:
-                lim = f"[{k.qlim[0]:.3g}, {k.qlim[1]:.3g}]"
-            else:
-                lim = f"[{np.degrees(k.qlim[0]):.0f}, {np.degrees(k.qlim[1]):.0f}]"
+            lim = _qlim_text(k)
             rows.append(f"{j:>2} | {self.joint_names[j - 1][:22]:<22} | {xyz:>28} | {rpy:>22} | {lim:>17}")
+        return "\n".join([head, *rows, *self._repr_extra()])
+
+    def _repr_extra(self) -> list[str]:
+        """The lines after a table: base and tool offsets, named poses."""
         extra = []
         if not self._base_is_eye:
             extra.append(f"base t = {np.round(self.base[:3, 3], 4).tolist()}")
@@ -690,4 +686,4 @@ class Robot:
             extra.append(f"tool t = {np.round(self.tool[:3, 3], 4).tolist()}")
         if self.poses:
             extra.append("poses: " + ", ".join(self.poses))
-        return "\n".join([head, *rows, *extra])
+        return extra
