@@ -10,45 +10,15 @@ With ``EJSGEN_GALLERY=1`` the screenshot is also written to
 from __future__ import annotations
 
 import io
-import os
 import re
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from testkit import ROOT
-from testkit.browser import ARTIFACTS, serving, wait_until
+from testkit.browser import close_notifications, panel_image, save_shot, serving, wait_until
 
 FX, FY, CX, CY = 610.0, 605.0, 326.0, 244.0  # the lab's true camera
-GALLERY = ROOT / "examples" / "gallery"
-
-
-def close_notifications(page) -> None:
-    """Close the 'software WebGL' notice of a GPU-less browser, so it does not cover the scene."""
-    buttons = page.locator(".mantine-Notification-closeButton")
-    for i in range(buttons.count()):
-        try:
-            buttons.nth(i).click(timeout=2_000)
-        except Exception:  # noqa: BLE001 - it may close by itself meanwhile
-            pass
-
-
-def panel_image(page):
-    """The camera picture in the panel (viser sends it as a blob: URL)."""
-    return page.locator("img[src^='blob:']").first
-
-
-def save_shot(page, name: str) -> bytes:
-    """A screenshot, kept in test-artifacts/ and, with EJSGEN_GALLERY=1, as the gallery's 640x400 picture."""
-    page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
-    png = page.screenshot()
-    ARTIFACTS.mkdir(exist_ok=True)
-    (ARTIFACTS / f"lab_{name}.png").write_bytes(png)
-    if os.environ.get("EJSGEN_GALLERY"):
-        GALLERY.mkdir(parents=True, exist_ok=True)
-        Image.open(io.BytesIO(png)).convert("RGB").resize((640, 400), Image.LANCZOS).save(GALLERY / f"{name}.png", optimize=True)
-    return png
 
 
 def _panel_text(page) -> str:

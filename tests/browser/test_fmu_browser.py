@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from PIL import Image
 from testkit import ROOT
-from testkit.browser import ARTIFACTS, serving, wait_until
+from testkit.browser import ARTIFACTS, close_notifications, serving, wait_until
 
 SET_POINTS = np.array([np.pi / 2, np.pi / 3, -np.pi / 4])
 TITLE = "Position control of a 3-DOF arm with an FMU (paper, figure 13)"
@@ -42,16 +42,6 @@ def scene_pixels(page) -> np.ndarray:
     """The 3D view as an (H, W, 3) int array (what the user sees of the scene)."""
     png = page.locator("canvas").nth(scene_canvas(page) or 0).screenshot(timeout=60_000)
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
-
-
-def close_notifications(page) -> None:
-    """Close the 'software WebGL' notice of a GPU-less browser, so it does not cover the scene."""
-    buttons = page.locator(".mantine-Notification-closeButton")
-    for i in range(buttons.count()):
-        try:
-            buttons.nth(i).click(timeout=2_000)
-        except Exception:  # noqa: BLE001 - it may close by itself meanwhile
-            pass
 
 
 def hide_notices(page) -> None:

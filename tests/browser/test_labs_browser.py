@@ -12,17 +12,13 @@ to ``examples/gallery/<lab>.png`` (the pictures of ``examples/README.md``).
 from __future__ import annotations
 
 import io
-import os
 from dataclasses import dataclass
 
 import numpy as np
 import pytest
 from PIL import Image
 
-from testkit.browser import ARTIFACTS, canvas_pixels, serving, wait_until
-from testkit import ROOT
-
-GALLERY = ROOT / "examples" / "gallery"
+from testkit.browser import canvas_pixels, close_notifications, panel_image, save_shot, serving, wait_until
 
 
 @dataclass
@@ -53,32 +49,6 @@ def served(request, built):
     lab = LABS[request.param]
     with serving(built(lab.spec)) as (app, url):
         yield lab, app, url
-
-
-def close_notifications(page) -> None:
-    """Close the 'software WebGL' notice of a GPU-less browser, so it does not cover the scene."""
-    buttons = page.locator(".mantine-Notification-closeButton")
-    for i in range(buttons.count()):
-        try:
-            buttons.nth(i).click(timeout=2_000)
-        except Exception:  # noqa: BLE001 - it may close by itself meanwhile
-            pass
-
-
-def panel_image(page):
-    """The camera picture in the panel (viser sends it as a blob: URL)."""
-    return page.locator("img[src^='blob:']").first
-
-
-def save_shot(page, name: str) -> bytes:
-    # hide the GPU-less browser's notice (it may come back after being closed) for the picture
-    page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
-    png = page.screenshot()
-    (ARTIFACTS / f"lab_{name}.png").write_bytes(png)
-    if os.environ.get("EJSGEN_GALLERY"):
-        GALLERY.mkdir(parents=True, exist_ok=True)
-        Image.open(io.BytesIO(png)).convert("RGB").resize((640, 400), Image.LANCZOS).save(GALLERY / f"{name}.png", optimize=True)
-    return png
 
 
 @pytest.mark.browser

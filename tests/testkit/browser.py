@@ -45,3 +45,41 @@ def canvas_pixels(page: Any) -> np.ndarray:
 
     png = page.locator("canvas").first.screenshot()
     return np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+
+
+#: the examples gallery's pictures (written by save_shot with EJSGEN_GALLERY=1)
+from testkit import ROOT  # noqa: E402
+
+GALLERY = ROOT / "examples" / "gallery"
+
+
+def close_notifications(page: Any) -> None:
+    """Close the 'software WebGL' notice of a GPU-less browser, so it does not cover the scene."""
+    buttons = page.locator(".mantine-Notification-closeButton")
+    for i in range(buttons.count()):
+        try:
+            buttons.nth(i).click(timeout=2_000)
+        except Exception:  # noqa: BLE001 - it may close by itself meanwhile
+            pass
+
+
+def panel_image(page: Any) -> Any:
+    """The camera picture in the panel (viser sends it as a blob: URL)."""
+    return page.locator("img[src^='blob:']").first
+
+
+def save_shot(page: Any, name: str) -> bytes:
+    """A screenshot, kept in test-artifacts/ and, with EJSGEN_GALLERY=1, as the gallery's 640x400 picture."""
+    import os
+
+    from PIL import Image
+
+    # hide the GPU-less browser's notice (it may come back after being closed) for the picture
+    page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
+    png = page.screenshot()
+    ARTIFACTS.mkdir(exist_ok=True)
+    (ARTIFACTS / f"lab_{name}.png").write_bytes(png)
+    if os.environ.get("EJSGEN_GALLERY"):
+        GALLERY.mkdir(parents=True, exist_ok=True)
+        Image.open(io.BytesIO(png)).convert("RGB").resize((640, 400), Image.LANCZOS).save(GALLERY / f"{name}.png", optimize=True)
+    return png
