@@ -28,7 +28,7 @@ class StateLayout:
     wrong shape fails to broadcast.
     """
 
-    __slots__ = ("slices", "shapes", "size", "unpack", "views")
+    __slots__ = ("slices", "shapes", "size", "unpack", "views", "flat")
 
     def __init__(self, *values: Any) -> None:
         self.slices: list[slice] = []
@@ -41,7 +41,8 @@ class StateLayout:
         self.size = start
         self.unpack: Callable[[np.ndarray], tuple[Any, ...]]
         self.views: Callable[[np.ndarray], tuple[np.ndarray, ...]]
-        if all(len(s) == 1 for s in self.shapes):
+        self.flat = all(len(s) == 1 for s in self.shapes)  # every state a 1-D array
+        if self.flat:
             # every state a 1-D array: slicing in C
             if len(self.slices) == 1:
                 only = self.slices[0]
@@ -62,6 +63,14 @@ class StateLayout:
             else:
                 return previous
         return cls(*values)
+
+    def pack(self, values: tuple[Any, ...]) -> np.ndarray:
+        """The packed float64 vector of ``values`` (which have this layout's shapes): a new array."""
+        if self.flat:
+            if len(values) == 1:
+                return np.array(values[0], dtype=float)  # a copy, like concatenate's
+            return np.concatenate(values).astype(float, copy=False)
+        return np.concatenate([np.ravel(v) for v in values]).astype(float, copy=False)
 
     def _unpack(self, y: np.ndarray) -> tuple[Any, ...]:
         out = []

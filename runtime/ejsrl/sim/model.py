@@ -206,6 +206,12 @@ class OdePage:
         read = operator.attrgetter(*names) if len(names) > 1 else (lambda m: (getattr(m, names[0]),))
         layout: list[StateLayout | None] = [None]  # stays None when every state is a number
         numbers: list[bool | None] = [None]  # decided by the first state read, as a state keeps its kind
+        # What load() last gave the model: the packed vector and the values it wrote (views of
+        # it for arrays). While the model still holds exactly those objects, the vector (seen
+        # through the views, so in-place changes count) is the state: state() copies it
+        # instead of packing again.
+        loaded: list[Any] = [None, ()]
+        is_ = operator.is_
 
         def state() -> tuple[float, np.ndarray]:
             values = read(model)
@@ -213,13 +219,22 @@ class OdePage:
                 numbers[0] = all(np.ndim(v) == 0 and not isinstance(v, np.ndarray) for v in values)
             if numbers[0]:
                 return getattr(model, independent), np.array(values, dtype=float)
-            layout[0] = StateLayout.of(layout[0], *values)
-            return getattr(model, independent), np.concatenate([np.ravel(v) for v in values]).astype(float, copy=False)
+            y, held = loaded
+            if y is not None and all(map(is_, values, held)):
+                return getattr(model, independent), y.copy()
+            lay = layout[0] = StateLayout.of(layout[0], *values)
+            return getattr(model, independent), lay.pack(values)
 
         def load(t: float, y: np.ndarray) -> None:
             setattr(model, independent, t)
             lay = layout[0]
-            for n, v in zip(names, y.tolist() if lay is None else lay.unpack(y)):
+            if lay is None:
+                values = y.tolist()
+            else:
+                values = lay.unpack(y)
+                if y.shape == (lay.size,):
+                    loaded[0], loaded[1] = y, values
+            for n, v in zip(names, values):
                 setattr(model, n, v)
 
         def page_rates(t: float, y: np.ndarray) -> np.ndarray:
@@ -231,8 +246,12 @@ class OdePage:
             if lay is None:
                 return np.array(got, dtype=float)
             out = np.empty(lay.size)
-            for view, rate in zip(lay.views(out), got):
-                view[...] = rate
+            if lay.flat:  # a rate of the wrong shape fails to broadcast into its slice
+                for sl, rate in zip(lay.slices, got):
+                    out[sl] = rate
+            else:
+                for view, rate in zip(lay.views(out), got):
+                    view[...] = rate
             return out
 
         def event(ev: Any) -> EventDef:
