@@ -237,7 +237,15 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
     b.add_argument("spec", metavar="SPEC")
     b.add_argument("-o", "--output", metavar="DIR", help="output folder (default dist/NAME)")
     b.add_argument("--bundle", action="store_true", help="also write a single-file NAME.pyz that carries the runtime")
-    r = sub.add_parser("run", help="build a spec and run the app; options after the spec go to the app")
+    r = sub.add_parser(
+        "run",
+        help="build a spec and run the app; other options go to the app",
+        description="Build SPEC into a temporary folder (or -o DIR) and run the app. Every other option goes "
+        "to the app, before or after SPEC: --port N, --host ADDR (0.0.0.0 opens the lab to the network), "
+        "--shared (one simulation for every browser tab instead of one each), --max-sessions N, --grace S, "
+        "--allow-origin URL, --headless --duration T --csv FILE --vars a,b --set NAME=VALUE, --sweep ...; "
+        "`python app.py --help` in a built app lists them all.",
+    )
     r.add_argument("spec", metavar="SPEC")
     r.add_argument("-o", "--output", metavar="DIR", help="keep the built app in this folder")
     sub.add_parser("schema", help="print the JSON Schema of the spec language")
@@ -250,16 +258,43 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
     return p
 
 
+#: the served app's options that take a value (``python app.py --help`` lists them all)
+_APP_OPTIONS_WITH_VALUE = (
+    "--port", "--host", "--allow-origin", "--max-sessions", "--grace", "--duration", "--csv", "--vars", "--set", "--every",
+    "--grid", "--values", "--table", "--samples", "--sampling", "--seed", "--out", "--summary", "--plot", "--plot-y",
+    "--plot-x", "--workers", "--scheduler",
+)
+
+
+def _split_run_args(argv: list[str]) -> tuple[list[str], list[str]]:
+    """``run``'s own arguments (the spec, ``-o DIR``, ``-h``) and the app's (all the others,
+    before or after the spec): ``ejsgen run --port 8090 lab.ejs.yaml`` works as
+    ``ejsgen run lab.ejs.yaml --port 8090``."""
+    own, app, rest = [argv[0]], [], argv[1:]
+    spec_seen = False
+    while rest:
+        arg = rest.pop(0)
+        if arg in ("-o", "--output") and rest:
+            own += [arg, rest.pop(0)]
+        elif arg.startswith(("-o", "--output=")) and arg not in ("-o", "--output"):
+            own.append(arg)
+        elif arg in ("-h", "--help") and not spec_seen:
+            own.append(arg)
+        elif not spec_seen and not arg.startswith("-"):
+            own.append(arg)
+            spec_seen = True
+        else:
+            app.append(arg)
+            if arg in _APP_OPTIONS_WITH_VALUE and rest and not spec_seen:
+                app.append(rest.pop(0))  # an option's value is not the spec
+    return own, app
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     app_args: list[str] = []
     if argv and argv[0] == "run":
-        # everything after the spec (and our own -o DIR) belongs to the app
-        head, rest = argv[:2], argv[2:]
-        while rest[:1] and rest[0] in ("-o", "--output") and len(rest) > 1:
-            head += rest[:2]
-            rest = rest[2:]
-        argv, app_args = head, rest
+        argv, app_args = _split_run_args(argv)
     args = _parser(sweep=argv[:1] == ["sweep"]).parse_args(argv)
     try:
         if args.command == "new":
