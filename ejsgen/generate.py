@@ -22,7 +22,7 @@ import jinja2
 from ejsrl.sim.names import MATH_NAMES
 
 from ejsgen import __version__
-from ejsgen.errors import EjsError
+from ejsgen.errors import EjsError, SpecError
 from ejsgen.emit import WIDTH, call_lines, flat, meta_call, method_lines, program_call, sim_call, used_names, view_lines
 from ejsgen.plan import AppPlan, Line
 
@@ -183,6 +183,23 @@ def _check_compiles(text: str, name: str) -> None:
         raise EjsError(f"internal error: the generated {name} does not compile ({exc.msg} at line {exc.lineno}); please report it") from None
 
 
+def _check_urdf_parser(plan: AppPlan) -> None:
+    """A spec that loads a URDF arm needs yourdfpy: say so at the build, at the spec line that
+    loads it, as for FMPy, rather than serving an app whose scene stays empty."""
+    try:
+        import yourdfpy  # noqa: F401
+    except ImportError:
+        pass
+    else:
+        return
+    where = next((line.where for m in plan.methods for line in m.lines if "urdf" in line.text and line.where is not None), None)
+    hint = "pip install yourdfpy (or pip install 'ejsgen[urdf]')"
+    message = "URDF arms are read with yourdfpy, which is not installed"
+    if where is None:
+        raise EjsError(f"{plan.spec_name}: error: {message}; {hint}")
+    raise SpecError(where, message, hint)
+
+
 def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Path]:
     """Write the app folder ``out_dir`` (replacing it whole); returns the files written."""
     app_text = render_app(plan)
@@ -191,6 +208,8 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
     bundle_name = f"{out_dir.name}.pyz" if bundle else ""
     readme = env.get_template("README.md.j2").render(title=plan.title, description=plan.description, version=__version__, spec_name=plan.spec_name, bundle=bundle_name)
     urdf = ["yourdfpy>=0.0.56"] if "urdf" in app_text else []  # ejsrl.robotics.load_urdf, models.ur5_urdf
+    if urdf:
+        _check_urdf_parser(plan)
     reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf)
     if "from ejsrl.fmi import" in app_text:  # the spec's fmus: run through FMPy
         reqs += "fmpy>=0.3.20\n"
