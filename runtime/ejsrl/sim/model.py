@@ -129,6 +129,9 @@ class CodePage:
         """Nothing to forget."""
 
 
+_add_reduce = np.add.reduce  # what ndarray.sum calls, without its Python layer
+
+
 class OdePage:
     """An evolution page of ODEs, advanced by ``step()`` of its independent variable.
 
@@ -155,8 +158,9 @@ class OdePage:
         where: str = "",
         event_where: dict[str, str] | None = None,
     ) -> None:
-        from ejsrl.sim.ode import OdeIntegrator
+        from ejsrl.sim.ode import OdeIntegrator, ZenoError
 
+        self._zeno_error = ZenoError  # run() names it without an import statement each step
         self.name = name
         self.method = method
         self.step_fn = step
@@ -225,6 +229,9 @@ class OdePage:
             lay = layout[0] = StateLayout.of(layout[0], *values)
             return getattr(model, independent), lay.pack(values)
 
+        first = names[0] if names else ""
+        second = names[1] if len(names) == 2 else None
+
         def load(t: float, y: np.ndarray) -> None:
             setattr(model, independent, t)
             lay = layout[0]
@@ -234,8 +241,14 @@ class OdePage:
                 values = lay.unpack(y)
                 if y.shape == (lay.size,):
                     loaded[0], loaded[1] = y, values
-            for n, v in zip(names, values):
-                setattr(model, n, v)
+            if second is not None:  # the common one- and two-state pages without a loop
+                setattr(model, first, values[0])
+                setattr(model, second, values[1])
+            elif len(names) == 1:
+                setattr(model, first, values[0])
+            else:
+                for n, v in zip(names, values):
+                    setattr(model, n, v)
 
         def page_rates(t: float, y: np.ndarray) -> np.ndarray:
             load(t, y)
@@ -281,15 +294,13 @@ class OdePage:
             return False
         h = float(self.step_fn())
         t, y = self.state()
-        from ejsrl.sim.ode import ZenoError
-
         try:
             result = self.integrator.step(t, y, h)
-        except ZenoError as exc:
+        except self._zeno_error as exc:
             where = next((w for name, w in self.event_where.items() if f"'{name}'" in str(exc)), self.where)
             raise UserCodeError(str(exc), where) from None
         y_new = result.y
-        if not math.isfinite(y_new.sum()):  # one C call; a NaN or inf anywhere makes the sum non-finite
+        if not math.isfinite(_add_reduce(y_new)):  # y_new.sum() in one C call; a NaN or inf anywhere makes the sum non-finite
             bad = int(np.flatnonzero(~np.isfinite(y_new))[0])
             raise UserCodeError(
                 f"the state became non-finite (element {bad} of {', '.join(self.names)}) near t = {result.t:.6g}; "
