@@ -140,7 +140,7 @@ def test_wrong_options_are_refused_before_any_run(tmp_path: Path) -> None:
     cases = [
         (["--grid", "kk=1:2:3"], "--grid: unknown variable 'kk'; did you mean 'k'?"),
         (["--grid", "k=1:2"], "expected NAME=start:stop:count"),
-        (["--values", "m=1,x"], "--set m: 'x' is not a number"),
+        (["--values", "m=1,x"], "parameter m: 'x' is not a number"),
         (["--values", "label=a,b", "--values", "label=c"], "'label' is already a parameter"),
         (["--grid", "label=1:2:2"], "'label' is text; a grid takes a number variable"),
         (["--values", "k=1", "--vars", "E,EE"], "--vars: unknown variable 'EE'; did you mean 'E'?"),

@@ -42,11 +42,9 @@ def parse_set(text: str, types: dict[str, str]) -> tuple[str, Any]:
         raise ValueError(f"--set takes NAME=VALUE, got {text!r}")
     name, raw = (s.strip() for s in text.split("=", 1))
     if name not in types:
-        import difflib
+        from ejsrl._suggest import did_you_mean
 
-        close = difflib.get_close_matches(name, list(types), n=1)
-        hint = f"; did you mean '{close[0]}'?" if close else ""
-        raise ValueError(f"--set: unknown variable '{name}'{hint}")
+        raise ValueError(f"--set: unknown variable '{name}'{did_you_mean(name, types)}")
     kind = types[name]
     if kind == "auto":
         return name, _DeclaredSet(name, raw)

@@ -126,11 +126,9 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
     else:
         for n in names:
             if n not in types:
-                import difflib
+                from ejsrl._suggest import did_you_mean
 
-                close = difflib.get_close_matches(n, list(types), n=1)
-                hint = f"; did you mean '{close[0]}'?" if close else ""
-                raise UserCodeError(f"--vars: unknown variable '{n}'{hint}")
+                raise UserCodeError(f"--vars: unknown variable '{n}'{did_you_mean(n, types)}")
     columns: list[tuple[str, Callable[[], Any]]] = []
     for n in names:
         value = getattr(model, n)

@@ -78,8 +78,9 @@ def check_settings(runs: Sequence[Run], types: dict[str, str]) -> None:
             seen.add((name, text))
             try:
                 parse_set(f"{name}={text}", types)
-            except ValueError as exc:
-                raise SweepDesignError(str(exc)) from None
+            except ValueError as exc:  # parse_set words it for --set; here it is a parameter's value
+                message = str(exc)
+                raise SweepDesignError("parameter " + message[len("--set "):] if message.startswith("--set ") else message) from None
             if name in SUMMARY_COLUMNS:
                 raise SweepDesignError(f"the parameter '{name}' has the name of a column of the summary ({', '.join(SUMMARY_COLUMNS)})")
 
@@ -88,10 +89,9 @@ def check_variables(names: Sequence[str] | None, types: dict[str, str]) -> None:
     """Refuse a ``--vars`` name that is not a variable (``SweepDesignError``, with a suggestion)."""
     for n in names or ():
         if n not in types:
-            import difflib
+            from ejsrl._suggest import did_you_mean
 
-            close = difflib.get_close_matches(n, list(types), n=1)
-            raise SweepDesignError(f"--vars: unknown variable '{n}'" + (f"; did you mean '{close[0]}'?" if close else ""))
+            raise SweepDesignError(f"--vars: unknown variable '{n}'{did_you_mean(n, types)}")
 
 
 def sweep(

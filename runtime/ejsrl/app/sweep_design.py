@@ -188,11 +188,9 @@ def design(
 
     def claim(name: str, option: str) -> None:
         if name not in types:
-            import difflib
+            from ejsrl._suggest import did_you_mean
 
-            close = difflib.get_close_matches(name, list(types), n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else ""
-            raise SweepDesignError(f"{option}: unknown variable '{name}'{hint}")
+            raise SweepDesignError(f"{option}: unknown variable '{name}'{did_you_mean(name, types)}")
         if name in names:
             raise SweepDesignError(f"{option}: '{name}' is already a parameter of this sweep")
         names.append(name)

@@ -67,10 +67,9 @@ def plot_summary(summary: Table, params: Sequence[str], out: str | Path, *, y: s
             raise PlotError(f"'{name}' is not a parameter of this sweep (parameters: {', '.join(params) or 'none'})")
     y = y or default_y(summary, params)
     if y not in summary.columns:
-        import difflib
+        from ejsrl._suggest import did_you_mean
 
-        close = difflib.get_close_matches(y, list(summary.columns), n=1)
-        raise PlotError(f"'{y}' is not a column of the summary" + (f"; did you mean '{close[0]}'?" if close else ""))
+        raise PlotError(f"'{y}' is not a column of the summary{did_you_mean(y, summary.columns)}")
     data = summary.to_pydict()
     ok = [s != "error" and data[y][i] is not None for i, s in enumerate(data["status"])]
     yv = np.array([v for v, k in zip(data[y], ok) if k], dtype=float)
