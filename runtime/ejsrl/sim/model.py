@@ -239,7 +239,7 @@ class OdePage:
                 values = y.tolist()
             else:
                 values = lay.unpack(y)
-                if y.shape == (lay.size,):
+                if len(y) == lay.size:  # not the model's part of a longer vector (FMU states appended)
                     loaded[0], loaded[1] = y, values
             if second is not None:  # the common one- and two-state pages without a loop
                 setattr(model, first, values[0])
@@ -260,8 +260,13 @@ class OdePage:
                 return np.array(got, dtype=float)
             out = np.empty(lay.size)
             if lay.flat:  # a rate of the wrong shape fails to broadcast into its slice
-                for sl, rate in zip(lay.slices, got):
-                    out[sl] = rate
+                if second is not None and type(got) is list and len(got) == 2:
+                    sl = lay.slices
+                    out[sl[0]] = got[0]
+                    out[sl[1]] = got[1]
+                else:
+                    for sl, rate in zip(lay.slices, got):
+                        out[sl] = rate
             else:
                 for view, rate in zip(lay.views(out), got):
                     view[...] = rate
