@@ -74,10 +74,37 @@ def _imports(texts: list[str]) -> list[str]:
     return out
 
 
-def _math_import() -> list[str]:
-    """The prelude's math names (every app has them as module globals)."""
-    names = ", ".join(sorted(MATH_NAMES))
-    return textwrap.wrap(f"from math import ({names})", width=WIDTH, subsequent_indent=" " * 18)
+def _code_names(lines: list[str]) -> set[str]:
+    """The names a Python source line may load (not attributes, strings or comments)."""
+    import io
+    import tokenize
+
+    names: set[str] = set()
+    for line in lines:
+        previous = ""
+        try:
+            for tok in tokenize.generate_tokens(io.StringIO(line.strip() + "\n").readline):
+                if tok.type == tokenize.NAME and previous != ".":
+                    names.add(tok.string)
+                previous = tok.string
+        except (tokenize.TokenError, SyntaxError):  # a line of a longer statement: its start was read
+            pass
+    return names
+
+
+def _prelude_imports(texts: list[str]) -> tuple[list[str], bool]:
+    """The import of the prelude's math names the app's text uses, and whether it uses ``np``.
+
+    Each line is read by Python's tokenizer on its own, names after a ``.`` (attributes) and
+    inside strings and comments left out; a line inside a multi-line string reads as code, so
+    a name may be imported that is not used (harmless), never the other way round.
+    """
+    words = _code_names(texts)
+    names = sorted(set(MATH_NAMES) & words)
+    out = textwrap.wrap(f"from math import {', '.join(names)}", width=WIDTH, subsequent_indent=" " * 17) if names else []
+    if len(out) > 1:
+        out = textwrap.wrap(f"from math import ({', '.join(names)})", width=WIDTH, subsequent_indent=" " * 18)
+    return out, "np" in words
 
 
 def _marked(lines: list[Line], locs: list[tuple[int, int]]) -> list[str]:
@@ -123,12 +150,14 @@ def render_app(plan: AppPlan) -> str:
     blocks.append(_marked(view_lines(plan.view), locs))
     blocks.append([ln.text for ln in call_lines(sim_call(plan), 0, "SIMULATION = ", "")] + [ln.text for ln in call_lines(meta_call(plan), 0, "META = ", "")])
     texts = [ln for m in methods for ln in m] + [ln for b in blocks for ln in b] + ["ModelBase", "main", "AppMeta", "SimConfig"]
+    math_lines, uses_numpy = _prelude_imports(texts)
     text = _env().get_template("app.py.j2").render(
         version=__version__,
         header=_header(plan),
         spec_name=plan.spec_name,
         spec_name_repr=repr(plan.spec_name),
-        prelude_imports=_math_import(),
+        prelude_imports=math_lines,
+        numpy=uses_numpy,
         runtime_imports=_imports(texts) + list(plan.runtime_imports),
         user_imports=plan.user_imports,
         class_lines=class_lines,

@@ -105,3 +105,15 @@ def test_a_call_with_a_keyword_the_runtime_lacks_is_caught() -> None:
 
     with pytest.raises(pytest.fail.Exception, match="minimum"):
         _bind(E.Slider, 0, ["bind", "minimum"], "E.Slider")
+
+
+@pytest.mark.parametrize("spec", SPECS, ids=_id)
+def test_the_app_imports_only_the_prelude_names_it_uses(spec: Path, tmp_path: Path) -> None:
+    """``from math import ...`` and ``import numpy as np`` name only what the app's code uses."""
+    from ejsgen.cli import build
+
+    tree = ast.parse((build(spec, tmp_path / "app") / "app.py").read_text())
+    imported = {a.asname or a.name for node in tree.body if isinstance(node, ast.ImportFrom) and node.module == "math" for a in node.names}
+    imported |= {a.asname or a.name for node in tree.body if isinstance(node, ast.Import) for a in node.names if a.name == "numpy"}
+    used = {n.id for n in ast.walk(tree) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+    assert imported - used == set(), f"{_id(spec)}: app.py imports {sorted(imported - used)} and never uses them"
