@@ -215,12 +215,13 @@ def _check_compiles(text: str, name: str) -> None:
 def _check_urdf_parser(plan: AppPlan) -> None:
     """A spec that loads a URDF arm needs yourdfpy: say so at the build, at the spec line that
     loads it, as for FMPy, rather than serving an app whose scene stays empty."""
-    try:
-        import yourdfpy  # noqa: F401
-    except ImportError:
+    import importlib.util
+
+    try:  # found, not imported: importing it (trimesh, lxml) would double the build's time
+        if importlib.util.find_spec("yourdfpy") is not None:
+            return
+    except (ImportError, ValueError):  # a broken or blocked installation counts as missing
         pass
-    else:
-        return
     where = next((line.where for m in plan.methods for line in m.lines if "urdf" in line.text and line.where is not None), None)
     hint = "pip install yourdfpy (or pip install 'ejsgen[urdf]')"
     message = "URDF arms are read with yourdfpy, which is not installed"
