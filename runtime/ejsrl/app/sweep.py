@@ -234,7 +234,8 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     if not ex.dask and not ex.scheduler and ex.workers > len(runs):
         ex.workers = len(runs)
     plural = "s" if len(runs) != 1 else ""
-    print(f"{label}: {len(runs)} run{plural} of {args.duration:g} {model_cls.INDEPENDENT or 'steps'} on {ex.describe()}", file=err, flush=True)
+    span = f"each advancing {model_cls.INDEPENDENT} by {args.duration:g}" if model_cls.INDEPENDENT else f"each of {args.duration:g} steps"
+    print(f"{label}: {len(runs)} run{plural}, {span}, on {ex.describe()}", file=err, flush=True)
     progress = None if args.quiet else Progress(len(runs), err)
     start = time.perf_counter()
     try:
