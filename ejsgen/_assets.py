@@ -21,21 +21,16 @@ __all__ = ["checked_asset", "MESH_EXTENSIONS"]
 MESH_EXTENSIONS = ("obj", "stl", "ply", "glb", "gltf", "off", "dae", "3mf", "wrl", "wrz", "vrml")
 
 
-def checked_asset(spec_dir: Path, rel: str, where: Location, what: str = "asset", *, mesh: bool = False) -> tuple[str, Path]:
-    """Check the file ``rel`` named in the spec; returns (its posix relative path, its real path).
-
-    ``spec_dir``: the spec's folder; ``where``: the spec location of the name, for errors;
-    ``mesh``: the file must be a mesh the runtime can read (assets with a mesh extension
-    are read too). Raises ``SpecError`` when the path leaves the spec's folder (directly,
-    with ``..``, or through a symbolic link), does not name a regular file, or is a mesh
-    that cannot be read.
-    """
+def real_path_inside(spec_dir: Path, rel: str, where: Location, what: str, copy_hint: str) -> tuple[PurePosixPath, Path]:
+    """``rel`` as a relative path and the real path it names, refused (``SpecError``) if it
+    leaves the spec's folder directly, with ``..`` or through a symbolic link, or names
+    nothing. ``copy_hint``: how the user brings the thing into the folder."""
     p = PurePosixPath(rel.replace("\\", "/"))
     if p.is_absolute() or Path(rel).is_absolute() or ".." in p.parts:
         raise SpecError(
             where,
             f"the {what} '{rel}' must be a path inside the spec's folder",
-            "copy the file next to the spec (or into a subfolder) and name it relative to the spec",
+            f"{copy_hint} next to the spec (or into a subfolder) and name it relative to the spec",
         )
     folder = spec_dir.resolve()
     src = folder / p
@@ -49,8 +44,21 @@ def checked_asset(spec_dir: Path, rel: str, where: Location, what: str = "asset"
         raise SpecError(
             where,
             f"the {what} '{rel}' is a link to a file outside the spec's folder",
-            "only files inside the spec's folder are copied into an app; copy the file there instead of linking to it",
+            f"only files inside the spec's folder are copied into an app; {copy_hint} there instead of linking to it",
         )
+    return p, real
+
+
+def checked_asset(spec_dir: Path, rel: str, where: Location, what: str = "asset", *, mesh: bool = False) -> tuple[str, Path]:
+    """Check the file ``rel`` named in the spec; returns (its posix relative path, its real path).
+
+    ``spec_dir``: the spec's folder; ``where``: the spec location of the name, for errors;
+    ``mesh``: the file must be a mesh the runtime can read (assets with a mesh extension
+    are read too). Raises ``SpecError`` when the path leaves the spec's folder (directly,
+    with ``..``, or through a symbolic link), does not name a regular file, or is a mesh
+    that cannot be read.
+    """
+    p, real = real_path_inside(spec_dir, rel, where, what, "copy the file")
     if not real.is_file():
         kind = "a folder" if real.is_dir() else "not a regular file"
         raise SpecError(where, f"the {what} '{rel}' is {kind}", f"name a file{' (OBJ, STL, PLY, GLB/glTF, OFF or VRML97 .wrl)' if mesh else ''}")

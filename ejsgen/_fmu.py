@@ -27,6 +27,7 @@ import zipfile
 from pathlib import Path, PurePosixPath
 from typing import TYPE_CHECKING, Any
 
+from ejsgen._assets import checked_asset, real_path_inside
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError
 from ejsgen.plan import Line
@@ -61,22 +62,8 @@ def cache_dir() -> Path:
 
 
 def _inside(spec_dir: Path, rel: str, where: Location) -> Path:
-    """The real path of the folder ``rel``, refused if it leaves the spec's folder (as
-    ``ejsgen._assets.checked_asset`` refuses files)."""
-    p = PurePosixPath(rel.replace("\\", "/"))
-    if p.is_absolute() or Path(rel).is_absolute() or ".." in p.parts:
-        raise SpecError(where, f"the FMU '{rel}' must be a path inside the spec's folder", "copy the FMU next to the spec (or into a subfolder) and name it relative to the spec")
-    folder = spec_dir.resolve()
-    src = folder / p
-    if not src.exists() and not src.is_symlink():
-        raise SpecError(where, f"the FMU '{rel}' does not exist", "paths are relative to the spec's folder")
-    try:
-        real = src.resolve(strict=True)
-    except (OSError, RuntimeError):
-        raise SpecError(where, f"the FMU '{rel}' is a link to a file that does not exist") from None
-    if not real.is_relative_to(folder):
-        raise SpecError(where, f"the FMU '{rel}' is a link to a file outside the spec's folder", "copy the FMU into the spec's folder instead of linking to it")
-    return real
+    """The real path of the FMU folder ``rel``, refused if it leaves the spec's folder."""
+    return real_path_inside(spec_dir, rel, where, "FMU", "copy the FMU")[1]
 
 
 def _platform_dirs(fmpy: Any, version: str) -> str:
@@ -92,7 +79,6 @@ def prepare_fmu(spec_dir: Path, rel: str, where: Location) -> FmuFile:
     if (spec_dir / rel).is_dir():  # an unpacked FMU: checked here, file by file
         real = _inside(spec_dir, rel, where)
     else:  # an .fmu file: checked as every asset is (inside the spec's folder, no link out of it)
-        from ejsgen._assets import checked_asset
 
         _, real = checked_asset(spec_dir, rel, where, "FMU")
     if real.is_dir():
