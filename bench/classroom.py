@@ -157,16 +157,17 @@ async def _measure(port: int, n: int, seconds: float, server: Server, asked_pace
     await asyncio.sleep(2.0)  # every session playing
     before = [len(s.readouts()) for s in students]
     t_before = [s.readouts()[-1] if s.readouts() else 0.0 for s in students]
-    cpu0, wall0 = server.cpu_seconds(), time.perf_counter()
+    cpu0, wall0, mine0 = server.cpu_seconds(), time.perf_counter(), time.process_time()
     await asyncio.sleep(seconds)
     wall = time.perf_counter() - wall0
     cpu = server.cpu_seconds() - cpu0
+    students_cpu = time.process_time() - mine0
     rss = server.rss_mb()
     frames = [len(s.readouts()) - b for s, b in zip(students, before)]
     rates = [((s.readouts()[-1] if s.readouts() else 0.0) - t0) / wall / asked_pace for s, t0 in zip(students, t_before)]
     for s in students:
         await s.client.close()
-    return {"fps": [f / wall for f in frames], "rate": rates, "cpu": cpu / wall, "rss": rss,
+    return {"fps": [f / wall for f in frames], "rate": rates, "cpu": cpu / wall, "students_cpu": students_cpu / wall, "rss": rss,
             "load": os.getloadavg()[0]}
 
 
@@ -230,7 +231,7 @@ def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser
             best = n if ok else best
             print(f"   N={n:3d}: fps min {min(r['fps']):5.1f} median {sorted(r['fps'])[n // 2]:5.1f}; rate min {min(r['rate']):.2f} "
                   f"median {sorted(r['rate'])[n // 2]:.2f}; server CPU {r['cpu']:.2f} cores = {1000 * r['cpu'] / n:.1f} ms per "
-                  f"session-second; RSS {r['rss']:.0f} MB, {(r['rss'] - one_rss) / n:.1f} MB per extra session; "
+                  f"session-second (students' clients {r['students_cpu']:.2f} cores); RSS {r['rss']:.0f} MB, {(r['rss'] - one_rss) / n:.1f} MB per extra session; "
                   f"load {r['load']:.1f}  {'HELD' if ok else 'NOT HELD'}", flush=True)
             time.sleep(2.5)  # the sessions are freed (--grace 1)
             if not ok:

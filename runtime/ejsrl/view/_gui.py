@@ -20,6 +20,7 @@ import numpy as np
 
 from ejsrl.view._plots import ImageBinding, PlotBinding
 from ejsrl.view._validate import option_label, validate_control
+from ejsrl.view._wire import set_markdown
 from ejsrl.view.elements import (
     Button,
     Checkbox,
@@ -459,7 +460,7 @@ class Panel:
             if text is not None:
                 content = keep_spaces(str(text))
                 if self._label_shown.get(id(handle)) != content:
-                    handle.content = content
+                    set_markdown(handle, content)
                     self._label_shown[id(handle)] = content
         for t in self.texts:
             value = app.safe_value(t.prop, t.where)
@@ -518,7 +519,7 @@ class Panel:
         if speed is not None and speed < SLOW_SPEED:
             text += slow_text(speed, bool(getattr(getattr(self.app, "sim", None), "realtime", False)))
         if text != self._readout_shown:
-            self.readout.content = text
+            set_markdown(self.readout, text)
             self._readout_shown = text
 
     def _show_error(self) -> None:

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from ejsrl.view._wire import set_markdown, set_prop
 from ejsrl.view.elements import Image, Plot, escape_markdown
 from ejsrl.world.colors import to_rgb
 
@@ -73,12 +74,12 @@ class PlotBuffer:
 
     def append(self, x: float, ys: list[float]) -> bool:
         """Add one point; returns False (and adds nothing) if any value is not finite."""
-        if not np.isfinite(x) or not all(np.isfinite(y) for y in ys):
+        if not math.isfinite(x) or not all(math.isfinite(y) for y in ys):
             return False
         if len(self) and x == self._x[self._end - 1]:
             # the same instant again (paused, or a value changed from the panel): replace it
             last = self._end - 1
-            if np.array_equal(self._y[:, last], ys):
+            if self._y[:, last].tolist() == list(ys):
                 return True
             self._y[:, last] = ys
             self.rev += 1
@@ -97,9 +98,11 @@ class PlotBuffer:
         if len(self) > self.max_points:
             self._start = self._end - self.max_points
         if self.window is not None:
+            # x only grows: the points that left the window are the first few, usually one
             lo = x - self.window
-            xs = self._x[self._start : self._end]
-            self._start += int(np.searchsorted(xs, lo, side="left"))
+            xs = self._x
+            while xs[self._start] < lo:
+                self._start += 1
         self.rev += 1
         return True
 
@@ -341,10 +344,10 @@ class PlotBinding:
         data = self.buffer.data()
         self._fit_scales(data)
         self._fit_axes(data)
-        self.handle.data = data
+        set_prop(self.handle, "data", data)
         text = self._values_text()
         if text != self.values.content:
-            self.values.content = text
+            set_markdown(self.values, text)
         self._sent_rev = self.buffer.rev
         self._last_push = now
         return True

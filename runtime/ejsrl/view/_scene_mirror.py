@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ejsrl.robotics.transforms import q2r, r2q
+from ejsrl.view._wire import set_position, set_prop, set_wxyz
 from ejsrl.world.kinds import KINDS
 
 __all__ = ["SceneMirror", "ROOT"]
@@ -49,6 +50,11 @@ def _polyline_segments(points: Any) -> np.ndarray:
     if len(p) < 2:
         return np.zeros((1, 2, 3), dtype=np.float32)
     return np.ascontiguousarray(np.stack([p[:-1], p[1:]], axis=1))
+
+
+def _same(a: np.ndarray, b: np.ndarray) -> bool:
+    """``np.array_equal`` for two small float arrays of one shape, at a fraction of its cost."""
+    return a.shape == b.shape and a.tolist() == b.tolist()
 
 
 def _snapshot(node: Any) -> tuple:
@@ -150,12 +156,12 @@ class SceneMirror:
             return
         if m.style == "gizmo" and self._is_dragging(node.name):
             m.T = None  # the user moves it; send the model's pose again once the drag is over
-        elif m.T is None or not np.array_equal(m.T, T):
+        elif m.T is None or not _same(m.T, T):
             # only the part that moved: a body that translates (a pendulum's bob) sends no rotation
-            if m.T is None or not np.array_equal(m.T[:3, 3], T[:3, 3]):
-                m.frame.position = T[:3, 3]
-            if m.T is None or not np.array_equal(m.T[:3, :3], T[:3, :3]):
-                m.frame.wxyz = r2q(T)
+            if m.T is None or not _same(m.T[:3, 3], T[:3, 3]):
+                set_position(m.frame, T[:3, 3])
+            if m.T is None or not _same(m.T[:3, :3], T[:3, :3]):
+                set_wxyz(m.frame, r2q(T))
             self.counters["pose"] += 1
             m.T = np.array(T)
         if visible != m.visible:
@@ -280,8 +286,8 @@ class SceneMirror:
         for part, handles in zip(parts, m.part_handles):
             T = np.eye(4) if part.T_node_part is None else np.asarray(part.T_node_part, dtype=float)
             for h in handles:
-                h.position = T[:3, 3]
-                h.wxyz = r2q(T)
+                set_position(h, T[:3, 3])
+                set_wxyz(h, r2q(T))
         self.counters["part_poses"] += 1
         return True
 
@@ -467,7 +473,7 @@ def _props_solid(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opaci
 def _props_polyline(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
     g = m.geoms[0]
     pts = np.asarray(node.props["points"]).reshape(-1, 3)
-    g.points = _polyline_segments(pts)
+    set_prop(g, "points", _polyline_segments(pts))
     style = (tuple(color), float(node.props["width"]), len(pts) >= 2)
     if style != m.sent:  # a moving line (a pendulum's rod) changes its points only: each set costs
         # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
