@@ -456,7 +456,10 @@ class App(Controller):
         return server
 
     def _start_classroom(self, server: Any, *, max_sessions: int | None, grace: float | None, workers: int | None) -> None:
-        from ejsrl.app._sessions import GRACE_SECONDS, Classroom, default_max_sessions, measure_frame_cost
+        from ejsrl.app._sessions import GRACE_SECONDS, SWITCH_INTERVAL, Classroom, default_max_sessions, measure_frame_cost
+
+        if sys.getswitchinterval() > SWITCH_INTERVAL:
+            sys.setswitchinterval(SWITCH_INTERVAL)
 
         if max_sessions is None:
             max_sessions = default_max_sessions(measure_frame_cost(self), self.sim.fps)

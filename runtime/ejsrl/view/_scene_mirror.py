@@ -37,8 +37,18 @@ GizmoCallback = Callable[[str, np.ndarray], None]
 
 
 def _rgb255(rgb: Any) -> tuple[int, int, int]:
+    key = tuple(rgb) if isinstance(rgb, tuple) else None
+    if key is not None and key in _RGB255:
+        return _RGB255[key]
     c = np.clip(np.asarray(rgb, dtype=float).reshape(3) * 255.0 + 0.5, 0, 255).astype(int)
-    return (int(c[0]), int(c[1]), int(c[2]))
+    out = (int(c[0]), int(c[1]), int(c[2]))
+    if key is not None and len(_RGB255) < 4096:
+        _RGB255[key] = out
+    return out
+
+
+#: colours seen (a node's colour is a tuple): most frames send the colour of the frame before
+_RGB255: dict[tuple[Any, ...], tuple[int, int, int]] = {}
 
 
 def _opacity(x: float) -> float | None:
