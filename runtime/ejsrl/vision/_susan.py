@@ -25,6 +25,8 @@ Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV.
 
 from __future__ import annotations
 
+import functools
+
 import cv2
 import numpy as np
 from numpy.typing import NDArray
@@ -97,7 +99,7 @@ def _local_max(resp: NDArray[np.float32], radius: int, ys: NDArray, xs: NDArray)
     if len(ys) == 0:
         return np.zeros(0, bool)
     r = int(radius)
-    rp = np.pad(resp, r)
+    rp = cv2.copyMakeBorder(resp, r, r, r, r, cv2.BORDER_CONSTANT, value=0.0)
     dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
     dy, dx = dy.ravel(), dx.ravel()
     centre = (dy == 0) & (dx == 0)
@@ -163,50 +165,48 @@ def _clear_border(resp: NDArray, b: int) -> None:
 _MOMENTS = np.column_stack([np.ones(len(SUSAN_MASK)), SUSAN_MASK[:, 0], SUSAN_MASK[:, 1]]).astype(np.float32)
 
 
-def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, *, return_saddle: bool = False):
-    """The false-positive tests on the pixels (ys, xs); returns which pass and their USAN areas n (x100).
+def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, brighter: NDArray, similar, *, return_saddle: bool = False):
+    """The false-positive tests on the nuclei at flat indices ``base`` of the padded image
+    (``pf``, rows ``Wp`` wide); returns which pass and their USAN areas n (x100).
 
-    ``similarity(values)`` gives, for the grey values (K, m) uint8 of the pixels around each
-    nucleus, c (x100, float32; at most 100) and which of them are brighter than the nucleus
-    (bool; a pixel with c = 100 counts as alike, whatever it says).
+    ``c`` (K, 37) float32: the similarity (x100, at most 100) of each mask pixel to its nucleus;
+    ``brighter`` (K, 37) bool: which of them are brighter than the nucleus (a pixel with
+    c = 100 counts as alike, whatever it says); ``similar(values)``: c (K, 3) of the grey
+    values (K, 3) uint8 of three pixels around each nucleus.
 
     1. (Smith and Brady) the USAN centroid lies more than 1/sqrt(2) pixel from the nucleus;
     2. (Smith and Brady) the three pixels from the nucleus towards the centroid are in the USAN;
     3. (one-sided) the pixels unlike the nucleus are not split into brighter ones on one side
        and darker ones on the other, as around a nucleus inside an anti-aliased edge.
 
-    All K pixels are tested at once: the sums and moments over the mask are two matrix
-    products (OpenCV's: NumPy's BLAS threads stall on a shared machine); the mask is
+    All K pixels are tested at once: the sums and moments over the mask are one matrix
+    product (OpenCV's: NumPy's BLAS threads stall on a shared machine); the mask is
     symmetric, so the unlike pixels' moments follow from the USAN's.
     """
-    if len(ys) == 0:
+    K = len(base)
+    if K == 0:
         return (np.zeros(0, bool), np.zeros(0), np.zeros(0, bool)) if return_saddle else (np.zeros(0, bool), np.zeros(0))
-    Wp = pad.shape[1]
-    offs = SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0]
-    centre = (ys + _R) * Wp + (xs + _R)
-    vals = pad.ravel().take(centre[:, None] + offs[None, :])
-    c, brighter = similarity(vals)
-    usan = cv2.gemm(c, _MOMENTS, 1.0, None, 0.0).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
-    n, sx, sy = usan[:, 0], usan[:, 1], usan[:, 2]
+    # the moments of the USAN (weights c) and of the brighter unlike pixels (weights 100 - c), in one product
+    w = np.empty((2 * K, c.shape[1]), np.float32)
+    w[:K] = c
+    np.subtract(np.float32(_SCALE), c, out=w[K:])
+    np.multiply(w[K:], brighter, out=w[K:])
+    m = cv2.gemm(w, _MOMENTS, 1.0, None, 0.0).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
+    n, sx, sy = m[:K, 0], m[:K, 1], m[:K, 2]
+    mb, bx, by = m[K:, 0], m[K:, 1], m[K:, 2]
     far_enough = sx * sx + sy * sy > 0.5 * n * n
     ax, ay = np.abs(sx), np.abs(sy)
     along_x = ay < ax
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.where(along_x, sy / np.where(ax > 0, ax, 1), sx / np.where(ay > 0, ay, 1))
     sgn = np.where(along_x, np.sign(sx), np.sign(sy)).astype(np.int64)
-    steps = np.empty((len(ys), 3), np.uint8)
-    for k in (1, 2, 3):
-        off = (np.sign(k * slope) * np.floor(np.abs(k * slope) + 0.5)).astype(np.int64)
-        oy = np.where(along_x, off, k * sgn)
-        ox = np.where(along_x, k * sgn, off)
-        steps[:, k - 1] = pad.ravel().take(centre + oy * Wp + ox)
-    total = similarity(steps)[0].sum(axis=1, dtype=np.float64)
+    # the three pixels from the nucleus towards the centroid, as flat offsets (k = 1, 2, 3)
+    ks = _K123[None, :] * slope[:, None]
+    off = (np.sign(ks) * np.floor(np.abs(ks) + 0.5)).astype(np.int64)
+    along = _K123.astype(np.int64)[None, :] * sgn[:, None]
+    step = np.where(along_x[:, None], off * Wp + along, along * Wp + off)
+    total = similar(pf.take(base[:, None] + step)).sum(axis=1, dtype=np.float64)
     contiguous = total > 2.9 * _SCALE
-    # the moments of the unlike pixels (weights 100 - c), split into brighter and darker ones
-    bright = np.subtract(np.float32(_SCALE), c)
-    np.multiply(bright, brighter, out=bright)
-    bright_m = cv2.gemm(bright, _MOMENTS, 1.0, None, 0.0).astype(np.float64)
-    mb, bx, by = bright_m[:, 0], bright_m[:, 1], bright_m[:, 2]
     md, dx_, dy_ = _SCALE * len(SUSAN_MASK) - n - mb, -sx - bx, -sy - by
     opposite = bx * dx_ + by * dy_ < 0
     balanced = np.minimum(mb, md) > 0.25 * (mb + md)
@@ -223,60 +223,143 @@ def _corner_tests(pad: NDArray[np.uint8], ys: NDArray, xs: NDArray, similarity, 
     return ok, n, saddle
 
 
-def _smooth_similarity(lut: NDArray[np.uint8], nucleus: NDArray):
-    """SUSAN's test ``c = exp(-((I - I0) / t)^6)`` (the LUT) around the nuclei's own grey levels."""
-    g0 = np.ascontiguousarray(nucleus, dtype=np.uint8)[:, None]
-
-    def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
-        g = g0[: len(vals)]
-        d = cv2.absdiff(vals, np.repeat(g, vals.shape[1], axis=1))
-        return cv2.LUT(d, lut).astype(np.float32), vals > g
-
-    return sim
+_K123 = np.arange(1, 4, dtype=np.float64)
 
 
-def _coverage_response(gray: NDArray[np.uint8], g100: float, where: tuple[NDArray, NDArray] | None = None) -> NDArray:
-    """The corner response (x100) of each pixel judged as the dark side of its 7x7 neighbourhood
-    (negative: the bright side's, of that size), from the pixels' dark shares.
+def _smooth_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray, c8: NDArray, lut: NDArray[np.uint8], **kw):
+    """``_corner_tests`` with SUSAN's test ``c = exp(-((I - I0) / t)^6)`` (the LUT, ``c8`` its
+    values for the mask pixels ``vals``) around the nuclei's own grey levels."""
+    g0 = np.ascontiguousarray(vals[:, _NUCLEUS])[:, None]
 
-    ``share = (max7 - I) / (max7 - min7)`` (the part of the pixel covered by the darker region,
-    for two grey levels and an anti-aliased edge); the darker side's USAN of a nucleus is the
-    sum of the shares over the mask. A straight edge cutting the nucleus pixel so that a share
-    a of it is dark leaves about ``g + 6.8 (a - 1/2)`` of the mask dark (the mask's chord is
-    6.8 pixels long); the response is what the side falls short of that, on the side that
-    falls short (the other side then has more than its share).
-    """
-    k7 = np.ones((7, 7), np.uint8)
-    levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
-    lo = cv2.erode(levels, k7).astype(np.float32)
-    hi = cv2.dilate(levels, k7).astype(np.float32)
-    share = np.clip((hi - gray.astype(np.float32)) / np.maximum(hi - lo, 1.0), 0.0, 1.0)
-    if where is not None:  # only at these pixels (ys, xs): the shares summed over the mask there
-        ys, xs = where
-        sp = cv2.copyMakeBorder(share, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
-        Wp = sp.shape[1]
-        offs = SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0]
-        n_dark = sp.ravel()[((ys + _R) * Wp + (xs + _R))[:, None] + offs[None, :]].sum(axis=1)
-        return (g100 + _CHORD * _SCALE * (share[ys, xs] - 0.5)) - _SCALE * n_dark
-    disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
-    disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
-    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE)
-    return (g100 + _CHORD * _SCALE * (share - 0.5)) - _SCALE * n_dark
+    def similar(v: NDArray) -> NDArray:
+        return cv2.LUT(cv2.absdiff(v, np.repeat(g0, v.shape[1], axis=1)), lut)
+
+    return _corner_tests(pf, Wp, base, c8.astype(np.float32), vals > g0, similar, **kw)
 
 
-def _coverage_similarity(lo: NDArray, hi: NDArray, dark: bool):
-    """For a nucleus inside an anti-aliased edge between grey levels lo and hi: each pixel's
-    share of the dark (or bright) side, ``(hi - I) / (hi - lo)`` clipped to [0, 1] (x100)."""
+def _coverage_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray, lo: NDArray, hi: NDArray, dark: NDArray):
+    """``_corner_tests`` for nuclei inside an anti-aliased edge between grey levels lo and hi,
+    judged as the dark side (where ``dark``) or the bright one: each pixel counts by its share
+    of that side, ``(hi - I) / (hi - lo)`` clipped to [0, 1] for the dark side (x100); for
+    the dark side the pixels unlike it are brighter, for the bright side darker."""
     lo_ = lo.astype(np.float32)[:, None]
     span = np.maximum(hi.astype(np.float32)[:, None] - lo_, np.float32(1.0))
+    d = dark[:, None]
 
-    def sim(vals: NDArray) -> tuple[NDArray, NDArray]:
-        share = np.clip((vals.astype(np.float32) - lo_[: len(vals)]) / span[: len(vals)], np.float32(0.0), np.float32(1.0))
-        c = np.float32(_SCALE) * (np.float32(1.0) - share if dark else share)
-        # the other side is brighter if this is the dark one (darker otherwise)
-        return c, (c < _SCALE) if dark else np.zeros(c.shape, bool)
+    def side(v: NDArray) -> NDArray:
+        share = np.clip((v.astype(np.float32) - lo_) / span, np.float32(0.0), np.float32(1.0))
+        return np.float32(_SCALE) * np.where(d, np.float32(1.0) - share, share)
 
-    return sim
+    c = side(vals)
+    return _corner_tests(pf, Wp, base, c, (c < _SCALE) & d, side)
+
+
+#: the column of SUSAN_MASK that is the nucleus, and those of its 3x3 neighbourhood
+_NUCLEUS = int(np.flatnonzero((SUSAN_MASK[:, 0] == 0) & (SUSAN_MASK[:, 1] == 0))[0])
+_NEAR = np.flatnonzero(np.abs(SUSAN_MASK).max(axis=1) <= 1)
+_MAX_MARGIN = 14  # the widest ramp of _ramp_bound: 36 neighbours of at most 14 fit in uint8 below the threshold
+
+
+@functools.lru_cache(maxsize=16)
+def _ramp_bound(t: float) -> tuple[int, int, float]:
+    """``(T, m, s)`` with ``s min((T - d)+, m) <= c(d)`` (the LUT, x100) for every difference d.
+
+    A lower bound on SUSAN's test that OpenCV's saturating uint8 arithmetic computes much
+    faster than the look-up: the largest such ramp (its area) of at most ``_MAX_MARGIN`` steps.
+    """
+    lut = _lut(t).astype(np.float64)
+    d = np.arange(256)
+    T = np.arange(1, 256)[:, None, None]
+    m = np.arange(1, _MAX_MARGIN + 1)[None, :, None]
+    r = np.minimum(np.maximum(T - d, 0), m)  # (255, 14, 256)
+    s = np.where(r > 0, lut / np.maximum(r, 1), np.inf).min(axis=2)
+    area = s * r.sum(axis=2)
+    i, j = np.unravel_index(int(np.argmax(area)), area.shape)
+    return int(T[i, 0, 0]), int(m[0, j, 0]), float(s[i, j])
+
+
+def _candidates_by_bound(gray: NDArray[np.uint8], t: float, n_max: float) -> NDArray[np.int64] | None:
+    """Flat image indices (raster order) of the pixels at least ``_R + 1`` from the border whose
+    USAN area (x100) may be ``<= n_max``, from a lower bound on it; None when the bound cannot
+    tell (a large ``g``): then the exact whole-image pass must be used.
+
+    With ``s min((T - d)+, m) <= c(d)`` (``_ramp_bound``), ``n >= 100 + s L`` where
+    ``L = sum min((T - d)+, m)`` over the 36 neighbours: only pixels with ``L <= (n_max - 100) / s``
+    can qualify. L is summed in uint8 with OpenCV's saturating operations (at 255 it stops,
+    above any threshold it is compared with), five cheap whole-image operations per offset
+    pair instead of the look-up; the exact USAN of the few candidates follows by gathering.
+    """
+    T, m, s = _ramp_bound(float(t))
+    if n_max < _SCALE:
+        return np.zeros(0, np.int64)
+    L_max = int(np.floor((n_max - _SCALE) / s))
+    if L_max >= 255:
+        return None
+    H, W = gray.shape
+    b = _R + 1
+    Hi, Wi = H - 2 * b, W - 2 * b
+    acc = np.zeros((Hi, Wi), np.uint8)
+    Tm = np.full((Hi + _R, Wi + _R), T, np.uint8)  # an array, not a scalar: OpenCV reads a scalar beside a tiny image as an array
+    for dx, dy in SUSAN_MASK:
+        if dy < 0 or (dy == 0 and dx <= 0):
+            continue  # one offset of each pair (d, -d): E(q) = e(|I(q) - I(q + d)|) serves p = q and p = q + d
+        x0, y0 = b - max(dx, 0), b - dy
+        w = Wi + abs(dx)
+        e = cv2.absdiff(gray[y0 : y0 + Hi + dy, x0 : x0 + w], gray[y0 + dy : y0 + dy + Hi + dy, x0 + dx : x0 + dx + w])
+        e = cv2.subtract(Tm[: e.shape[0], : e.shape[1]], e)  # (T - d)+
+        cv2.threshold(e, m, 0, cv2.THRESH_TRUNC, dst=e)  # min(., m)
+        ex = max(dx, 0)
+        cv2.add(acc, e[dy : dy + Hi, ex : ex + Wi], dst=acc)  # offset d of p: q = p
+        ex = max(-dx, 0)
+        cv2.add(acc, e[0:Hi, ex : ex + Wi], dst=acc)  # offset -d of p: q = p - d
+    nz = cv2.findNonZero(np.less_equal(acc, np.uint8(L_max)).view(np.uint8))
+    if nz is None:
+        return np.zeros(0, np.int64)
+    xy = nz.reshape(-1, 2).astype(np.int64)
+    return (xy[:, 1] + b) * W + (xy[:, 0] + b)
+
+
+def _hidden_failures(resp: NDArray[np.float32], r: int, passing: NDArray[np.int64], failing: NDArray[np.int64], fv: NDArray) -> None:
+    """Zero, in ``resp`` (H, W), the failing pixels (flat indices ``failing``, values ``fv``) that are
+    not hidden: a failing pixel stays when a larger pixel that stays (passing, or failing and
+    hidden itself) lies in its (2r+1)^2 window.
+
+    Found from the passing pixels down: the windows of the pixels just found to stay are
+    searched for smaller failing pixels, which stay in turn, until none is found.
+    """
+    H, W = resp.shape
+    if len(failing) == 0:
+        return
+    rf = resp.ravel()
+    rf[failing] = 0
+    Wp = W + 2 * r
+    undecided = np.full((H + 2 * r) * Wp, np.inf, np.float32)  # padded: the value of each failing pixel not yet found hidden
+    to_pad = lambda i: (i // W + r) * Wp + i % W + r  # noqa: E731
+    undecided[to_pad(failing)] = fv
+    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
+    offs = (dy * Wp + dx).ravel()
+    front, front_v = to_pad(passing), rf[passing]
+    while len(front):
+        where = front[:, None] + offs[None, :]
+        hit = undecided.take(where) < front_v[:, None]
+        found = np.unique(where[hit])
+        front_v = undecided[found]
+        undecided[found] = np.inf
+        front = found
+        rf[(found // Wp - r) * W + found % Wp - r] = front_v
+
+
+def _window_max(img: NDArray[np.float32], r: int, idx: NDArray[np.int64]) -> NDArray[np.float32]:
+    """The largest value of ``img`` in the (2r+1)^2 window of each pixel (flat indices ``idx``)."""
+    if len(idx) * (2 * r + 1) ** 2 > img.size // 2:  # many: one whole-image dilation is cheaper
+        return cv2.dilate(img, np.ones((2 * r + 1, 2 * r + 1), np.uint8)).ravel().take(idx)
+    H, W = img.shape
+    padded = cv2.copyMakeBorder(img, r, r, r, r, cv2.BORDER_CONSTANT, value=0.0)
+    Wp = W + 2 * r
+    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
+    offs = (dy * Wp + dx).ravel()
+    centre = (idx // W + r) * Wp + idx % W + r
+    return padded.ravel().take(centre[:, None] + offs[None, :]).max(axis=1)
 
 
 @image_function
@@ -317,6 +400,12 @@ def susan_corners(
     the rejected ones searched again until every maximum passes). Every peak of the
     returned response is then a corner.
 
+    How it is computed (the result is the same as testing every pixel of the image): a
+    cheap lower bound on the USAN area (``_candidates_by_bound``) leaves the few pixels
+    that may have a response; their 37 mask pixels are gathered once, and the exact USAN,
+    the in-between-grey test, the side's coverage and the false-positive tests all work
+    on those rows.
+
     Returns the corners (N, 2) float64 as ``(x, y)`` pixel coordinates, strongest first
     (ties in raster order); with ``return_response`` also the response map (H, W) float32
     (after the tests: 0 where a maximum was rejected).
@@ -331,112 +420,93 @@ def susan_corners(
     if H <= 2 * _R + 2 or W <= 2 * _R + 2:
         pts = np.zeros((0, 2))
         return (pts, np.zeros((H, W), np.float32)) if return_response else pts
-    # only pixels whose 7x7 neighbourhood spans enough grey levels can have a small USAN (with
-    # every difference at most s, n >= 37 exp(-(s / t)^6)) or an in-between grey; where they
-    # are few (a rendered scene: flat faces), their USANs are gathered one by one, else the
-    # whole-image pass is cheaper. The same values either way.
-    k7 = np.ones((2 * _R + 1, 2 * _R + 1), np.uint8)
-    need = min(0.9 * float(t) * np.log(len(SUSAN_MASK) * _SCALE / g100) ** (1.0 / 6.0), float(t))
-    maybe = cv2.subtract(cv2.dilate(gray, k7), cv2.erode(gray, k7)) > need
-    _clear_border(maybe, _R + 1)
-    sparse = maybe.mean() <= 0.2
-    if sparse:
-        pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
-        lut = _lut(t)
-        my_, mx_ = np.nonzero(maybe)
-        resp = np.zeros((H, W), np.float32)
-        resp[my_, mx_] = g100 - _gather(pad, gray, lut, my_, mx_).sum(axis=1, dtype=np.int32)
-    else:
-        acc, pad, lut = _usan(gray, t)
-        resp = np.float32(g100) - acc.astype(np.float32)  # g - n, x100
     floor = float(min_response) * _SCALE
-    # keep what reaches the floor: OpenCV's threshold keeps what exceeds the largest float32 below it
+    # keep what reaches the floor: the largest float32 below it is what a response must exceed
     below = np.float32(floor)
     if below >= floor:
         below = np.nextafter(below, np.float32(-np.inf))
-    resp = cv2.threshold(resp, float(below), 0.0, cv2.THRESH_TOZERO)[1]
-    _clear_border(resp, _R + 1)
-    # pixels with an in-between grey (inside an anti-aliased or blurred edge) have a tiny USAN of
+    lut = _lut(t)
+    # 1. the pixels that may have a response (n <= g - floor), then their exact USAN areas from
+    # their 37 mask pixels, gathered once for every test below (rows of `vals`)
+    idx = _candidates_by_bound(gray, t, g100 - floor + 1.0)
+    if idx is None:  # a geometric threshold so large that the bound cannot tell: the exact pass
+        acc = _usan(gray, t)[0]
+        some = (np.float32(g100) - acc.astype(np.float32)) > below
+        _clear_border(some, _R + 1)
+        idx = np.flatnonzero(some)
+    if len(idx) == 0:
+        pts = np.zeros((0, 2))
+        return (pts, np.zeros((H, W), np.float32)) if return_response else pts
+    pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
+    pf, Wp = pad.ravel(), W + 2 * _R
+    base = idx + (idx // W) * (2 * _R) + (_R * Wp + _R)  # flat indices in the padded image
+    vals = pf.take(base[:, None] + (SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0])[None, :])
+    v0 = vals[:, _NUCLEUS]
+    c8 = cv2.LUT(cv2.absdiff(vals, np.repeat(v0[:, None], len(SUSAN_MASK), axis=1)), lut)
+    n = cv2.reduce(c8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    rv = np.float32(g100) - n.astype(np.float32)  # g - n, x100
+    keep = rv > below
+    idx, base, vals, c8, v0, rv = idx[keep], base[keep], vals[keep], c8[keep], v0[keep], rv[keep]
+    # 2. pixels with an in-between grey (inside an anti-aliased or blurred edge) have a tiny USAN of
     # their own that means nothing: they are judged as the side they belong to would be. Those
-    # that cannot be a corner that way (a straight edge: the whole-image estimate of
-    # _coverage_response) are dropped at once; the others are judged one by one below
-    k3 = np.ones((3, 3), np.uint8)
+    # that cannot be a corner that way (a straight edge: the estimate of _coverage_response)
+    # are dropped at once; the others are judged one by one below
+    near = vals[:, _NEAR]
+    lo3, hi3 = near.min(axis=1), near.max(axis=1)
+    v16 = v0.astype(np.int16)
     half_t = 0.5 * float(t)
-    lo3, hi3 = cv2.erode(gray, k3), cv2.dilate(gray, k3)
-    mid = (cv2.subtract(gray, lo3) > half_t) & (cv2.subtract(hi3, gray) > half_t)
-    kernel = np.ones((2 * r + 1, 2 * r + 1), np.uint8)
-    tested = np.zeros((H, W), bool)
-    passed_y, passed_x = [np.zeros(0, np.int64)], [np.zeros(0, np.int64)]
+    mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
+    r_dark = np.zeros(len(idx), np.float32)
+    if mid.any():
+        r_dark[mid] = _coverage_response(gray, g100).ravel().take(idx[mid])
+    flat_side = mid & (np.abs(r_dark) < floor - _MID_SLACK * _SCALE)
     # X-junctions (saddles: the corner of a checkerboard) have an in-between centre pixel with a
     # small USAN of its own, its brighter and darker neighbours in opposite quadrants
     # (and, being half dark and half bright, no corner by the side it belongs to)
-    if sparse:
-        mid &= maybe
-        r_dark = np.zeros((H, W), np.float32)
-        wy, wx = np.nonzero(mid)
-        r_dark[wy, wx] = _coverage_response(gray, g100, (wy, wx))
-    else:
-        r_dark = _coverage_response(gray, g100)
-    flat_side = mid & (np.abs(r_dark) < floor - _MID_SLACK * _SCALE)
-    own_mid = np.where(flat_side, resp, 0)
-    sy, sx = np.nonzero((own_mid > 0) & (own_mid >= cv2.dilate(own_mid, k3)))
-    saddle = _corner_tests(pad, sy, sx, _smooth_similarity(lut, gray[sy, sx]), return_saddle=True)[2]
-    sy, sx = sy[saddle], sx[saddle]
-    resp[flat_side] = 0
-    resp[sy, sx] = own_mid[sy, sx]
-    tested[sy, sx] = True
-    passed_y.append(sy)
-    passed_x.append(sx)
-    # every other pixel with a response is tested at once (as Smith and Brady test every pixel
+    k3 = np.ones((3, 3), np.uint8)
+    wf = np.flatnonzero(flat_side)
+    own_mid = np.zeros((H, W), np.float32)
+    own_mid.ravel()[idx[wf]] = rv[wf]
+    ws = wf[rv[wf] >= cv2.dilate(own_mid, k3).ravel().take(idx[wf])]
+    saddle = _smooth_test(pf, Wp, base[ws], vals[ws], c8[ws], lut, return_saddle=True)[2]
+    ws = ws[saddle]
+    # 3. every other pixel with a response is tested at once (as Smith and Brady test every pixel
     # before the suppression); those that fail are removed, or, inside an anti-aliased edge,
     # judged again as the side they belong to
-    ys, xs = np.nonzero((resp > 0) & ~tested)
-    v = gray[ys, xs]
-    ok, _ = _corner_tests(pad, ys, xs, _smooth_similarity(lut, v))
-    m = mid[ys, xs] & ~ok
-    new = np.zeros(len(ys))
-    if m.any():
-        my, mx, lo, hi = ys[m], xs[m], lo3[ys[m], xs[m]], hi3[ys[m], xs[m]]
-        # judged as the side that falls short of its share (the sign of the whole-image
-        # estimate): a straight edge cutting the nucleus pixel so that a share a of it lies on
-        # one side leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord
-        # is 6.8 pixels long); only what falls short of that is a corner
-        dark = r_dark[my, mx] > 0
-        a_dark = (hi.astype(np.float64) - v[m]) / np.maximum(hi.astype(np.float64) - lo, 1.0)
+    rest = ~flat_side
+    wt = np.flatnonzero(rest)
+    ok, _ = _smooth_test(pf, Wp, base[wt], vals[wt], c8[wt], lut)
+    value = rv[wt].astype(np.float32)
+    mt = mid[wt] & ~ok
+    if mt.any():
+        sel = wt[mt]
+        lo, hi, v = lo3[sel], hi3[sel], v0[sel]
+        # judged as the side that falls short of its share (the sign of the estimate): a
+        # straight edge cutting the nucleus pixel so that a share a of it lies on one side
+        # leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord is 6.8
+        # pixels long); only what falls short of that is a corner
+        dark = r_dark[sel] > 0
+        a_dark = (hi.astype(np.float64) - v) / np.maximum(hi.astype(np.float64) - lo, 1.0)
         a_side = np.where(dark, a_dark, 1.0 - a_dark)
-        ok_m = np.zeros(len(my), bool)
-        n_m = np.zeros(len(my))
-        for side in (True, False):
-            k = dark == side
-            if k.any():
-                ok_m[k], n_m[k] = _corner_tests(pad, my[k], mx[k], _coverage_similarity(lo[k], hi[k], dark=side))
+        ok_m, n_m = _coverage_test(pf, Wp, base[sel], vals[sel], lo, hi, dark)
         r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
-        new[m] = np.where(r_mid >= floor, r_mid, 0.0)
-        ok |= new > 0
-    # a pixel that fails is dropped where it is the largest in its window, as a maximum that
+        new = np.where(r_mid >= floor, r_mid, 0.0)
+        got = new > 0
+        value[np.flatnonzero(mt)[got]] = new[got].astype(np.float32)
+        ok[np.flatnonzero(mt)[got]] = True
+    # 4. a pixel that fails is dropped where it is the largest in its window, as a maximum that
     # fails is; where a larger pixel that stays is in its window, it stays too (hidden under
     # that maximum, not a corner) and still suppresses the weaker pixels around it. Which
-    # stay is found from the strongest down, a chain of such pixels at a time
-    fail = ~ok
-    resp[ys[new > 0], xs[new > 0]] = new[new > 0].astype(np.float32)
-    fy, fx = ys[fail], xs[fail]
-    fv = resp[fy, fx]
-    stay = np.zeros(len(fy), bool)
-    live = resp.copy()
-    live[fy, fx] = 0
-    und = np.arange(len(fy))  # the failing pixels not yet found hidden
-    while len(und):
-        uy, ux = fy[und], fx[und]
-        hidden = cv2.dilate(live, kernel)[uy, ux] > fv[und]
-        if not hidden.any():
-            break
-        stay[und[hidden]] = True
-        live[uy[hidden], ux[hidden]] = fv[und[hidden]]
-        und = und[~hidden]
-    resp[fy[~stay], fx[~stay]] = 0
-    passed_y.append(ys[ok])
-    passed_x.append(xs[ok])
-    cy, cx = np.concatenate(passed_y), np.concatenate(passed_x)
+    # stay is found from the passing pixels down, through the windows of those just found
+    resp = np.zeros((H, W), np.float32)
+    rf = resp.ravel()
+    rf[idx[ws]] = rv[ws]
+    rf[idx[wt]] = value
+    passing = np.concatenate([idx[ws], idx[wt[ok]]])
+    _hidden_failures(resp, r, passing, idx[wt[~ok]], value[~ok])
+    # 5. the corners: the passing pixels that are maxima in their window
+    ci = passing[rf[passing] >= _window_max(resp, r, passing)] if len(passing) else passing
+    cy, cx = np.divmod(ci, W)
     keep = _local_max(resp, r, cy, cx)
     py, px = cy[keep], cx[keep]
     strength = resp[py, px] / _SCALE
@@ -450,6 +520,31 @@ def susan_corners(
     if subpixel and len(pts):
         pts = _refine(gray, pts)
     return (pts, resp / _SCALE) if return_response else pts
+
+
+def _coverage_response(gray: NDArray[np.uint8], g100: float) -> NDArray[np.float32]:
+    """The corner response (x100) of each pixel judged as the dark side of its 7x7 neighbourhood
+    (negative: the bright side's, of that size), from the pixels' dark shares.
+
+    ``share = (max7 - I) / (max7 - min7)`` (the part of the pixel covered by the darker region,
+    for two grey levels and an anti-aliased edge); the darker side's USAN of a nucleus is the
+    sum of the shares over the mask. A straight edge cutting the nucleus pixel so that a share
+    a of it is dark leaves about ``g + 6.8 (a - 1/2)`` of the mask dark (the mask's chord is
+    6.8 pixels long); the response is what the side falls short of that, on the side that
+    falls short (the other side then has more than its share).
+
+    Whole-image OpenCV operations in float32 (``max7 - I`` saturates at 0: a share below 0 is
+    clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit.
+    """
+    k7 = np.ones((7, 7), np.uint8)
+    levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
+    lo, hi = cv2.erode(levels, k7), cv2.dilate(levels, k7)
+    share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
+    cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
+    disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
+    disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
+    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE)
+    return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (share - np.float32(0.5))) - np.float32(_SCALE) * n_dark
 
 
 def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64]) -> NDArray[np.float64]:
