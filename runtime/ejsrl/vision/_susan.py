@@ -26,6 +26,9 @@ Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV.
 from __future__ import annotations
 
 import functools
+import threading
+from concurrent.futures import ThreadPoolExecutor
+from typing import NamedTuple
 
 import cv2
 import numpy as np
@@ -165,55 +168,68 @@ def _clear_border(resp: NDArray, b: int) -> None:
 _MOMENTS = np.column_stack([np.ones(len(SUSAN_MASK)), SUSAN_MASK[:, 0], SUSAN_MASK[:, 1]]).astype(np.float32)
 
 
-def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, brighter: NDArray, similar, *, return_saddle: bool = False):
+def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, brighter: NDArray | None, similar, *, return_saddle: bool = False):
     """The false-positive tests on the nuclei at flat indices ``base`` of the padded image
     (``pf``, rows ``Wp`` wide); returns which pass and their USAN areas n (x100).
 
     ``c`` (K, 37) float32: the similarity (x100, at most 100) of each mask pixel to its nucleus;
     ``brighter`` (K, 37) bool: which of them are brighter than the nucleus (a pixel with
-    c = 100 counts as alike, whatever it says); ``similar(values)``: c (K, 3) of the grey
-    values (K, 3) uint8 of three pixels around each nucleus.
+    c = 100 counts as alike, whatever it says), or None where the unlike pixels cannot be split
+    (all of them on one side: test 3 cannot fail); ``similar(values, rows)``: c (k, 3) of the
+    grey values (k, 3) uint8 of three pixels around each nucleus of ``rows`` (indices).
 
     1. (Smith and Brady) the USAN centroid lies more than 1/sqrt(2) pixel from the nucleus;
     2. (Smith and Brady) the three pixels from the nucleus towards the centroid are in the USAN;
     3. (one-sided) the pixels unlike the nucleus are not split into brighter ones on one side
        and darker ones on the other, as around a nucleus inside an anti-aliased edge.
 
-    All K pixels are tested at once: the sums and moments over the mask are one matrix
-    product (OpenCV's: NumPy's BLAS threads stall on a shared machine); the mask is
-    symmetric, so the unlike pixels' moments follow from the USAN's.
+    All K pixels are tested at once: the sums and moments over the mask are matrix products
+    (OpenCV's: NumPy's BLAS threads stall on a shared machine); the mask is symmetric, so the
+    unlike pixels' moments follow from the USAN's.
     """
     K = len(base)
     if K == 0:
         return (np.zeros(0, bool), np.zeros(0), np.zeros(0, bool)) if return_saddle else (np.zeros(0, bool), np.zeros(0))
-    # the moments of the USAN (weights c) and of the brighter unlike pixels (weights 100 - c), in one product
-    w = np.empty((2 * K, c.shape[1]), np.float32)
-    w[:K] = c
-    np.subtract(np.float32(_SCALE), c, out=w[K:])
-    np.multiply(w[K:], brighter, out=w[K:])
-    m = cv2.gemm(w, _MOMENTS, 1.0, None, 0.0).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
-    n, sx, sy = m[:K, 0], m[:K, 1], m[:K, 2]
-    mb, bx, by = m[K:, 0], m[K:, 1], m[K:, 2]
-    far_enough = sx * sx + sy * sy > 0.5 * n * n
+    m = cv2.gemm(c, _MOMENTS, 1.0, None, 0.0).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
+    n, sx, sy = m[:, 0], m[:, 1], m[:, 2]
+    ok = sx * sx + sy * sy > 0.5 * n * n  # far enough
+    # the other two tests only where they can still change the answer (most pixels inside an
+    # edge already fail this one); the saddle test needs the unlike pixels' moments everywhere
+    rows = np.arange(K) if return_saddle else np.flatnonzero(ok)
+    if len(rows) == 0:
+        return ok, n
+    if len(rows) < K:
+        base, n, sx, sy = base[rows], n[rows], sx[rows], sy[rows]
     ax, ay = np.abs(sx), np.abs(sy)
     along_x = ay < ax
     with np.errstate(divide="ignore", invalid="ignore"):
         slope = np.where(along_x, sy / np.where(ax > 0, ax, 1), sx / np.where(ay > 0, ay, 1))
     sgn = np.where(along_x, np.sign(sx), np.sign(sy)).astype(np.int64)
-    # the three pixels from the nucleus towards the centroid, as flat offsets (k = 1, 2, 3)
+    # the three pixels from the nucleus towards the centroid, as flat offsets (k = 1, 2, 3),
+    # rounded half away from zero
     ks = _K123[None, :] * slope[:, None]
-    off = (np.sign(ks) * np.floor(np.abs(ks) + 0.5)).astype(np.int64)
+    off = np.trunc(ks + np.copysign(0.5, ks)).astype(np.int64)
     along = _K123.astype(np.int64)[None, :] * sgn[:, None]
     step = np.where(along_x[:, None], off * Wp + along, along * Wp + off)
-    total = similar(pf.take(base[:, None] + step)).sum(axis=1, dtype=np.float64)
+    total = similar(pf.take(base[:, None] + step), rows).sum(axis=1, dtype=np.float64)
     contiguous = total > 2.9 * _SCALE
+    if brighter is None:
+        ok[rows] &= contiguous
+        return ok, m[:, 0]
+    # the moments of the unlike pixels (weights 100 - c), split into brighter and darker ones
+    if len(rows) < K:
+        c, brighter = c[rows], brighter[rows]
+    bright = np.subtract(np.float32(_SCALE), c)
+    np.multiply(bright, brighter, out=bright)
+    bright_m = cv2.gemm(bright, _MOMENTS, 1.0, None, 0.0).astype(np.float64)
+    mb, bx, by = bright_m[:, 0], bright_m[:, 1], bright_m[:, 2]
     md, dx_, dy_ = _SCALE * len(SUSAN_MASK) - n - mb, -sx - bx, -sy - by
     opposite = bx * dx_ + by * dy_ < 0
     balanced = np.minimum(mb, md) > 0.25 * (mb + md)
     two_sided = opposite & balanced
-    ok = far_enough & contiguous & ~two_sided
+    ok[rows] &= contiguous & ~two_sided
     if not return_saddle:
-        return ok, n
+        return ok, m[:, 0]
     # an X-junction (a saddle: the corner of a checkerboard) is two-sided too, but its brighter
     # and its darker pixels each lie in two opposite quadrants, centred on the nucleus
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -231,8 +247,8 @@ def _smooth_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray, c
     values for the mask pixels ``vals``) around the nuclei's own grey levels."""
     g0 = np.ascontiguousarray(vals[:, _NUCLEUS])[:, None]
 
-    def similar(v: NDArray) -> NDArray:
-        return cv2.LUT(cv2.absdiff(v, np.repeat(g0, v.shape[1], axis=1)), lut)
+    def similar(v: NDArray, rows: NDArray) -> NDArray:
+        return cv2.LUT(cv2.absdiff(v, np.repeat(g0[rows], v.shape[1], axis=1)), lut)
 
     return _corner_tests(pf, Wp, base, c8.astype(np.float32), vals > g0, similar, **kw)
 
@@ -242,16 +258,24 @@ def _coverage_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray,
     judged as the dark side (where ``dark``) or the bright one: each pixel counts by its share
     of that side, ``(hi - I) / (hi - lo)`` clipped to [0, 1] for the dark side (x100); for
     the dark side the pixels unlike it are brighter, for the bright side darker."""
-    lo_ = lo.astype(np.float32)[:, None]
-    span = np.maximum(hi.astype(np.float32)[:, None] - lo_, np.float32(1.0))
+    lo8 = np.ascontiguousarray(lo, dtype=np.uint8)[:, None]
+    span8 = np.maximum(np.subtract(hi, lo, dtype=np.uint8), np.uint8(1))[:, None]  # hi >= lo: the max and min of one window
+    spanf = span8.astype(np.float32)
     d = dark[:, None]
 
-    def side(v: NDArray) -> NDArray:
-        share = np.clip((v.astype(np.float32) - lo_) / span, np.float32(0.0), np.float32(1.0))
-        return np.float32(_SCALE) * np.where(d, np.float32(1.0) - share, share)
+    def side(v: NDArray, rows: NDArray | slice = slice(None)) -> NDArray:
+        # (I - lo) clipped to [0, span] in uint8, then divided: the same float32 share as
+        # clip((I - lo) / span, 0, 1), with three of its passes over the values in uint8
+        x = np.maximum(v, lo8[rows])
+        np.subtract(x, lo8[rows], out=x)
+        np.minimum(x, span8[rows], out=x)
+        share = np.divide(x, spanf[rows], dtype=np.float32)
+        np.subtract(np.float32(1.0), share, out=share, where=d[rows])
+        return np.multiply(share, np.float32(_SCALE), out=share)
 
-    c = side(vals)
-    return _corner_tests(pf, Wp, base, c, (c < _SCALE) & d, side)
+    # the pixels unlike the side are all on the other side (brighter than the dark side,
+    # darker than the bright one), never split into two: the one-sided test cannot fail
+    return _corner_tests(pf, Wp, base, side(vals), None, side)
 
 
 #: the column of SUSAN_MASK that is the nucleus, and those of its 3x3 neighbourhood
@@ -278,34 +302,40 @@ def _ramp_bound(t: float) -> tuple[int, int, float]:
     return int(T[i, 0, 0]), int(m[0, j, 0]), float(s[i, j])
 
 
-def _candidates_by_bound(gray: NDArray[np.uint8], t: float, n_max: float) -> NDArray[np.int64] | None:
-    """Flat image indices (raster order) of the pixels at least ``_R + 1`` from the border whose
-    USAN area (x100) may be ``<= n_max``, from a lower bound on it; None when the bound cannot
-    tell (a large ``g``): then the exact whole-image pass must be used.
+def _bound_limit(t: float, n_max: float) -> int | None:
+    """The largest ramp sum L of ``_candidates_by_bound`` that may still have ``n <= n_max``; None
+    when the bound cannot tell in uint8 (a large ``g``): then the exact whole-image pass is used."""
+    s = _ramp_bound(float(t))[2]
+    if n_max < _SCALE:
+        return -1
+    L_max = int(np.floor((n_max - _SCALE) / s))
+    return L_max if L_max < 255 else None
+
+
+def _candidates_by_bound(gray: NDArray[np.uint8], t: float, L_max: int, y0: int, y1: int) -> NDArray[np.int64]:
+    """Flat image indices (raster order) of the pixels of rows ``y0 .. y1 - 1`` (at least ``_R + 1``
+    from the border) whose USAN area may be small enough: a ramp sum ``L <= L_max`` (``_bound_limit``).
 
     With ``s min((T - d)+, m) <= c(d)`` (``_ramp_bound``), ``n >= 100 + s L`` where
     ``L = sum min((T - d)+, m)`` over the 36 neighbours: only pixels with ``L <= (n_max - 100) / s``
-    can qualify. L is summed in uint8 with OpenCV's saturating operations (at 255 it stops,
-    above any threshold it is compared with), five cheap whole-image operations per offset
-    pair instead of the look-up; the exact USAN of the few candidates follows by gathering.
+    can have ``n <= n_max``. L is summed in uint8 with OpenCV's saturating operations (at 255
+    it stops, above any threshold it is compared with), five cheap whole-image operations per
+    offset pair instead of the look-up; the exact USAN of the few candidates follows by gathering.
     """
-    T, m, s = _ramp_bound(float(t))
-    if n_max < _SCALE:
-        return np.zeros(0, np.int64)
-    L_max = int(np.floor((n_max - _SCALE) / s))
-    if L_max >= 255:
-        return None
+    T, m, _ = _ramp_bound(float(t))
     H, W = gray.shape
     b = _R + 1
-    Hi, Wi = H - 2 * b, W - 2 * b
+    Hi, Wi = y1 - y0, W - 2 * b
+    if L_max < 0 or Hi <= 0 or Wi <= 0:
+        return np.zeros(0, np.int64)
     acc = np.zeros((Hi, Wi), np.uint8)
     Tm = np.full((Hi + _R, Wi + _R), T, np.uint8)  # an array, not a scalar: OpenCV reads a scalar beside a tiny image as an array
     for dx, dy in SUSAN_MASK:
         if dy < 0 or (dy == 0 and dx <= 0):
             continue  # one offset of each pair (d, -d): E(q) = e(|I(q) - I(q + d)|) serves p = q and p = q + d
-        x0, y0 = b - max(dx, 0), b - dy
+        qx, qy = b - max(dx, 0), y0 - dy
         w = Wi + abs(dx)
-        e = cv2.absdiff(gray[y0 : y0 + Hi + dy, x0 : x0 + w], gray[y0 + dy : y0 + dy + Hi + dy, x0 + dx : x0 + dx + w])
+        e = cv2.absdiff(gray[qy : y1, qx : qx + w], gray[qy + dy : y1 + dy, qx + dx : qx + dx + w])
         e = cv2.subtract(Tm[: e.shape[0], : e.shape[1]], e)  # (T - d)+
         cv2.threshold(e, m, 0, cv2.THRESH_TRUNC, dst=e)  # min(., m)
         ex = max(dx, 0)
@@ -316,7 +346,27 @@ def _candidates_by_bound(gray: NDArray[np.uint8], t: float, n_max: float) -> NDA
     if nz is None:
         return np.zeros(0, np.int64)
     xy = nz.reshape(-1, 2).astype(np.int64)
-    return (xy[:, 1] + b) * W + (xy[:, 0] + b)
+    return (xy[:, 1] + y0) * W + (xy[:, 0] + b)
+
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_LOCK = threading.Lock()
+
+
+def _workers() -> int:
+    """How many threads SUSAN splits its work over: as many as OpenCV uses (``cv2.setNumThreads``), at most 2."""
+    return max(1, min(2, cv2.getNumThreads()))
+
+
+def _map(fn, args: list[tuple]) -> list:
+    """``[fn(*a) for a in args]``, over ``_workers()`` threads (OpenCV and NumPy let go of the GIL in their loops)."""
+    global _POOL
+    if len(args) < 2 or _workers() < 2:
+        return [fn(*a) for a in args]
+    with _POOL_LOCK:
+        if _POOL is None:
+            _POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="ejsrl-susan")
+    return list(_POOL.map(lambda a: fn(*a), args))
 
 
 def _hidden_failures(resp: NDArray[np.float32], r: int, passing: NDArray[np.int64], failing: NDArray[np.int64], fv: NDArray) -> None:
@@ -426,84 +476,54 @@ def susan_corners(
     if below >= floor:
         below = np.nextafter(below, np.float32(-np.inf))
     lut = _lut(t)
-    # 1. the pixels that may have a response (n <= g - floor), then their exact USAN areas from
-    # their 37 mask pixels, gathered once for every test below (rows of `vals`)
-    idx = _candidates_by_bound(gray, t, g100 - floor + 1.0)
-    if idx is None:  # a geometric threshold so large that the bound cannot tell: the exact pass
-        acc = _usan(gray, t)[0]
-        some = (np.float32(g100) - acc.astype(np.float32)) > below
-        _clear_border(some, _R + 1)
-        idx = np.flatnonzero(some)
+    mid_slack = floor - _MID_SLACK * _SCALE
+    b = _R + 1
+    # 1. the pixels that may have a response (n <= g - floor): a cheap bound over the image, in two
+    # bands of rows at once, beside the whole-image coverage estimate of step 2
+    L_max = _bound_limit(t, g100 - floor + 1.0)
+    split = b + (H - 2 * b) // 2
+    jobs: list[tuple] = [(_coverage_response, gray, g100)]
+    if L_max is not None:
+        jobs += [(_candidates_by_bound, gray, t, L_max, b, split), (_candidates_by_bound, gray, t, L_max, split, H - b)]
+    else:  # a geometric threshold so large that the bound cannot tell: the exact pass
+        jobs.append((_exact_candidates, gray, t, g100, below))
+    cover, *found = _map(lambda f, *a: f(*a), jobs)
+    idx = np.concatenate(found)
     if len(idx) == 0:
         pts = np.zeros((0, 2))
         return (pts, np.zeros((H, W), np.float32)) if return_response else pts
     pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
     pf, Wp = pad.ravel(), W + 2 * _R
-    base = idx + (idx // W) * (2 * _R) + (_R * Wp + _R)  # flat indices in the padded image
-    vals = pf.take(base[:, None] + (SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0])[None, :])
-    v0 = vals[:, _NUCLEUS]
-    c8 = cv2.LUT(cv2.absdiff(vals, np.repeat(v0[:, None], len(SUSAN_MASK), axis=1)), lut)
-    n = cv2.reduce(c8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
-    rv = np.float32(g100) - n.astype(np.float32)  # g - n, x100
-    keep = rv > below
-    idx, base, vals, c8, v0, rv = idx[keep], base[keep], vals[keep], c8[keep], v0[keep], rv[keep]
-    # 2. pixels with an in-between grey (inside an anti-aliased or blurred edge) have a tiny USAN of
-    # their own that means nothing: they are judged as the side they belong to would be. Those
-    # that cannot be a corner that way (a straight edge: the estimate of _coverage_response)
-    # are dropped at once; the others are judged one by one below
-    near = vals[:, _NEAR]
-    lo3, hi3 = near.min(axis=1), near.max(axis=1)
-    v16 = v0.astype(np.int16)
-    half_t = 0.5 * float(t)
-    mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
-    r_dark = np.zeros(len(idx), np.float32)
-    if mid.any():
-        r_dark[mid] = _coverage_response(gray, g100).ravel().take(idx[mid])
-    flat_side = mid & (np.abs(r_dark) < floor - _MID_SLACK * _SCALE)
+    # 2-3. each pixel judged on its own (its USAN, the in-between-grey test, the false-positive
+    # tests), the candidates in two halves at once
+    half = len(idx) // 2 if len(idx) > 2000 else len(idx)
+    parts = _map(_judge, [(pf, Wp, W, lut, float(t), g100, floor, below, mid_slack, cover, part) for part in (idx[:half], idx[half:]) if len(part)])
+    j = _Judged(*(np.concatenate(a) for a in zip(*parts)))
+    idx = j.idx
     # X-junctions (saddles: the corner of a checkerboard) have an in-between centre pixel with a
     # small USAN of its own, its brighter and darker neighbours in opposite quadrants
     # (and, being half dark and half bright, no corner by the side it belongs to)
     k3 = np.ones((3, 3), np.uint8)
-    wf = np.flatnonzero(flat_side)
+    wf = np.flatnonzero(j.flat)
     own_mid = np.zeros((H, W), np.float32)
-    own_mid.ravel()[idx[wf]] = rv[wf]
-    ws = wf[rv[wf] >= cv2.dilate(own_mid, k3).ravel().take(idx[wf])]
-    saddle = _smooth_test(pf, Wp, base[ws], vals[ws], c8[ws], lut, return_saddle=True)[2]
-    ws = ws[saddle]
-    # 3. every other pixel with a response is tested at once (as Smith and Brady test every pixel
-    # before the suppression); those that fail are removed, or, inside an anti-aliased edge,
-    # judged again as the side they belong to
-    rest = ~flat_side
-    wt = np.flatnonzero(rest)
-    ok, _ = _smooth_test(pf, Wp, base[wt], vals[wt], c8[wt], lut)
-    value = rv[wt].astype(np.float32)
-    mt = mid[wt] & ~ok
-    if mt.any():
-        sel = wt[mt]
-        lo, hi, v = lo3[sel], hi3[sel], v0[sel]
-        # judged as the side that falls short of its share (the sign of the estimate): a
-        # straight edge cutting the nucleus pixel so that a share a of it lies on one side
-        # leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord is 6.8
-        # pixels long); only what falls short of that is a corner
-        dark = r_dark[sel] > 0
-        a_dark = (hi.astype(np.float64) - v) / np.maximum(hi.astype(np.float64) - lo, 1.0)
-        a_side = np.where(dark, a_dark, 1.0 - a_dark)
-        ok_m, n_m = _coverage_test(pf, Wp, base[sel], vals[sel], lo, hi, dark)
-        r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
-        new = np.where(r_mid >= floor, r_mid, 0.0)
-        got = new > 0
-        value[np.flatnonzero(mt)[got]] = new[got].astype(np.float32)
-        ok[np.flatnonzero(mt)[got]] = True
+    own_mid.ravel()[idx[wf]] = j.rv[wf]
+    ws = wf[j.rv[wf] >= cv2.dilate(own_mid, k3).ravel().take(idx[wf])]
+    base = idx[ws] + (idx[ws] // W) * (2 * _R) + (_R * Wp + _R)
+    vals = pf.take(base[:, None] + (SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0])[None, :])
+    c8 = cv2.LUT(cv2.absdiff(vals, np.repeat(vals[:, _NUCLEUS : _NUCLEUS + 1], len(SUSAN_MASK), axis=1)), lut) if len(ws) else vals
+    ws = ws[_smooth_test(pf, Wp, base, vals, c8, lut, return_saddle=True)[2]]
     # 4. a pixel that fails is dropped where it is the largest in its window, as a maximum that
     # fails is; where a larger pixel that stays is in its window, it stays too (hidden under
     # that maximum, not a corner) and still suppresses the weaker pixels around it. Which
     # stay is found from the passing pixels down, through the windows of those just found
     resp = np.zeros((H, W), np.float32)
     rf = resp.ravel()
-    rf[idx[ws]] = rv[ws]
-    rf[idx[wt]] = value
+    wt = np.flatnonzero(~j.flat)
+    rf[idx[ws]] = j.rv[ws]
+    rf[idx[wt]] = j.value[wt]
+    ok = j.ok[wt]
     passing = np.concatenate([idx[ws], idx[wt[ok]]])
-    _hidden_failures(resp, r, passing, idx[wt[~ok]], value[~ok])
+    _hidden_failures(resp, r, passing, idx[wt[~ok]], j.value[wt[~ok]])
     # 5. the corners: the passing pixels that are maxima in their window
     ci = passing[rf[passing] >= _window_max(resp, r, passing)] if len(passing) else passing
     cy, cx = np.divmod(ci, W)
@@ -520,6 +540,77 @@ def susan_corners(
     if subpixel and len(pts):
         pts = _refine(gray, pts)
     return (pts, resp / _SCALE) if return_response else pts
+
+
+class _Judged(NamedTuple):
+    """The pixels with a response, each judged on its own (``_judge``), one row each."""
+
+    idx: NDArray  # flat image indices, raster order
+    rv: NDArray  # float32: their own response g - n (x100)
+    flat: NDArray  # bool: an in-between grey that is no corner by the side it belongs to (a saddle, at most)
+    value: NDArray  # float32: the response after the tests (their own, or as the side they belong to)
+    ok: NDArray  # bool: passed the tests (False where flat)
+
+
+def _exact_candidates(gray: NDArray[np.uint8], t: float, g100: float, below: np.float32) -> NDArray[np.int64]:
+    """Flat indices of the pixels (at least ``_R + 1`` from the border) whose response exceeds ``below``, from the exact whole-image USAN."""
+    some = (np.float32(g100) - _usan(gray, t)[0].astype(np.float32)) > below
+    _clear_border(some, _R + 1)
+    return np.flatnonzero(some)
+
+
+def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below, mid_slack: float, cover: NDArray, idx: NDArray) -> _Judged:
+    """Judge the candidate pixels ``idx`` (flat image indices) each on its own: their exact USAN
+    from their 37 mask pixels (gathered once for every test), and those with a response
+    through the in-between-grey test and the false-positive tests.
+
+    ``pf``/``Wp``: the padded image, flat, and its width; ``cover``: ``_coverage_response``.
+    """
+    base = idx + (idx // W) * (2 * _R) + (_R * Wp + _R)  # flat indices in the padded image
+    vals = pf.take(base[:, None] + (SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0])[None, :])
+    v0 = vals[:, _NUCLEUS]
+    c8 = cv2.LUT(cv2.absdiff(vals, np.repeat(v0[:, None], len(SUSAN_MASK), axis=1)), lut)
+    n = cv2.reduce(c8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
+    rv = np.float32(g100) - n.astype(np.float32)  # g - n, x100
+    keep = rv > below
+    idx, base, vals, c8, v0, rv = idx[keep], base[keep], vals[keep], c8[keep], v0[keep], rv[keep]
+    K = len(idx)
+    # pixels with an in-between grey (inside an anti-aliased or blurred edge) have a tiny USAN of
+    # their own that means nothing: they are judged as the side they belong to would be. Those
+    # that cannot be a corner that way (a straight edge: the estimate of _coverage_response)
+    # are dropped at once (only a saddle may be among them); the others are judged below
+    near = vals[:, _NEAR]
+    lo3, hi3 = near.min(axis=1), near.max(axis=1)
+    v16 = v0.astype(np.int16)
+    half_t = 0.5 * t
+    mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
+    r_dark = np.zeros(K, np.float32)
+    r_dark[mid] = cover.ravel().take(idx[mid])
+    flat = mid & (np.abs(r_dark) < mid_slack)
+    # every other pixel with a response is tested at once (as Smith and Brady test every pixel
+    # before the suppression); those that fail are removed, or, inside an anti-aliased edge,
+    # judged again as the side they belong to
+    wt = np.flatnonzero(~flat)
+    value = rv.copy()
+    ok = np.zeros(K, bool)
+    ok[wt] = _smooth_test(pf, Wp, base[wt], vals[wt], c8[wt], lut)[0]
+    sel = np.flatnonzero(mid & ~flat & ~ok)
+    if len(sel):
+        lo, hi, v = lo3[sel], hi3[sel], v0[sel]
+        # judged as the side that falls short of its share (the sign of the estimate): a
+        # straight edge cutting the nucleus pixel so that a share a of it lies on one side
+        # leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord is 6.8
+        # pixels long); only what falls short of that is a corner
+        dark = r_dark[sel] > 0
+        a_dark = (hi.astype(np.float64) - v) / np.maximum(hi.astype(np.float64) - lo, 1.0)
+        a_side = np.where(dark, a_dark, 1.0 - a_dark)
+        ok_m, n_m = _coverage_test(pf, Wp, base[sel], vals[sel], lo, hi, dark)
+        r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
+        got = r_mid >= floor
+        got &= r_mid > 0
+        value[sel[got]] = r_mid[got].astype(np.float32)
+        ok[sel[got]] = True
+    return _Judged(idx, rv, flat, value, ok)
 
 
 def _coverage_response(gray: NDArray[np.uint8], g100: float) -> NDArray[np.float32]:
