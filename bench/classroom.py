@@ -181,7 +181,10 @@ def lab_settings(app_dir: Path) -> tuple[float, float]:
         return fps, 1.0
     t0 = app.model._ejs_time() or 0.0
     app._run_steps(int(app.sim.steps_per_display))
-    return fps, ((app.model._ejs_time() or 0.0) - t0) * fps
+    pace = ((app.model._ejs_time() or 0.0) - t0) * fps
+    if not pace > 0:
+        raise RuntimeError(f"{app_dir.name}: one display frame did not advance the simulation (error: {getattr(app, 'error', None)})")
+    return fps, pace
 
 
 def chromium_check(port: int, seconds: float = 4.0) -> str:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import os
 import threading
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -136,6 +137,7 @@ class _Renderer:
                 attrs = [(self.vbo, "3f", "in_pos"), (self.cbo, "3f1", "in_col")] + ([(self.tbo, "3f", "in_tex")] if tex else [])
                 self.vaos[mode] = self.ctx.vertex_array(prog, attrs)
         self.targets: dict[tuple[int, int], tuple[Any, Any, Any]] = {}
+        self.finish = _gil_free_finish()
         self.lock = threading.Lock()
         self.pid = os.getpid()
         info = self.ctx.info
@@ -195,11 +197,37 @@ class _Renderer:
             self.ctx.depth_func = "<"
             if F:
                 vao.render(self.mgl.TRIANGLES, vertices=3 * F)
+            self.finish()  # the rasterising, without the GIL (see _gil_free_finish)
             draw.read_into(rgb, components=3, attachment=0, alignment=1)
             draw.read_into(inv_z, components=1, attachment=1, alignment=1, dtype="f4")
         with np.errstate(divide="ignore"):
             depth = np.divide(np.float32(1.0), inv_z, out=inv_z)  # 1 / 0 = inf where empty
         return rgb, depth
+
+
+def _gil_free_finish() -> Callable[[], None]:
+    """``glFinish`` called through ctypes, which lets go of the GIL while it waits.
+
+    moderngl keeps the GIL in every call, and with Mesa's llvmpipe the rasterising happens
+    in the wait for the pixels: a served class's other sessions could not run meanwhile
+    (bench/classroom.py, six-axis lab: a third of the server's GIL time was that wait).
+    Called before the read, it leaves the read a copy. Through GLVND's libGL it reaches the
+    context current on this thread; without the library it does nothing (the read waits).
+    """
+    import ctypes
+    import ctypes.util
+
+    for name in ("libGL.so.1", "libOpenGL.so.0", ctypes.util.find_library("GL")):
+        if not name:
+            continue
+        try:
+            fn = ctypes.CDLL(name).glFinish
+        except (OSError, AttributeError):
+            continue
+        fn.restype = None
+        fn.argtypes = []
+        return fn
+    return lambda: None
 
 
 _lock = threading.Lock()
