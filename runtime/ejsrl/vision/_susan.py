@@ -166,15 +166,28 @@ def _clear_border(resp: NDArray, b: int) -> None:
 
 #: (37, 3) float32: each mask pixel's 1, dx, dy (a matrix product gives the sum, x and y moments)
 _MOMENTS = np.column_stack([np.ones(len(SUSAN_MASK)), SUSAN_MASK[:, 0], SUSAN_MASK[:, 1]]).astype(np.float32)
+#: rows per matrix product: OpenCV's gemm hands large products to its bundled OpenBLAS, whose
+#: threads then spin for a while after each call (on a shared 2-core machine that takes a core
+#: from everything running next); OpenBLAS stays on one thread below m n k = 4 * 65536
+_GEMM_ROWS = 2000
 
 
-def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, brighter: NDArray | None, similar, *, return_saddle: bool = False):
+def _moments(c: NDArray[np.float32]) -> NDArray[np.float64]:
+    """(K, 3): the sum, x and y moments over the mask of each row of ``c`` (K, 37) float32."""
+    out = np.empty((len(c), 3), np.float32)
+    for i in range(0, len(c), _GEMM_ROWS):
+        cv2.gemm(c[i : i + _GEMM_ROWS], _MOMENTS, 1.0, None, 0.0, dst=out[i : i + _GEMM_ROWS])
+    return out.astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
+
+
+def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, brighter, similar, *, return_saddle: bool = False):
     """The false-positive tests on the nuclei at flat indices ``base`` of the padded image
     (``pf``, rows ``Wp`` wide); returns which pass and their USAN areas n (x100).
 
     ``c`` (K, 37) float32: the similarity (x100, at most 100) of each mask pixel to its nucleus;
-    ``brighter`` (K, 37) bool: which of them are brighter than the nucleus (a pixel with
-    c = 100 counts as alike, whatever it says), or None where the unlike pixels cannot be split
+    ``brighter(rows)`` (k, 37) bool: which of them, for the nuclei ``rows`` (indices), are
+    brighter than the nucleus (a pixel with c = 100 counts as alike, whatever it says), or None
+    where the unlike pixels cannot be split
     (all of them on one side: test 3 cannot fail); ``similar(values, rows)``: c (k, 3) of the
     grey values (k, 3) uint8 of three pixels around each nucleus of ``rows`` (indices).
 
@@ -184,13 +197,12 @@ def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, bri
        and darker ones on the other, as around a nucleus inside an anti-aliased edge.
 
     All K pixels are tested at once: the sums and moments over the mask are matrix products
-    (OpenCV's: NumPy's BLAS threads stall on a shared machine); the mask is symmetric, so the
-    unlike pixels' moments follow from the USAN's.
+    (``_moments``); the mask is symmetric, so the unlike pixels' moments follow from the USAN's.
     """
     K = len(base)
     if K == 0:
         return (np.zeros(0, bool), np.zeros(0), np.zeros(0, bool)) if return_saddle else (np.zeros(0, bool), np.zeros(0))
-    m = cv2.gemm(c, _MOMENTS, 1.0, None, 0.0).astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
+    m = _moments(c)
     n, sx, sy = m[:, 0], m[:, 1], m[:, 2]
     ok = sx * sx + sy * sy > 0.5 * n * n  # far enough
     # the other two tests only where they can still change the answer (most pixels inside an
@@ -217,11 +229,9 @@ def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, bri
         ok[rows] &= contiguous
         return ok, m[:, 0]
     # the moments of the unlike pixels (weights 100 - c), split into brighter and darker ones
-    if len(rows) < K:
-        c, brighter = c[rows], brighter[rows]
-    bright = np.subtract(np.float32(_SCALE), c)
-    np.multiply(bright, brighter, out=bright)
-    bright_m = cv2.gemm(bright, _MOMENTS, 1.0, None, 0.0).astype(np.float64)
+    bright = np.subtract(np.float32(_SCALE), c[rows] if len(rows) < K else c)
+    np.multiply(bright, brighter(rows), out=bright)
+    bright_m = _moments(bright)
     mb, bx, by = bright_m[:, 0], bright_m[:, 1], bright_m[:, 2]
     md, dx_, dy_ = _SCALE * len(SUSAN_MASK) - n - mb, -sx - bx, -sy - by
     opposite = bx * dx_ + by * dy_ < 0
@@ -242,15 +252,21 @@ def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, bri
 _K123 = np.arange(1, 4, dtype=np.float64)
 
 
-def _smooth_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray, c8: NDArray, lut: NDArray[np.uint8], **kw):
+def _smooth_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray, c8: NDArray, lut: NDArray[np.uint8], which: NDArray | None = None, **kw):
     """``_corner_tests`` with SUSAN's test ``c = exp(-((I - I0) / t)^6)`` (the LUT, ``c8`` its
-    values for the mask pixels ``vals``) around the nuclei's own grey levels."""
-    g0 = np.ascontiguousarray(vals[:, _NUCLEUS])[:, None]
+    values for the mask pixels ``vals``) around the nuclei's own grey levels; on the rows
+    ``which`` (indices) of these arrays, or all."""
+    if which is None:
+        which = np.arange(len(base))
+    g0 = vals[which, _NUCLEUS][:, None]
 
     def similar(v: NDArray, rows: NDArray) -> NDArray:
         return cv2.LUT(cv2.absdiff(v, np.repeat(g0[rows], v.shape[1], axis=1)), lut)
 
-    return _corner_tests(pf, Wp, base, c8.astype(np.float32), vals > g0, similar, **kw)
+    def brighter(rows: NDArray) -> NDArray:
+        return vals[which[rows]] > g0[rows]
+
+    return _corner_tests(pf, Wp, base[which], c8[which].astype(np.float32), brighter, similar, **kw)
 
 
 def _coverage_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray, lo: NDArray, hi: NDArray, dark: NDArray):
@@ -388,11 +404,13 @@ def _hidden_failures(resp: NDArray[np.float32], r: int, passing: NDArray[np.int6
     undecided[to_pad(failing)] = fv
     dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
     offs = (dy * Wp + dx).ravel()
+    slot = np.zeros(len(undecided), np.int64)  # to keep each pixel found once (the last of its entries)
     front, front_v = to_pad(passing), rf[passing]
     while len(front):
         where = front[:, None] + offs[None, :]
-        hit = undecided.take(where) < front_v[:, None]
-        found = np.unique(where[hit])
+        found = where[undecided.take(where) < front_v[:, None]]
+        slot[found] = np.arange(len(found))
+        found = found[slot[found] == np.arange(len(found))]
         front_v = undecided[found]
         undecided[found] = np.inf
         front = found
@@ -572,14 +590,14 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
     c8 = cv2.LUT(cv2.absdiff(vals, np.repeat(v0[:, None], len(SUSAN_MASK), axis=1)), lut)
     n = cv2.reduce(c8, 1, cv2.REDUCE_SUM, dtype=cv2.CV_32S).ravel()
     rv = np.float32(g100) - n.astype(np.float32)  # g - n, x100
-    keep = rv > below
-    idx, base, vals, c8, v0, rv = idx[keep], base[keep], vals[keep], c8[keep], v0[keep], rv[keep]
+    kk = np.flatnonzero(rv > below)  # the rows with a response (vals, c8 and base keep all, unread elsewhere)
+    idx, v0, rv = idx[kk], v0[kk], rv[kk]
     K = len(idx)
     # pixels with an in-between grey (inside an anti-aliased or blurred edge) have a tiny USAN of
     # their own that means nothing: they are judged as the side they belong to would be. Those
     # that cannot be a corner that way (a straight edge: the estimate of _coverage_response)
     # are dropped at once (only a saddle may be among them); the others are judged below
-    near = vals[:, _NEAR]
+    near = vals[kk[:, None], _NEAR[None, :]]
     lo3, hi3 = near.min(axis=1), near.max(axis=1)
     v16 = v0.astype(np.int16)
     half_t = 0.5 * t
@@ -593,7 +611,7 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
     wt = np.flatnonzero(~flat)
     value = rv.copy()
     ok = np.zeros(K, bool)
-    ok[wt] = _smooth_test(pf, Wp, base[wt], vals[wt], c8[wt], lut)[0]
+    ok[wt] = _smooth_test(pf, Wp, base, vals, c8, lut, kk[wt])[0]
     sel = np.flatnonzero(mid & ~flat & ~ok)
     if len(sel):
         lo, hi, v = lo3[sel], hi3[sel], v0[sel]
@@ -604,7 +622,7 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
         dark = r_dark[sel] > 0
         a_dark = (hi.astype(np.float64) - v) / np.maximum(hi.astype(np.float64) - lo, 1.0)
         a_side = np.where(dark, a_dark, 1.0 - a_dark)
-        ok_m, n_m = _coverage_test(pf, Wp, base[sel], vals[sel], lo, hi, dark)
+        ok_m, n_m = _coverage_test(pf, Wp, base[kk[sel]], vals[kk[sel]], lo, hi, dark)
         r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
         got = r_mid >= floor
         got &= r_mid > 0
