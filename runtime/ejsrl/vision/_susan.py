@@ -26,8 +26,6 @@ Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV.
 from __future__ import annotations
 
 import functools
-import threading
-from concurrent.futures import ThreadPoolExecutor
 from typing import NamedTuple
 
 import cv2
@@ -294,9 +292,8 @@ def _coverage_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray,
     return _corner_tests(pf, Wp, base, side(vals), None, side)
 
 
-#: the column of SUSAN_MASK that is the nucleus, and those of its 3x3 neighbourhood
+#: the column of SUSAN_MASK that is the nucleus
 _NUCLEUS = int(np.flatnonzero((SUSAN_MASK[:, 0] == 0) & (SUSAN_MASK[:, 1] == 0))[0])
-_NEAR = np.flatnonzero(np.abs(SUSAN_MASK).max(axis=1) <= 1)
 _MAX_MARGIN = 14  # the widest ramp of _ramp_bound: 36 neighbours of at most 14 fit in uint8 below the threshold
 
 
@@ -363,26 +360,6 @@ def _candidates_by_bound(gray: NDArray[np.uint8], t: float, L_max: int, y0: int,
         return np.zeros(0, np.int64)
     xy = nz.reshape(-1, 2).astype(np.int64)
     return (xy[:, 1] + y0) * W + (xy[:, 0] + b)
-
-
-_POOL: ThreadPoolExecutor | None = None
-_POOL_LOCK = threading.Lock()
-
-
-def _workers() -> int:
-    """How many threads SUSAN splits its work over: as many as OpenCV uses (``cv2.setNumThreads``), at most 2."""
-    return max(1, min(2, cv2.getNumThreads()))
-
-
-def _map(fn, args: list[tuple]) -> list:
-    """``[fn(*a) for a in args]``, over ``_workers()`` threads (OpenCV and NumPy let go of the GIL in their loops)."""
-    global _POOL
-    if len(args) < 2 or _workers() < 2:
-        return [fn(*a) for a in args]
-    with _POOL_LOCK:
-        if _POOL is None:
-            _POOL = ThreadPoolExecutor(max_workers=2, thread_name_prefix="ejsrl-susan")
-    return list(_POOL.map(lambda a: fn(*a), args))
 
 
 def _hidden_failures(resp: NDArray[np.float32], r: int, passing: NDArray[np.int64], failing: NDArray[np.int64], fv: NDArray) -> None:
@@ -496,32 +473,24 @@ def susan_corners(
     lut = _lut(t)
     mid_slack = floor - _MID_SLACK * _SCALE
     b = _R + 1
-    # 1. the pixels that may have a response (n <= g - floor): a cheap bound over the image, in two
-    # bands of rows at once, beside the whole-image coverage estimate of step 2
+    # 1. the pixels that may have a response (n <= g - floor), from a cheap bound over the image
     L_max = _bound_limit(t, g100 - floor + 1.0)
-    split = b + (H - 2 * b) // 2
-    jobs: list[tuple] = [(_coverage_response, gray, g100)]
     if L_max is not None:
-        jobs += [(_candidates_by_bound, gray, t, L_max, b, split), (_candidates_by_bound, gray, t, L_max, split, H - b)]
+        idx = _candidates_by_bound(gray, t, L_max, b, H - b)
     else:  # a geometric threshold so large that the bound cannot tell: the exact pass
-        jobs.append((_exact_candidates, gray, t, g100, below))
-    cover, *found = _map(lambda f, *a: f(*a), jobs)
-    idx = np.concatenate(found)
+        idx = _exact_candidates(gray, t, g100, below)
     if len(idx) == 0:
         pts = np.zeros((0, 2))
         return (pts, np.zeros((H, W), np.float32)) if return_response else pts
     pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
     pf, Wp = pad.ravel(), W + 2 * _R
-    # 2-3. each pixel judged on its own (its USAN, the in-between-grey test, the false-positive
-    # tests), the candidates in two halves at once
-    half = len(idx) // 2 if len(idx) > 2000 else len(idx)
-    parts = _map(_judge, [(pf, Wp, W, lut, float(t), g100, floor, below, mid_slack, cover, part) for part in (idx[:half], idx[half:]) if len(part)])
-    j = _Judged(*(np.concatenate(a) for a in zip(*parts)))
+    # 2-3. each pixel judged on its own: its USAN, the in-between-grey test, the false-positive tests
+    k3 = np.ones((3, 3), np.uint8)
+    j = _judge(pf, Wp, W, lut, float(t), g100, floor, below, mid_slack, lambda: _coverage_response(gray, g100), cv2.erode(gray, k3), cv2.dilate(gray, k3), idx)
     idx = j.idx
     # X-junctions (saddles: the corner of a checkerboard) have an in-between centre pixel with a
     # small USAN of its own, its brighter and darker neighbours in opposite quadrants
     # (and, being half dark and half bright, no corner by the side it belongs to)
-    k3 = np.ones((3, 3), np.uint8)
     wf = np.flatnonzero(j.flat)
     own_mid = np.zeros((H, W), np.float32)
     own_mid.ravel()[idx[wf]] = j.rv[wf]
@@ -577,12 +546,13 @@ def _exact_candidates(gray: NDArray[np.uint8], t: float, g100: float, below: np.
     return np.flatnonzero(some)
 
 
-def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below, mid_slack: float, cover: NDArray, idx: NDArray) -> _Judged:
+def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below, mid_slack: float, cover, lo3img: NDArray, hi3img: NDArray, idx: NDArray) -> _Judged:
     """Judge the candidate pixels ``idx`` (flat image indices) each on its own: their exact USAN
     from their 37 mask pixels (gathered once for every test), and those with a response
     through the in-between-grey test and the false-positive tests.
 
-    ``pf``/``Wp``: the padded image, flat, and its width; ``cover``: ``_coverage_response``.
+    ``pf``/``Wp``: the padded image, flat, and its width; ``cover()``: ``_coverage_response``;
+    ``lo3img``/``hi3img``: the image's 3x3 minimum and maximum.
     """
     base = idx + (idx // W) * (2 * _R) + (_R * Wp + _R)  # flat indices in the padded image
     vals = pf.take(base[:, None] + (SUSAN_MASK[:, 1] * Wp + SUSAN_MASK[:, 0])[None, :])
@@ -597,13 +567,13 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
     # their own that means nothing: they are judged as the side they belong to would be. Those
     # that cannot be a corner that way (a straight edge: the estimate of _coverage_response)
     # are dropped at once (only a saddle may be among them); the others are judged below
-    near = vals[kk[:, None], _NEAR[None, :]]
-    lo3, hi3 = near.min(axis=1), near.max(axis=1)
+    lo3, hi3 = lo3img.ravel().take(idx), hi3img.ravel().take(idx)
     v16 = v0.astype(np.int16)
     half_t = 0.5 * t
     mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
     r_dark = np.zeros(K, np.float32)
-    r_dark[mid] = cover.ravel().take(idx[mid])
+    if mid.any():
+        r_dark[mid] = cover().ravel().take(idx[mid])
     flat = mid & (np.abs(r_dark) < mid_slack)
     # every other pixel with a response is tested at once (as Smith and Brady test every pixel
     # before the suppression); those that fail are removed, or, inside an anti-aliased edge,
