@@ -1,12 +1,13 @@
 """Benchmark of the vision runtime, measured side by side in one run.
 
-    python bench/vision.py [--repeat N]
+    python bench/vision.py [--repeat N] [--rounds R] [--only susan|camera]
 
 1. SUSAN corners (``susan_corners`` at its defaults) against ``cv2.goodFeaturesToTrack``
    (100 corners, quality 0.01, 5 px apart) on scikit-image's real photographs resized to
    640x480 grey, and on a rendered scene of a few objects (flat, mostly empty: the easy case)
    (target: SUSAN at most 3x its time on the photographs). The two are timed interleaved,
-   call for call, and medians reported, so a shared machine's load hits both alike.
+   call for call, and medians reported, so a shared machine's load hits both alike; the
+   whole measurement is repeated in rounds and the rounds' spread of each ratio printed.
 2. Virtual-camera rendering, frames per second at 320x240 and 640x480, for a ~200-triangle
    and a ~20,000-triangle scene, with each back end that works here side by side: the
    NumPy rasterizer and, where moderngl and EGL work, OpenGL (target: at least 30
@@ -106,31 +107,42 @@ def interleaved(fa: Callable[[], object], fb: Callable[[], object], repeat: int,
     return statistics.median(ta), statistics.median(tb)
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=15)
-    args = ap.parse_args()
-    n = args.repeat
-    cv2.setNumThreads(cv2.getNumThreads())  # OpenCV's default threading, as apps run it
+def busy_threads_after(fn: Callable[[], object]) -> float:
+    """CPU time over wall time of a one-thread NumPy loop run right after ``fn``: about 1, unless
+    ``fn`` left threads of this process busy (OpenBLAS's spin after a large matrix product)."""
+    x = np.random.default_rng(0).random(300_000).astype(np.float32)
+    fn()
+    c0, w0 = time.process_time(), time.perf_counter()
+    for _ in range(30):
+        x.sum()
+    return (time.process_time() - c0) / (time.perf_counter() - w0)
 
+
+def bench_susan(n: int, rounds: int) -> None:
     import os
 
     print("== SUSAN corners (defaults) vs cv2.goodFeaturesToTrack(100, 0.01, 5), 640x480 grey, interleaved medians ==")
     print(f"load average before: {os.getloadavg()[0]:.2f} (the machine may be shared: both detectors see the same load)")
-    print(f"{'image':12s} {'SUSAN ms':>9s} {'GFTT ms':>8s} {'ratio':>6s} {'SUSAN corners':>13s}")
-    ratios = []
+    print(f"{rounds} rounds, each timing every image {n} times, SUSAN and GFTT call for call; per image the median of the rounds' medians, and the rounds' spread of the ratio")
+    print(f"{'image':12s} {'SUSAN ms':>9s} {'GFTT ms':>8s} {'ratio':>6s} {'spread':>11s} {'SUSAN corners':>13s}")
     images = {**photographs(), "rendered": rendered_image()}
+    runs: dict[str, list[tuple[float, float]]] = {name: [] for name in images}
+    for _ in range(rounds):
+        for name, img in images.items():
+            runs[name].append(interleaved(lambda img=img: susan_corners(img), lambda img=img: cv2.goodFeaturesToTrack(img, 100, 0.01, 5), n))
+    ratios = []
     for name, img in images.items():
-        t_s, t_g = interleaved(lambda img=img: susan_corners(img), lambda img=img: cv2.goodFeaturesToTrack(img, 100, 0.01, 5), n)
+        r = [a / b for a, b in runs[name]]
+        t_s, t_g = statistics.median(a for a, _ in runs[name]), statistics.median(b for _, b in runs[name])
         if name != "rendered":
-            ratios.append(t_s / t_g)
-        print(f"{name:12s} {t_s * 1e3:9.2f} {t_g * 1e3:8.2f} {t_s / t_g:6.2f} {len(susan_corners(img)):13d}")
+            ratios.append(statistics.median(r))
+        print(f"{name:12s} {t_s * 1e3:9.2f} {t_g * 1e3:8.2f} {statistics.median(r):6.2f} {min(r):5.2f}-{max(r):<5.2f} {len(susan_corners(img)):13d}")
     worst, med = max(ratios), statistics.median(ratios)
     print(
         f"SUSAN / goodFeaturesToTrack on the photographs: median {med:.1f}x, worst {worst:.1f}x "
         f"(target <= 3x: {'met' if worst <= 3 else 'NOT met'}); load average after: {os.getloadavg()[0]:.2f}"
     )
-    # the same in CPU time with one OpenCV thread (SUSAN uses no BLAS): a loaded machine stretches
+    # the same in CPU time with one OpenCV thread (SUSAN uses no BLAS threads): a loaded machine stretches
     # wall-clock times unevenly (SUSAN's many short calls more than one long one), CPU time much less
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)
@@ -141,7 +153,27 @@ def main() -> None:
             cpu.append(t_s / t_g)
     cv2.setNumThreads(threads)
     print(f"in CPU time (one thread each): median {statistics.median(cpu):.1f}x, worst {max(cpu):.1f}x")
+    # a detector that leaves threads spinning (OpenBLAS after a large product) also slows whatever runs
+    # next, GFTT in the interleaved timing above included: that would flatter the ratio
+    img = images["camera"]
+    print(f"threads left busy: CPU/wall of a one-thread loop right after SUSAN {busy_threads_after(lambda: susan_corners(img)):.2f} (1.00: none)")
 
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--repeat", type=int, default=15)
+    ap.add_argument("--rounds", type=int, default=3, help="rounds of the interleaved SUSAN timing (the spread between them is reported)")
+    ap.add_argument("--only", choices=("susan", "camera"), help="run one part of the benchmark")
+    args = ap.parse_args()
+    n = args.repeat
+    cv2.setNumThreads(cv2.getNumThreads())  # OpenCV's default threading, as apps run it
+
+    import os
+
+    if args.only != "camera":
+        bench_susan(n, args.rounds)
+    if args.only == "susan":
+        return
     print()
     print("== Virtual camera rendering (render(world, CameraModel, T)) ==")
 
