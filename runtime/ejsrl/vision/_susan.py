@@ -382,7 +382,11 @@ def _hidden_failures(resp: NDArray[np.float32], r: int, passing: NDArray[np.int6
     dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
     offs = (dy * Wp + dx).ravel()
     slot = np.zeros(len(undecided), np.int64)  # to keep each pixel found once (the last of its entries)
-    front, front_v = to_pad(passing), rf[passing]
+    # the first step at once: failing pixels under a larger passing one (one dilation of the passing pixels)
+    first = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8)).ravel().take(failing) > fv
+    front, front_v = to_pad(failing[first]), fv[first]
+    undecided[front] = np.inf
+    rf[failing[first]] = front_v
     while len(front):
         where = front[:, None] + offs[None, :]
         found = where[undecided.take(where) < front_v[:, None]]
@@ -486,7 +490,7 @@ def susan_corners(
     pf, Wp = pad.ravel(), W + 2 * _R
     # 2-3. each pixel judged on its own: its USAN, the in-between-grey test, the false-positive tests
     k3 = np.ones((3, 3), np.uint8)
-    j = _judge(pf, Wp, W, lut, float(t), g100, floor, below, mid_slack, lambda: _coverage_response(gray, g100), cv2.erode(gray, k3), cv2.dilate(gray, k3), idx)
+    j = _judge(pf, Wp, W, lut, float(t), g100, floor, below, mid_slack, lambda where: _coverage_response(gray, g100, where), cv2.erode(gray, k3), cv2.dilate(gray, k3), idx)
     idx = j.idx
     # X-junctions (saddles: the corner of a checkerboard) have an in-between centre pixel with a
     # small USAN of its own, its brighter and darker neighbours in opposite quadrants
@@ -551,7 +555,7 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
     from their 37 mask pixels (gathered once for every test), and those with a response
     through the in-between-grey test and the false-positive tests.
 
-    ``pf``/``Wp``: the padded image, flat, and its width; ``cover()``: ``_coverage_response``;
+    ``pf``/``Wp``: the padded image, flat, and its width; ``cover(idx)``: ``_coverage_response``;
     ``lo3img``/``hi3img``: the image's 3x3 minimum and maximum.
     """
     base = idx + (idx // W) * (2 * _R) + (_R * Wp + _R)  # flat indices in the padded image
@@ -573,7 +577,7 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
     mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
     r_dark = np.zeros(K, np.float32)
     if mid.any():
-        r_dark[mid] = cover().ravel().take(idx[mid])
+        r_dark[mid] = cover(idx[mid])
     flat = mid & (np.abs(r_dark) < mid_slack)
     # every other pixel with a response is tested at once (as Smith and Brady test every pixel
     # before the suppression); those that fail are removed, or, inside an anti-aliased edge,
@@ -601,9 +605,9 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
     return _Judged(idx, rv, flat, value, ok)
 
 
-def _coverage_response(gray: NDArray[np.uint8], g100: float) -> NDArray[np.float32]:
-    """The corner response (x100) of each pixel judged as the dark side of its 7x7 neighbourhood
-    (negative: the bright side's, of that size), from the pixels' dark shares.
+def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int64]) -> NDArray[np.float32]:
+    """The corner response (x100) of the pixels at flat indices ``idx`` judged as the dark side
+    of their 7x7 neighbourhood (negative: the bright side's, of that size), from the pixels' dark shares.
 
     ``share = (max7 - I) / (max7 - min7)`` (the part of the pixel covered by the darker region,
     for two grey levels and an anti-aliased edge); the darker side's USAN of a nucleus is the
@@ -622,8 +626,9 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float) -> NDArray[np.float
     cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
     disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
     disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
-    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE)
-    return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (share - np.float32(0.5))) - np.float32(_SCALE) * n_dark
+    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
+    own = share.ravel().take(idx)
+    return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
 
 
 def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64]) -> NDArray[np.float64]:
