@@ -7,9 +7,12 @@ the USAN ("univalue segment assimilating nucleus"). A corner or an edge is where
 is small: the response is ``g - n`` where ``n < g``, with the geometric threshold ``g``
 half the mask area for corners and three quarters for edges.
 
-The USAN is computed with whole-image OpenCV operations over the 18 offset pairs (d, -d)
-(the brightness test is symmetric); the false-positive tests and the direction of edges
-look only at candidate pixels, with NumPy indexing.
+The whole-image USAN (``usan_area``, edges) is computed with OpenCV operations over the 18
+offset pairs (d, -d) (the brightness test is symmetric). Corners need it only where it is
+small: a lower bound on it, summed with OpenCV's saturating uint8 operations (much cheaper
+than the look-up), leaves the few pixels that may have a response; their 37 mask pixels
+are gathered once, and the exact USAN and every test work on those rows with NumPy
+indexing. The result is the same as testing every pixel of the image.
 
 Corners in anti-aliased (or slightly blurred) images need one addition to the original:
 a pixel inside an edge has an in-between grey, so its own USAN is tiny and means nothing.
