@@ -309,7 +309,9 @@ def _ramp_bound(t: float) -> tuple[int, int, float]:
     """
     lut = _lut(t).astype(np.float64)
     d = np.arange(256)
-    T = np.arange(1, 256)[:, None, None]
+    zero = np.flatnonzero(lut == 0)
+    top = int(zero[0]) + 1 if len(zero) else 256  # a ramp reaching a zero of the LUT has s = 0
+    T = np.arange(1, top)[:, None, None]
     m = np.arange(1, _MAX_MARGIN + 1)[None, :, None]
     r = np.minimum(np.maximum(T - d, 0), m)  # (255, 14, 256)
     s = np.where(r > 0, lut / np.maximum(r, 1), np.inf).min(axis=2)
