@@ -187,10 +187,10 @@ def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, bri
 
     ``c`` (K, 37) float32: the similarity (x100, at most 100) of each mask pixel to its nucleus;
     ``brighter(rows)`` (k, 37) bool: which of them, for the nuclei ``rows`` (indices), are
-    brighter than the nucleus (a pixel with c = 100 counts as alike, whatever it says), or None
-    where the unlike pixels cannot be split
-    (all of them on one side: test 3 cannot fail); ``similar(values, rows)``: c (k, 3) of the
-    grey values (k, 3) uint8 of three pixels around each nucleus of ``rows`` (indices).
+    brighter than the nucleus (a pixel with c = 100 counts as alike, whatever it says), or
+    None where the unlike pixels cannot be split (all of them on one side: test 3 cannot
+    fail); ``similar(values, rows)``: c (k, 3) of the grey values (k, 3) uint8 of three
+    pixels around each nucleus of ``rows`` (indices).
 
     1. (Smith and Brady) the USAN centroid lies more than 1/sqrt(2) pixel from the nucleus;
     2. (Smith and Brady) the three pixels from the nucleus towards the centroid are in the USAN;
@@ -313,7 +313,7 @@ def _ramp_bound(t: float) -> tuple[int, int, float]:
     top = int(zero[0]) + 1 if len(zero) else 256  # a ramp reaching a zero of the LUT has s = 0
     T = np.arange(1, top)[:, None, None]
     m = np.arange(1, _MAX_MARGIN + 1)[None, :, None]
-    r = np.minimum(np.maximum(T - d, 0), m)  # (255, 14, 256)
+    r = np.minimum(np.maximum(T - d, 0), m)  # (T, m, d)
     s = np.where(r > 0, lut / np.maximum(r, 1), np.inf).min(axis=2)
     area = s * r.sum(axis=2)
     i, j = np.unravel_index(int(np.argmax(area)), area.shape)
