@@ -348,13 +348,15 @@ def _candidates_by_bound(gray: NDArray[np.uint8], t: float, L_max: int, y0: int,
         return np.zeros(0, np.int64)
     acc = np.zeros((Hi, Wi), np.uint8)
     Tm = np.full((Hi + _R, Wi + _R), T, np.uint8)  # an array, not a scalar: OpenCV reads a scalar beside a tiny image as an array
+    buf = np.empty((Hi + _R, Wi + _R), np.uint8)
     for dx, dy in SUSAN_MASK:
         if dy < 0 or (dy == 0 and dx <= 0):
             continue  # one offset of each pair (d, -d): E(q) = e(|I(q) - I(q + d)|) serves p = q and p = q + d
         qx, qy = b - max(dx, 0), y0 - dy
         w = Wi + abs(dx)
-        e = cv2.absdiff(gray[qy : y1, qx : qx + w], gray[qy + dy : y1 + dy, qx + dx : qx + dx + w])
-        e = cv2.subtract(Tm[: e.shape[0], : e.shape[1]], e)  # (T - d)+
+        e = buf[: Hi + dy, :w]
+        cv2.absdiff(gray[qy : y1, qx : qx + w], gray[qy + dy : y1 + dy, qx + dx : qx + dx + w], dst=e)
+        cv2.subtract(Tm[: Hi + dy, :w], e, dst=e)  # (T - d)+
         cv2.threshold(e, m, 0, cv2.THRESH_TRUNC, dst=e)  # min(., m)
         ex = max(dx, 0)
         cv2.add(acc, e[dy : dy + Hi, ex : ex + Wi], dst=acc)  # offset d of p: q = p
