@@ -10,6 +10,9 @@ bench/vision.py. Here, two guards that a shared, loaded machine cannot make flak
 - SUSAN stays within a generous multiple of GFTT in CPU time (one OpenCV thread each, best of
   several interleaved runs: load stretches wall-clock times, CPU time much less): a change
   that makes it grossly slower fails here. Measured 5.3-5.7x on this image (it was 7-8x).
+
+And the one shortcut the speed rests on is sound: the cheap lower bound on the USAN that
+picks the pixels SUSAN looks at never leaves out a pixel with a response.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ import numpy as np
 import pytest
 from skimage import data
 
-from ejsrl.vision import susan_corners
+from ejsrl.vision import susan_corners, usan_area
 
 
 @pytest.fixture(scope="module")
@@ -65,3 +68,26 @@ def test_susan_is_not_grossly_slower_than_goodfeaturestotrack(camera):
         cv2.setNumThreads(threads)
     ratio = min(ts) / min(tg)
     assert ratio <= 10.0, f"SUSAN took {ratio:.1f}x goodFeaturesToTrack's CPU time ({min(ts) * 1e3:.1f} ms vs {min(tg) * 1e3:.2f} ms)"
+
+
+@pytest.mark.parametrize("t", [5.0, 12.0, 25.0, 40.0])
+@pytest.mark.parametrize("scene", ["camera", "noise"])
+def test_the_cheap_bound_keeps_every_pixel_with_a_response(t, scene, camera):
+    """SUSAN corners look only at the pixels a lower bound on the USAN leaves; every pixel whose
+    exact USAN (``usan_area``, the whole-image pass) gives a response must be among them."""
+    from ejsrl.vision._susan import _bound_limit, _candidates_by_bound
+
+    img = camera if scene == "camera" else np.random.default_rng(1).integers(0, 256, (120, 160)).astype(np.uint8)
+    H, W = img.shape
+    g, floor = 18.5, 1.5
+    L_max = _bound_limit(t, 100 * (g - floor) + 1.0)
+    assert L_max is not None
+    kept = np.zeros(H * W, bool)
+    kept[_candidates_by_bound(img, t, L_max, 4, H - 4)] = True
+    response = (g - usan_area(img, t)).ravel() >= floor - 1e-4
+    inner = np.zeros((H, W), bool)
+    inner[4:-4, 4:-4] = True
+    need = response & inner.ravel()
+    assert need.sum() > 100
+    assert kept[need].all(), f"{(~kept[need]).sum()} pixels with a response left out"
+    assert kept.sum() < 2.5 * need.sum() or scene == "noise"  # and it is a useful filter on a photograph
