@@ -71,14 +71,15 @@ def _usan(gray: NDArray[np.uint8], t: float) -> tuple[NDArray[np.uint16], NDArra
     The brightness test is symmetric, ``c(p, p + d) = c(p + d, p)``, so each of the 18
     offset pairs (d, -d) needs one difference image and one look-up: over the pixels q of
     the image and of the image shifted by -d, ``E(q) = c(|I(q) - I(q + d)|)``; pixel p gets
-    ``E(p)`` for offset d and ``E(p - d)`` for offset -d. The two add exactly in uint8
-    (at most 200) before the uint16 sum.
+    ``E(p)`` for offset d and ``E(p - d)`` for offset -d, added in uint16 (at most 3700).
     """
     H, W = gray.shape
     pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
     lut = _lut(t)
+    lut16 = lut.astype(np.uint16)  # the look-up writes uint16: the sums stay in OpenCV's 16-bit adds
     acc = np.full((H, W), _SCALE, dtype=np.uint16)  # the nucleus itself
-    pair = np.empty((H, W), np.uint8)
+    diff = np.empty((H + _R, W + 2 * _R), np.uint8)
+    E16 = np.empty((H + _R, W + 2 * _R), np.uint16)
     for dx, dy in SUSAN_MASK:
         if dy < 0 or (dy == 0 and dx <= 0):
             continue  # one offset of each pair (d, -d)
@@ -87,10 +88,11 @@ def _usan(gray: NDArray[np.uint8], t: float) -> tuple[NDArray[np.uint16], NDArra
         h, w = H + dy, W + abs(dx)
         a = pad[r0 : r0 + h, c0 : c0 + w]
         b = pad[r0 + dy : r0 + dy + h, c0 + dx : c0 + dx + w]
-        E = cv2.LUT(cv2.absdiff(a, b), lut)
+        E = E16[:h, :w]
+        cv2.LUT(cv2.absdiff(a, b, dst=diff[:h, :w]), lut16, dst=E)
         py, px = dy, -min(0, -dx)  # where the image's pixel (0, 0) sits in E
-        cv2.add(E[py : py + H, px : px + W], E[py - dy : py - dy + H, px - dx : px - dx + W], dst=pair)
-        np.add(acc, pair, out=acc)
+        cv2.add(acc, E[py : py + H, px : px + W], dst=acc)
+        cv2.add(acc, E[py - dy : py - dy + H, px - dx : px - dx + W], dst=acc)
     return acc, pad, lut
 
 
@@ -103,12 +105,16 @@ def _local_max(resp: NDArray[np.float32], radius: int, ys: NDArray, xs: NDArray)
     if len(ys) == 0:
         return np.zeros(0, bool)
     r = int(radius)
-    rp = cv2.copyMakeBorder(resp, r, r, r, r, cv2.BORDER_CONSTANT, value=0.0)
     dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
     dy, dx = dy.ravel(), dx.ravel()
     centre = (dy == 0) & (dx == 0)
     before = (dy < 0) | ((dy == 0) & (dx < 0))
-    win = rp[(ys + r)[:, None] + dy[None, :], (xs + r)[:, None] + dx[None, :]]
+    H, W = resp.shape
+    if r <= min(ys.min(), xs.min(), H - 1 - ys.max(), W - 1 - xs.max()):  # every window inside the image
+        win = resp.ravel().take((ys * W + xs)[:, None] + (dy * W + dx)[None, :])
+    else:
+        rp = cv2.copyMakeBorder(resp, r, r, r, r, cv2.BORDER_CONSTANT, value=0.0)
+        win = rp[(ys + r)[:, None] + dy[None, :], (xs + r)[:, None] + dx[None, :]]
     v = resp[ys, xs][:, None]
     ok_after = (win <= v) | centre[None, :]
     ok_before = (win < v) | ~before[None, :]
@@ -406,13 +412,16 @@ def _hidden_failures(resp: NDArray[np.float32], r: int, passing: NDArray[np.int6
 
 
 def _window_max(img: NDArray[np.float32], r: int, idx: NDArray[np.int64]) -> NDArray[np.float32]:
-    """The largest value of ``img`` in the (2r+1)^2 window of each pixel (flat indices ``idx``)."""
+    """The largest value of ``img`` in the (2r+1)^2 window of each pixel (flat indices ``idx``, at
+    least ``_R + 1`` from the border; outside the image counts as 0)."""
     if len(idx) * (2 * r + 1) ** 2 > img.size // 2:  # many: one whole-image dilation is cheaper
         return cv2.dilate(img, np.ones((2 * r + 1, 2 * r + 1), np.uint8)).ravel().take(idx)
     H, W = img.shape
+    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
+    if r <= _R + 1:  # SUSAN's pixels are at least _R + 1 from the border: their windows are inside
+        return img.ravel().take(idx[:, None] + (dy * W + dx).ravel()[None, :]).max(axis=1)
     padded = cv2.copyMakeBorder(img, r, r, r, r, cv2.BORDER_CONSTANT, value=0.0)
     Wp = W + 2 * r
-    dy, dx = np.mgrid[-r : r + 1, -r : r + 1]
     offs = (dy * Wp + dx).ravel()
     centre = (idx // W + r) * Wp + idx % W + r
     return padded.ravel().take(centre[:, None] + offs[None, :]).max(axis=1)
