@@ -44,11 +44,10 @@ def _cpu_over_wall() -> float:
 
 def test_susan_leaves_no_threads_busy(camera):
     susan_corners(camera)
-    time.sleep(0.5)  # whatever an earlier call left spinning has gone to sleep
-    before = _cpu_over_wall()
-    susan_corners(camera)
     after = _cpu_over_wall()  # right after: spinning threads would count here (about 2 on 2 cores)
-    assert after < before + 0.4, (before, after)
+    # one thread alone reaches at most 1 (a loaded machine gives it less, never more): a
+    # comparison with a measurement before the call failed when load took half of that one
+    assert after < 1.3, after
 
 
 def test_susan_is_not_grossly_slower_than_goodfeaturestotrack(camera):

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 from viser import _messages
+from viser._assignable_props_api import AssignablePropsBase
 
 __all__ = ["set_markdown", "set_position", "set_prop", "set_wxyz"]
 
@@ -34,6 +35,9 @@ _SCALARS = (str, bool, int, float, type(None))
 
 def set_prop(handle: Any, name: str, value: Any) -> None:
     """``handle.<name> = value`` for a plain viser property (no Python setter of its own)."""
+    if not isinstance(handle, AssignablePropsBase):  # a stand-in (tests' fake scenes)
+        setattr(handle, name, value)
+        return
     hint = handle._prop_hints.get(name)
     dtype = _ARRAY_HINTS.get(hint) if hint is not None else None
     if dtype is None and isinstance(value, tuple) and _tuple_of_arrays(hint) is not None:
@@ -107,6 +111,9 @@ def _close(a: tuple[float, ...], b: np.ndarray) -> bool:
 
 
 def _pose(handle: Any, attr: str, value: Any, length: int, message: type) -> None:
+    if not isinstance(handle, AssignablePropsBase):  # a stand-in (tests' fake scenes)
+        setattr(handle, attr, value)
+        return
     if isinstance(value, np.ndarray):
         if value.shape != (length,):
             raise ValueError(f"Expected vector of shape {(length,)}, but got {value.shape} instead")
@@ -136,7 +143,7 @@ def set_wxyz(handle: Any, wxyz: Any) -> None:
 def set_markdown(handle: Any, content: str) -> None:
     """``handle.content = content`` for a Markdown element whose text has no images
     (viser rewrites image links into data URLs; text with ``![`` goes through it)."""
-    if "![" in content:
+    if "![" in content or not isinstance(handle, AssignablePropsBase):
         handle.content = content
         return
     object.__setattr__(handle, "_content", content)
