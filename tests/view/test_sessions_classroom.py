@@ -182,3 +182,29 @@ def test_serving_a_class_hands_the_gil_over_often(classroom):
     import sys
 
     assert sys.getswitchinterval() <= _sessions.SWITCH_INTERVAL
+
+
+def test_a_session_whose_last_frame_is_unsent_skips_drawing_the_next(classroom, monkeypatch):
+    """On a busy server the event loop may not have sent a tab's last frame when the next is
+    due: that session's model steps on but its view is not refreshed until the frame before
+    has gone out (drawing it would only take time from the sender)."""
+    app, server = classroom
+    waiting: dict[int, int] = {}
+    real_backlog = app.classroom.backlog
+    monkeypatch.setattr(app.classroom, "backlog", lambda cid: waiting.get(cid, real_backlog(cid)))
+
+    async def scenario():
+        a = await connect(server)
+        sa = app.classroom.sessions[token_of(a)]
+        await a.send(gui_update(a.uuid_of("GuiButtonMessage", "Play"), value=True))
+        await a.until(lambda: sa.view.frames > 5, "A to play")
+        waiting[sa.client_id] = 1  # one message of the last frame still waits
+        await a.settle(0.1)
+        frames, skipped, t = sa.view.frames, sa.view.skipped, sa.app.model.t
+        await a.until(lambda: sa.view.skipped > skipped + 5, "frames to be skipped")
+        assert sa.view.frames <= frames + 1 and sa.app.model.t > t  # not drawn, still stepping
+        del waiting[sa.client_id]  # sent
+        await a.until(lambda: sa.view.frames > frames + 5, "A to be drawn again")
+        await a.close()
+
+    run_async(scenario())

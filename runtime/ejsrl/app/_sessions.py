@@ -44,8 +44,16 @@ GRACE_SECONDS = 60.0
 #: after a change from the browser, a paused session is refreshed for this long (seconds):
 #: the change shows, and a control the user held gets the model's value back
 IDLE_TAIL_SECONDS = 1.0
-#: messages waiting for a tab above which its frames are skipped (the model still steps)
-SKIP_BACKLOG = 64
+#: messages waiting for a tab above which (at two frames running) its frames are skipped
+#: (the model still steps). Zero: viser keeps only the newest update of each property, so a tab that cannot keep up
+#: never has more than a frame's worth waiting, and any message still waiting means the
+#: frame before has not gone out; drawing another then only takes the GIL from the event
+#: loop that must send it. With 64, 40 pendulum sessions on a busy server fell to 8-10
+#: frames/s each, as the steppers starved the sender; skipping, every one got 21-23.
+SKIP_BACKLOG = 0
+#: the longest viser's event loop keeps a client's messages before sending them (seconds:
+#: its window of 1/60 s, and a little for the loop to get the GIL)
+VISER_WINDOW = 1.0 / 60.0 + 0.004
 #: ... and above which, held for DROP_AFTER_SECONDS, the tab is disconnected
 DROP_BACKLOG = 256
 DROP_AFTER_SECONDS = 10.0
@@ -97,6 +105,8 @@ class Session:
         self.resume_playing = False
         self.awake_until = -math.inf
         self.behind_since: float | None = None
+        #: frames in a row at which the tab had not been sent the frame before
+        self.unsent_ticks = 0
         self.freed = False
         #: serialises taking the session (a tab connecting) and leaving it (a tab closing)
         self.lock = threading.RLock()
@@ -111,13 +121,15 @@ class Session:
         app, view = self.app, self.view
         if app is None or view is None or view.closed or self.freed:
             return None
-        backlog = self.classroom.backlog(self.client_id)
-        view.hold = backlog > SKIP_BACKLOG
+        # viser may keep a window up to VISER_WINDOW before sending it: a lab whose frames
+        # come faster than that is held only when the frame before the last is unsent too
+        period = 1.0 / max(float(app.sim.fps), 1.0)
+        self.unsent_ticks = self.unsent_ticks + 1 if self.classroom.backlog(self.client_id) > SKIP_BACKLOG else 0
+        view.hold = self.unsent_ticks >= (1 if period > VISER_WINDOW else 2)
         app.frame()
         now = self.classroom.clock()
         if not (app.is_playing() or now < self.awake_until):
             return None
-        period = 1.0 / max(float(app.sim.fps), 1.0)
         nxt = due + period
         return nxt if nxt >= now else now  # behind: no catching up, back of the queue
 
