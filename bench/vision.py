@@ -1,6 +1,6 @@
 """Benchmark of the vision runtime, measured side by side in one run.
 
-    python bench/vision.py [--repeat N] [--rounds R] [--only susan|susan-order|camera]
+    python bench/vision.py [--repeat N] [--rounds R] [--only susan|camera]
 
 1. SUSAN corners (``susan_corners`` at its defaults) against ``cv2.goodFeaturesToTrack``
    (100 corners, quality 0.01, 5 px apart) on scikit-image's real photographs resized to
@@ -8,8 +8,8 @@
    (target: SUSAN at most 3x its time on the photographs). The two are timed interleaved,
    call for call, and medians reported, so a shared machine's load hits both alike; the
    whole measurement is repeated in rounds and the rounds' spread of each ratio printed.
-   ``--only susan-order``: the shipped order of SUSAN's tests against testing the local maxima
-   only (bench/susan_suppress_first.py), both against GFTT, per photograph.
+   (Testing only the local maxima, then the maxima of failing ones' windows, was measured
+   1.1-1.8x slower than the shipped order: its code and bench are in commit 2fa4817.)
 2. Virtual-camera rendering, frames per second at 320x240 and 640x480, for a ~200-triangle
    and a ~20,000-triangle scene, with each back end that works here side by side: the
    NumPy rasterizer and, where moderngl and EGL work, OpenGL (target: at least 30
@@ -161,62 +161,17 @@ def bench_susan(n: int, rounds: int) -> None:
     print(f"threads left busy: CPU/wall of a one-thread loop right after SUSAN {busy_threads_after(lambda: susan_corners(img)):.2f} (1.00: none)")
 
 
-def bench_susan_order(n: int, rounds: int) -> None:
-    """The shipped order (test every pixel with a response, then suppress) against testing the local
-    maxima only (bench/susan_suppress_first.py), interleaved call for call with GFTT."""
-    import os
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from susan_suppress_first import susan_corners_suppress_first
-
-    print("== SUSAN: test everything then suppress (shipped) vs suppress first, test the maxima; GFTT as the unit ==")
-    print(f"load average before: {os.getloadavg()[0]:.2f}; {rounds} rounds of {n} interleaved calls each, medians; spread = the rounds' range")
-    print(f"{'image':10s} {'shipped ms':>10s} {'first ms':>9s} {'GFTT ms':>8s} {'shipped/G':>9s} {'first/G':>8s} {'first/shipped':>18s} {'corners':>9s}")
-    images = photographs()
-    sh_all, fi_all = [], []
-    for name, img in images.items():
-        fs = (lambda: susan_corners(img), lambda: susan_corners_suppress_first(img), lambda: cv2.goodFeaturesToTrack(img, 100, 0.01, 5))
-        meds = []
-        for _ in range(rounds):
-            for f in fs:
-                f()
-            ts: list[list[float]] = [[], [], []]
-            for _ in range(n):
-                for i, f in enumerate(fs):
-                    t0 = time.perf_counter()
-                    f()
-                    ts[i].append(time.perf_counter() - t0)
-            meds.append([statistics.median(t) for t in ts])
-        sh, fi, gf = (statistics.median(m[i] for m in meds) for i in range(3))
-        rel = [m[1] / m[0] for m in meds]
-        sh_all.append(sh / gf)
-        fi_all.append(fi / gf)
-        print(
-            f"{name:10s} {sh * 1e3:10.2f} {fi * 1e3:9.2f} {gf * 1e3:8.2f} {sh / gf:9.2f} {fi / gf:8.2f} "
-            f"{fi / sh:6.2f} ({min(rel):.2f}-{max(rel):.2f}) {len(susan_corners(img)):4d}/{len(susan_corners_suppress_first(img)):<4d}"
-        )
-    print(
-        f"over GFTT: shipped median {statistics.median(sh_all):.1f}x worst {max(sh_all):.1f}x; suppress first median "
-        f"{statistics.median(fi_all):.1f}x worst {max(fi_all):.1f}x; load average after: {os.getloadavg()[0]:.2f}"
-    )
-
-
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=15)
     ap.add_argument("--rounds", type=int, default=3, help="rounds of the interleaved SUSAN timing (the spread between them is reported)")
-    ap.add_argument("--only", choices=("susan", "susan-order", "camera"), help="run one part of the benchmark")
+    ap.add_argument("--only", choices=("susan", "camera"), help="run one part of the benchmark")
     args = ap.parse_args()
     n = args.repeat
     cv2.setNumThreads(cv2.getNumThreads())  # OpenCV's default threading, as apps run it
 
     import os
 
-    if args.only == "susan-order":
-        bench_susan_order(n, args.rounds)
-        return
     if args.only != "camera":
         bench_susan(n, args.rounds)
     if args.only == "susan":
