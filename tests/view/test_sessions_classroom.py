@@ -208,3 +208,25 @@ def test_a_session_whose_last_frame_is_unsent_skips_drawing_the_next(classroom, 
         await a.close()
 
     run_async(scenario())
+
+
+def test_a_tab_closing_mid_frame_puts_no_warning_in_the_teachers_terminal(classroom):
+    """viser warns once per closed connection that a frame drawn for it "will never be
+    delivered": a tab closing while its session draws is ordinary in a class, so a served
+    class does not show it (other warnings still do)."""
+    import threading
+    import warnings
+
+    caught: list[str] = []
+
+    def draw_for_a_closed_tab() -> None:
+        with warnings.catch_warnings(record=True) as w:
+            warnings.warn("Queued a GuiUpdateMessage on a closed connection (e.g. via a handle owned by a "
+                          "disconnected client); it will never be delivered.", UserWarning)
+            warnings.warn("something else", UserWarning)
+            caught.extend(str(x.message) for x in w)
+
+    thread = threading.Thread(target=draw_for_a_closed_tab)
+    thread.start()
+    thread.join()
+    assert caught == ["something else"]

@@ -12,6 +12,7 @@ from __future__ import annotations
 import sys
 import threading
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -460,6 +461,9 @@ class App(Controller):
 
         if sys.getswitchinterval() > SWITCH_INTERVAL:
             sys.setswitchinterval(SWITCH_INTERVAL)
+        # a tab closing while its session draws a frame makes viser warn once that the frame
+        # "will never be delivered": in a class that is ordinary, and a teacher reads it as an error
+        warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning)
 
         if max_sessions is None:
             max_sessions = default_max_sessions(measure_frame_cost(self), self.sim.fps)
