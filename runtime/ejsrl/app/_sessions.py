@@ -44,12 +44,12 @@ GRACE_SECONDS = 60.0
 #: after a change from the browser, a paused session is refreshed for this long (seconds):
 #: the change shows, and a control the user held gets the model's value back
 IDLE_TAIL_SECONDS = 1.0
-#: messages waiting for a tab above which (at two frames running) its frames are skipped
-#: (the model still steps). Zero: viser keeps only the newest update of each property, so a tab that cannot keep up
-#: never has more than a frame's worth waiting, and any message still waiting means the
-#: frame before has not gone out; drawing another then only takes the GIL from the event
-#: loop that must send it. With 64, 40 pendulum sessions on a busy server fell to 8-10
-#: frames/s each, as the steppers starved the sender; skipping, every one got 21-23.
+#: messages waiting for a tab above which, at two frames running (more for labs faster than
+#: 30 frames/s), its frames are skipped (the model still steps). Zero: viser keeps only the
+#: newest update of each property, so a tab that cannot keep up never has more than a
+#: frame's worth waiting; drawing more then only takes the GIL from the event loop that
+#: must send them. With 64 the skip never fired, and 40 pendulum sessions on a busy server
+#: fell to 8-10 frames/s each as the steppers starved the sender.
 SKIP_BACKLOG = 0
 #: the longest viser's event loop keeps a client's messages before sending them (seconds:
 #: its window of 1/60 s, and a little for the loop to get the GIL)
@@ -121,11 +121,12 @@ class Session:
         app, view = self.app, self.view
         if app is None or view is None or view.closed or self.freed:
             return None
-        # viser may keep a window up to VISER_WINDOW before sending it: a lab whose frames
-        # come faster than that is held only when the frame before the last is unsent too
+        # held when the frame before the last is still unsent too (a frame may wait a window
+        # of viser's, and a camera picture takes a while to encode and send: one unsent frame
+        # is ordinary), or more frames for a lab whose frames come faster than the window
         period = 1.0 / max(float(app.sim.fps), 1.0)
         self.unsent_ticks = self.unsent_ticks + 1 if self.classroom.backlog(self.client_id) > SKIP_BACKLOG else 0
-        view.hold = self.unsent_ticks >= (1 if period > VISER_WINDOW else 2)
+        view.hold = self.unsent_ticks >= 1 + math.ceil(VISER_WINDOW / period)
         app.frame()
         now = self.classroom.clock()
         if not (app.is_playing() or now < self.awake_until):
