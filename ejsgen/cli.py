@@ -214,6 +214,13 @@ def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
         except _Stopped as exc:
             print(f"ejsgen run: stopped by {exc}", file=sys.stderr)
             return 128 + int(exc.signum)
+        except Exception:
+            # the signal came during an import in C (NumPy's), which turned _Stopped into
+            # an ImportError of its own: still the stop that was asked for, not a failure
+            if runner.signum is None or runner.proc is not None:
+                raise
+            print(f"ejsgen run: stopped by {signal.Signals(runner.signum).name}", file=sys.stderr)
+            return 128 + int(runner.signum)
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:

@@ -206,3 +206,30 @@ def test_csv_to_standard_output_stops_quietly_when_the_reader_closes_the_pipe(bu
     assert head[0].startswith(b"t,") and all(line.endswith(b"\n") for line in head)
     assert status == 128 + signal.SIGPIPE
     assert "Traceback" not in err and "Exception ignored" not in err and "BrokenPipe" not in err
+
+
+def test_a_stop_that_lands_in_an_import_in_c_is_still_a_clean_stop(tmp_path, monkeypatch, capsys) -> None:
+    """SIGTERM while NumPy's C extension imports: the handler's exception comes back as an
+    ImportError of NumPy's ("PyCapsule_Import could not import module"), seen once in CI
+    as a traceback. It is the stop that was asked for: status 143, the usual line, and the
+    temporary folder removed."""
+    import argparse
+
+    from ejsgen import cli
+
+    made: list[Path] = []
+
+    def build_interrupted_in_c(spec, out):
+        made.append(Path(out).parent)
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)  # the handler raises here, as in an import
+            time.sleep(1.0)
+        except Exception as exc:
+            raise ImportError("PyCapsule_Import could not import module \"datetime\"") from exc
+        raise AssertionError("the signal did not arrive")
+
+    monkeypatch.setattr(cli, "build", build_interrupted_in_c)
+    status = cli._cmd_run(argparse.Namespace(spec=str(EXAMPLES / "pendulum.ejs.yaml"), output=None), [])
+    err = capsys.readouterr().err
+    assert status == 143 and "ejsgen run: stopped by SIGTERM" in err
+    assert made and not made[0].exists()
