@@ -211,12 +211,9 @@ def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
             with tempfile.TemporaryDirectory(prefix="ejsgen-run-") as tmp:
                 out = build(args.spec, Path(tmp) / "app")
                 return runner.run([sys.executable, str(out / "app.py"), *app_args])
-        except _Stopped as exc:
-            print(f"ejsgen run: stopped by {exc}", file=sys.stderr)
-            return 128 + int(exc.signum)
         except Exception:
-            # the signal came during an import in C (NumPy's), which turned _Stopped into
-            # an ImportError of its own: still the stop that was asked for, not a failure
+            # _Stopped, or what an import in C (NumPy's) made of it when the signal came
+            # there (an ImportError of its own): the stop that was asked for, not a failure
             if runner.signum is None or runner.proc is not None:
                 raise
             print(f"ejsgen run: stopped by {signal.Signals(runner.signum).name}", file=sys.stderr)

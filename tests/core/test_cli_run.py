@@ -27,3 +27,20 @@ def test_run_help_names_the_apps_serving_options() -> None:
     text = " ".join(r.stdout.split())
     for option in ("--port", "--host", "--shared", "--max-sessions", "--headless", "python app.py --help"):
         assert option in text, option
+
+
+def test_run_knows_every_app_option_that_takes_a_value() -> None:
+    """``ejsgen run`` keeps its own list of the app's options that take a value (importing
+    the runtime to ask would slow every command's start by a quarter of a second): it must
+    be the served app's and the sweep's options exactly, or a value would be taken for the spec."""
+    import argparse
+
+    from ejsgen.cli import _APP_OPTIONS_WITH_VALUE
+    from ejsrl.app.cli import _parser
+    from ejsrl.app.sweep import add_sweep_options
+
+    sweep = argparse.ArgumentParser()
+    add_sweep_options(sweep)
+    taking_values = {o for parser in (_parser("lab"), sweep) for a in parser._actions if a.option_strings and a.nargs != 0
+                     for o in a.option_strings if o.startswith("--")}
+    assert set(_APP_OPTIONS_WITH_VALUE) == taking_values

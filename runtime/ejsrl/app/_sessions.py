@@ -51,12 +51,12 @@ IDLE_TAIL_SECONDS = 1.0
 #: must send them. With 64 the skip never fired, and 40 pendulum sessions on a busy server
 #: fell to 8-10 frames/s each as the steppers starved the sender.
 SKIP_BACKLOG = 0
-#: the longest viser's event loop keeps a client's messages before sending them (seconds:
-#: its window of 1/60 s, and a little for the loop to get the GIL)
-VISER_WINDOW = 1.0 / 60.0 + 0.004
 #: ... and above which, held for DROP_AFTER_SECONDS, the tab is disconnected
 DROP_BACKLOG = 256
 DROP_AFTER_SECONDS = 10.0
+#: the longest viser's event loop keeps a client's messages before sending them (seconds:
+#: its window of 1/60 s, and a little for the loop to get the GIL)
+VISER_WINDOW = 1.0 / 60.0 + 0.004
 #: a tab reloading may connect before its old connection is seen to close: how long the
 #: new one waits for the old one to go before it is given a session of its own (seconds)
 RELOAD_WAIT_SECONDS = 2.0

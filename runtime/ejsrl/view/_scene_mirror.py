@@ -37,7 +37,7 @@ GizmoCallback = Callable[[str, np.ndarray], None]
 
 
 def _rgb255(rgb: Any) -> tuple[int, int, int]:
-    key = tuple(rgb) if isinstance(rgb, tuple) else None
+    key = rgb if isinstance(rgb, tuple) else None
     if key is not None and key in _RGB255:
         return _RGB255[key]
     c = np.clip(np.asarray(rgb, dtype=float).reshape(3) * 255.0 + 0.5, 0, 255).astype(int)

@@ -40,17 +40,16 @@ def set_prop(handle: Any, name: str, value: Any) -> None:
         return
     hint = handle._prop_hints.get(name)
     dtype = _ARRAY_HINTS.get(hint) if hint is not None else None
-    if dtype is None and isinstance(value, tuple) and _tuple_of_arrays(hint) is not None:
-        _set_arrays(handle, name, value, _tuple_of_arrays(hint))
+    element_dtype = _tuple_of_arrays(hint) if dtype is None and isinstance(value, tuple) else None
+    if element_dtype is not None:
+        _set_arrays(handle, name, value, element_dtype)
         return
     if hint is None or isinstance(getattr(type(handle), name, None), property) or (
         dtype is None and not isinstance(value, _SCALARS)
     ):
         setattr(handle, name, value)  # colours, tuples, setters of its own: viser's own path
         return
-    impl = handle._impl
-    if impl.removed:
-        raise RuntimeError(f"Cannot assign to {name!r} on a removed {type(handle).__name__}.")
+    impl = _live(handle, name)
     current = getattr(impl.props, name)
     if dtype is None:
         if isinstance(current, np.ndarray):
@@ -91,10 +90,16 @@ def _tuple_of_arrays(hint: Any) -> Any:
         return None
 
 
-def _set_arrays(handle: Any, name: str, value: tuple[Any, ...], dtype: Any) -> None:
+def _live(handle: Any, name: str) -> Any:
+    """The handle's state; viser's refusal of a write to a removed handle."""
     impl = handle._impl
     if impl.removed:
         raise RuntimeError(f"Cannot assign to {name!r} on a removed {type(handle).__name__}.")
+    return impl
+
+
+def _set_arrays(handle: Any, name: str, value: tuple[Any, ...], dtype: Any) -> None:
+    impl = _live(handle, name)
     cast = tuple(np.asarray(v).astype(dtype) for v in value)
     setattr(impl.props, name, cast)
     handle._queue_update(name, cast)
