@@ -20,6 +20,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
+from ejsrl.app._front import WorkerRole
 from ejsrl.sim.model import Controller, ModelBase, SetValueError, UserCodeError, describe_error
 from ejsrl.sim.world_access import WorldFunctionsAccess
 from ejsrl.view.elements import Button, Control, Dynamic
@@ -389,6 +390,7 @@ class App(Controller):
         max_sessions: int | None = None,
         grace: float | None = None,
         workers: int | None = None,
+        role: WorkerRole | None = None,
     ) -> Any:
         """Start the viser server and the loop; returns the server (its real port: ``get_port()``).
 
@@ -401,43 +403,33 @@ class App(Controller):
 
         Only pages served by the app itself may open its websocket (and ``allow_origins``;
         ``"*"``: any); a ``host`` other than this machine's loopback prints a warning.
+        With ``role``, this app is one of the processes a class is served from (see
+        :mod:`ejsrl.app._front`): it serves its share of the tabs and reports to its front.
         """
-        from ejsrl.view._guard import is_loopback
         from ejsrl.view.viser_view import ViserView, make_server
 
-        server, _url = make_server(host, port, allow_origins=allow_origins, label=self.meta.title)
+        if role is not None:  # one of a front's processes: on this machine only, answering to the front's address
+            host, port, per_client = "127.0.0.1", 0, True
+        server, _url = make_server(host, port, allow_origins=allow_origins, label=self.meta.title,
+                                   answer_as=None if role is None else role.bind, banner=role is None)
         if per_client:
-            self._start_classroom(server, max_sessions=max_sessions, grace=grace, workers=workers)
+            self._start_classroom(server, max_sessions=max_sessions, grace=grace, workers=workers, role=role)
         else:
             view = ViserView(self, server)
             self.views.append(view)
-        port = server.get_port()
-        url_host = "localhost" if host in ("127.0.0.1", "0.0.0.0", "", "::") else host
-        print(f"{self.meta.title}: serving on http://{url_host}:{port} (Ctrl+C to stop)", flush=True)
-        if host in ("0.0.0.0", "", "::"):
-            others = ", ".join(f"http://{name}:{port}" for name in network_names())
-            if others:
-                print(f"  from other machines on the network: {others}", flush=True)
-        if not is_loopback(host):
-            where = "every network this machine is on" if host in ("0.0.0.0", "", "::") else f"the network at {host}"
-            print(
-                f"warning: --host {host or '0.0.0.0'} opens this lab to {where}: anyone who can reach this "
-                f"machine on port {port} can open it, watch it and change the simulation. "
-                "Leave --host out (127.0.0.1) to keep the lab on this machine.",
-                file=sys.stderr,
-                flush=True,
-            )
+        if role is not None:
+            assert self.classroom is not None
+            role.report(server.get_port(), self.classroom.max_sessions)
+        else:
+            announce(self.meta.title, host, server.get_port(),
+                     places=None if self.classroom is None else self.classroom.max_sessions)
         if self.classroom is not None:
-            print(
-                f"  every browser tab gets its own simulation, up to {self.classroom.max_sessions} at once "
-                "(--max-sessions N to change; --shared: one simulation for everyone)",
-                flush=True,
-            )
             if not block:
                 return server
             try:
                 while not self._stopped.wait(0.5):
-                    pass
+                    if role is not None and role.orphaned():
+                        break
             except KeyboardInterrupt:
                 pass
             finally:
@@ -456,7 +448,9 @@ class App(Controller):
             server.stop()
         return server
 
-    def _start_classroom(self, server: Any, *, max_sessions: int | None, grace: float | None, workers: int | None) -> None:
+    def _start_classroom(
+        self, server: Any, *, max_sessions: int | None, grace: float | None, workers: int | None, role: WorkerRole | None
+    ) -> None:
         from ejsrl.app._sessions import GRACE_SECONDS, SWITCH_INTERVAL, Classroom, default_max_sessions, measure_frame_cost
 
         if sys.getswitchinterval() > SWITCH_INTERVAL:
@@ -465,15 +459,20 @@ class App(Controller):
         # "will never be delivered": in a class that is ordinary, and a teacher reads it as an error
         warnings.filterwarnings("ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning)
 
+        if role is not None:
+            max_sessions = role.max_sessions
         if max_sessions is None:
-            max_sessions = default_max_sessions(measure_frame_cost(self), self.sim.fps)
+            # a process runs Python on one core at a time (the GIL), however many the machine has
+            cpus = role.cpus if role is not None else 1.0
+            max_sessions = default_max_sessions(measure_frame_cost(self), self.sim.fps, cpus=cpus)
 
         def make_app() -> App:
             return type(self)(self.model_cls, self.view, sim=self.sim, meta=self.meta, base_dir=self.base_dir,
                               overrides=self.overrides, clock=self.clock)
 
         self.classroom = Classroom(make_app, server, max_sessions=max_sessions,
-                                   grace=GRACE_SECONDS if grace is None else grace, workers=workers)
+                                   grace=GRACE_SECONDS if grace is None else grace, workers=workers,
+                                   token_prefix="" if role is None else role.token_prefix)
 
     # -- headless -----------------------------------------------------------------------------------
     def run_headless(
@@ -510,9 +509,38 @@ def load_app(
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # so tracebacks and SPEC_LINES find the module
     spec.loader.exec_module(module)
-    return App(
-        module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=folder, overrides=overrides, clock=clock
-    )
+    sim = getattr(module, "SIMULATION", SimConfig())  # app.py leaves it out when every setting is the default
+    return App(module.Model, module.VIEW, sim=sim, meta=module.META, base_dir=folder, overrides=overrides, clock=clock)
+
+
+def announce(title: str, host: str, port: int, *, places: int | None, processes: int = 1) -> None:
+    """Print where a lab is served (and a warning when that is beyond this machine):
+    ``places``: tabs served at once, each with its own simulation (None: one shared
+    simulation); ``processes``: how many processes serve them."""
+    from ejsrl.view._guard import is_loopback
+
+    url_host = "127.0.0.1" if host in ("127.0.0.1", "0.0.0.0", "", "::") else host
+    print(f"{title}: serving on http://{url_host}:{port} (Ctrl+C to stop)", flush=True)
+    if host in ("0.0.0.0", "", "::"):
+        others = ", ".join(f"http://{name}:{port}" for name in network_names())
+        if others:
+            print(f"  from other machines on the network: {others}", flush=True)
+    if not is_loopback(host):
+        where = "every network this machine is on" if host in ("0.0.0.0", "", "::") else f"the network at {host}"
+        print(
+            f"warning: --host {host or '0.0.0.0'} opens this lab to {where}: anyone who can reach this "
+            f"machine on port {port} can open it, watch it and change the simulation. "
+            "Leave --host out (127.0.0.1) to keep the lab on this machine.",
+            file=sys.stderr,
+            flush=True,
+        )
+    if places is not None:
+        by, change = (f" from {processes} processes", "--max-sessions N, --processes N") if processes > 1 else ("", "--max-sessions N")
+        print(
+            f"  every browser tab gets its own simulation, up to {places} at once{by} "
+            f"({change} to change; --shared: one simulation for everyone)",
+            flush=True,
+        )
 
 
 def network_names() -> list[str]:

@@ -140,7 +140,9 @@ class Classroom:
 
     ``make_app()`` builds a new ``App`` (not playing unless the lab autoplays); ``server``:
     a viser server from :func:`ejsrl.view.viser_view.make_server`; ``max_sessions``: tabs
-    served at once; ``grace``: seconds a closed tab's session is kept for a reload.
+    served at once; ``grace``: seconds a closed tab's session is kept for a reload;
+    ``token_prefix``: what every session's token starts with (which process serves it,
+    when a class is served from several: :mod:`ejsrl.app._front`).
     """
 
     def __init__(
@@ -152,8 +154,10 @@ class Classroom:
         grace: float = GRACE_SECONDS,
         workers: int | None = None,
         clock: Callable[[], float] = time.monotonic,
+        token_prefix: str = "",
     ) -> None:
         self.make_app = make_app
+        self.token_prefix = token_prefix
         self.server = server
         self.max_sessions = max(1, int(max_sessions))
         self.grace = float(grace)
@@ -212,7 +216,7 @@ class Classroom:
                 self.turned_away.add(client.client_id)
                 session = None
             else:
-                token = secrets.token_urlsafe(12)
+                token = self.token_prefix + secrets.token_urlsafe(12)
                 session = Session(self, token, client.client_id)
                 self.sessions[token] = session
                 self._by_client[client.client_id] = session

@@ -3,8 +3,8 @@
 ``main`` parses the command line of the language's last section (``--host``, ``--port``,
 ``--headless --duration T [--csv FILE] [--vars a,b,q] [--every N] [--set NAME=VALUE ...]``)
 and serves the app in the browser or runs it headless. Served, every browser tab gets a
-simulation of its own (``--max-sessions N``, ``--grace SECONDS``), or, with ``--shared``,
-every tab shows the same one.
+simulation of its own (``--max-sessions N``, ``--grace SECONDS``, served from one process
+per core: ``--processes N``), or, with ``--shared``, every tab shows the same one.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import math
 import os
 import signal
 import sys
+import threading
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -22,7 +23,8 @@ from typing import Any
 import numpy as np
 
 from ejsrl._signals import SignalScope
-from ejsrl.app._loop import App, AppMeta, SimConfig
+from ejsrl.app._front import WORKER_ENV, WorkerRole, default_processes, serve_front, worker_command
+from ejsrl.app._loop import App, AppMeta, SimConfig, announce
 from ejsrl.app.headless import csv_columns
 from ejsrl.sim.model import ModelBase, SetValueError, UserCodeError
 
@@ -143,6 +145,11 @@ def _parser(title: str) -> argparse.ArgumentParser:
         "(default: as many as this machine's cores can run at full speed, measured on this lab at start)",
     )
     p.add_argument(
+        "--processes", type=int, metavar="N",
+        help="serve the tabs from N processes, so that a class uses every core: one process runs Python on one "
+        "core at a time (default: one per core, up to 8; 1: a single process)",
+    )
+    p.add_argument(
         "--grace", type=float, default=60.0, metavar="SECONDS",
         help="keep a closed tab's simulation this long, so that a reload finds it again (default 60)",
     )
@@ -196,17 +203,23 @@ def main(
     model_cls: type[ModelBase],
     view: list[Any],
     *,
-    sim: SimConfig,
+    sim: SimConfig | None = None,
     meta: AppMeta,
-    base_dir: Path | str,
+    base_dir: Path | str | None = None,
     argv: Sequence[str] | None = None,
 ) -> int:
     """The generated app's entry point; returns the process exit status.
 
+    ``sim``: the spec's run settings (default: the runtime's); ``base_dir``: where the app's
+    assets are (default: the folder of the module that defines ``model_cls``, i.e. app.py's).
     SIGINT (Ctrl+C) and SIGTERM stop the app cleanly, with a one-line message and no
     traceback: a served app stops its server, a headless run keeps the rows written so
     far. The status is then 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
     """
+    sim = SimConfig() if sim is None else sim
+    if base_dir is None:
+        app_file = getattr(sys.modules.get(model_cls.__module__), "__file__", None)
+        base_dir = Path(app_file).resolve().parent if app_file else Path.cwd()
     args = list(sys.argv[1:] if argv is None else argv)
     if "--sweep" in args:  # many headless runs: ejsrl.app.sweep has its own options and signal handling
         from ejsrl.app.sweep import app_sweep
@@ -224,7 +237,8 @@ def main(
             if stop.signum is None:
                 stop.signum = signal.SIGINT
     if stop.signum is not None:
-        if status != 128 + stop.signum:  # a headless run reports its own stop
+        if status != 128 + stop.signum and WORKER_ENV not in os.environ:  # a headless run reports its own stop; a front, its processes'
+
             print(f"{meta.title}: stopped by {signal.Signals(stop.signum).name}", file=sys.stderr, flush=True)
         return 128 + int(stop.signum)
     return status
@@ -302,7 +316,25 @@ def _main(
     if not math.isfinite(args.grace) or args.grace < 0:
         print("error: --grace must be a number of seconds >= 0", file=sys.stderr)
         return 2
+    if args.processes is not None and args.processes < 1:
+        print("error: --processes must be at least 1", file=sys.stderr)
+        return 2
+    if args.processes is not None and args.processes > 1 and args.shared:
+        print("error: --shared serves one simulation from one process; leave --processes out", file=sys.stderr)
+        return 2
+    role = WorkerRole.from_env()
+    count = args.processes if args.processes is not None else default_processes()
+    if role is None and not args.shared and count > 1:
+        command = worker_command() if argv is None else None
+        if command is not None:
+            return serve_front(
+                command, args.host, args.port, count=count, max_sessions=args.max_sessions, stopped=threading.Event(),
+                announce=lambda port, places: announce(meta.title, args.host, port, places=places, processes=count),
+            )
+        if args.processes is not None:
+            print(f"warning: --processes {count}: this app was not started as a script (python app.py), so it cannot "
+                  "start copies of itself; serving from one process", file=sys.stderr, flush=True)
     app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
     app.serve(args.host, args.port, allow_origins=origins, per_client=not args.shared,
-              max_sessions=args.max_sessions, grace=args.grace)
+              max_sessions=args.max_sessions, grace=args.grace, role=role)
     return 0

@@ -30,7 +30,9 @@ if the hooks are not where it expects them, rather than serving without the guar
 
 from __future__ import annotations
 
+import contextlib
 import http
+import io
 import ipaddress
 import logging
 import math
@@ -541,9 +543,14 @@ def start_server(
     label: str | None = None,
     verbose: bool = False,
     max_message_bytes: int = MAX_MESSAGE_BYTES,
+    answer_as: str | None = None,
+    banner: bool = True,
 ) -> Any:
     """Start a ``viser.ViserServer`` on ``host:port`` (the next free port if taken) behind the
-    guards of this module; ``allow_origins``: extra websocket origins (``"*"``: any).
+    guards of this module; ``allow_origins``: extra websocket origins (``"*"``: any);
+    ``answer_as``: the address whose names the ``Host`` header may carry, when that is not
+    ``host`` (a worker behind the front of :mod:`ejsrl.app._front`); ``banner``: let viser
+    print its box of addresses.
 
     Raises ``ValueError`` for a malformed origin and ``RuntimeError`` if this viser's
     internals are not the ones the guards hook (the server is stopped first).
@@ -551,13 +558,14 @@ def start_server(
     import viser
     import websockets.asyncio.server as ws_server
 
-    access = Access(host, tuple(allow_origins))
+    access = Access(host if answer_as is None else answer_as, tuple(allow_origins))
     guard = MessageGuard()
     with _SERVE_LOCK:
         hook = _Hook(ws_server.serve, access, guard, max_message_bytes)
         ws_server.serve = hook  # type: ignore[assignment]
         try:
-            server = viser.ViserServer(host=host, port=port, label=label, verbose=verbose)
+            with contextlib.nullcontext() if banner else contextlib.redirect_stdout(io.StringIO()):
+                server = viser.ViserServer(host=host, port=port, label=label, verbose=verbose)
         finally:
             ws_server.serve = hook.original  # type: ignore[assignment]
     problem = None if hook.installed else "viser did not start its websocket server through websockets.asyncio.server.serve"

@@ -47,14 +47,18 @@ def make_server(
     allow_origins: Sequence[str] = (),
     label: str | None = None,
     verbose: bool = False,
+    answer_as: str | None = None,
+    banner: bool = True,
 ) -> tuple[Any, str]:
     """Start a viser server on ``host:port`` (the next free port if taken; 0: any free one)
     behind ejsgen's guards (:mod:`ejsrl.view._guard`): same-origin websockets only (plus
     ``allow_origins``), small messages, checked values.
 
-    Returns ``(server, url)`` with the port actually bound.
+    ``answer_as``, ``banner``: see :func:`ejsrl.view._guard.start_server`. Returns ``(server, url)`` with
+    the port actually bound.
     """
-    server = start_server(host, port, allow_origins=allow_origins, label=label, verbose=verbose)
+    server = start_server(host, port, allow_origins=allow_origins, label=label, verbose=verbose, answer_as=answer_as,
+                          banner=banner)
     shown_host = "127.0.0.1" if host in ("0.0.0.0", "", "::") else host
     if ":" in shown_host:
         shown_host = f"[{shown_host}]"

@@ -1,0 +1,386 @@
+"""Serving a class from several processes: a front that relays each tab to a worker.
+
+One Python process runs Python on one core at a time (the GIL): a class served by one
+process cannot use a lab machine's other cores, however many it has. With
+``--processes N`` (by default one per core, up to :data:`MAX_PROCESSES`) a served app is a
+*front* and N *workers*:
+
+- **The workers** are the same app, started with the same command line and told their
+  role through the environment (:data:`WORKER_ENV`). Each serves its share of the class
+  on 127.0.0.1 at a free port, with everything a single process does (sessions, grace
+  period, guards). It answers to the front's address (Host and Origin are checked against
+  it), names its sessions' tokens after itself (``<index>x<random>``), reports its port and
+  its number of places through a pipe, and stops when the front is gone.
+- **The front** listens on the address the teacher gave and relays every connection to a
+  worker, bytes as they come: a page or websocket at ``/s/<token>/`` goes to the worker
+  named in the token (a reload finds its session again), a new tab's websocket to the
+  least full worker, anything else (the page's files) in turn. When every
+  place is taken, the worker a new tab reaches tells it the lab is full. A worker that
+  stops is started again (its students' sessions are lost, with a line in the terminal).
+
+The front reads nothing but the request's first line and headers, and never what a
+client sends afterwards; every check of what clients send stays in the workers.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import itertools
+import json
+import logging
+import os
+import re
+import select
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+__all__ = ["WORKER_ENV", "MAX_PROCESSES", "WorkerRole", "Front", "default_processes", "worker_command", "split_places"]
+
+log = logging.getLogger("ejsrl.serve")
+
+#: the environment variable that makes an app a worker of a front (JSON: see WorkerRole)
+WORKER_ENV = "EJSRL_SERVE_WORKER"
+#: the most processes a class is served from by default
+MAX_PROCESSES = 8
+#: seconds a worker may take to start (imports, and measuring the lab's cost)
+START_SECONDS = 180.0
+#: seconds a client may take to send its request's first line and headers
+HEAD_SECONDS = 15.0
+#: the longest request head relayed (bytes)
+HEAD_LIMIT = 64 * 1024
+#: seconds the workers get to stop before they are killed
+STOP_SECONDS = 5.0
+
+_TOKEN = re.compile(r"/s/(\d{1,3})x[A-Za-z0-9_-]{8,64}(?:/|\?|$)")
+_UPGRADE = re.compile(rb"(?im)^upgrade:[ \t]*websocket[ \t]*\r?$")
+
+
+def default_processes(cpus: int | None = None) -> int:
+    """One process per core, at most :data:`MAX_PROCESSES`."""
+    n = cpus if cpus is not None else (os.cpu_count() or 1)
+    return max(1, min(MAX_PROCESSES, n))
+
+
+def split_places(total: int, count: int) -> list[int]:
+    """``total`` places shared as evenly as possible by ``count`` workers (each at least one)."""
+    return [max(1, total // count + (1 if i < total % count else 0)) for i in range(count)]
+
+
+def worker_command() -> list[str] | None:
+    """The command line that starts this app again (interpreter options, script, arguments),
+    or None when it was not started as a script or a ``.pyz`` (``-m``, ``-c``, embedded)."""
+    argv, orig = list(sys.argv), list(getattr(sys, "orig_argv", []))
+    if not argv or not argv[0] or not Path(argv[0]).is_file() or len(orig) < len(argv):
+        return None
+    options = orig[1 : len(orig) - len(argv)]
+    if any(o in ("-m", "-c") or o.startswith(("-m", "-c")) for o in options):
+        return None
+    if orig[len(orig) - len(argv) :][1:] != argv[1:]:
+        return None
+    return [sys.executable, *options, *argv]
+
+
+@dataclass(frozen=True)
+class WorkerRole:
+    """What a worker is told by its front (through :data:`WORKER_ENV`).
+
+    ``index``: its number, which its tokens carry; ``bind``: the front's address (the names
+    the worker answers to); ``cpus``: the cores it may count on when it works out its
+    places; ``max_sessions``: its places, if the teacher gave a number; ``report_fd``: where
+    it writes its port and places; ``parent``: the front's process id.
+    """
+
+    index: int
+    bind: str
+    cpus: float
+    max_sessions: int | None
+    report_fd: int
+    parent: int
+
+    @classmethod
+    def from_env(cls) -> WorkerRole | None:
+        text = os.environ.get(WORKER_ENV)
+        if not text:
+            return None
+        d = json.loads(text)
+        return cls(int(d["index"]), str(d["bind"]), float(d["cpus"]),
+                   None if d["max_sessions"] is None else int(d["max_sessions"]), int(d["report_fd"]), int(d["parent"]))
+
+    def to_env(self) -> str:
+        return json.dumps({"index": self.index, "bind": self.bind, "cpus": self.cpus, "max_sessions": self.max_sessions,
+                           "report_fd": self.report_fd, "parent": self.parent})
+
+    @property
+    def token_prefix(self) -> str:
+        return f"{self.index}x"
+
+    def report(self, port: int, max_sessions: int) -> None:
+        """Tell the front where this worker serves and how many places it has."""
+        with os.fdopen(self.report_fd, "w") as fh:
+            fh.write(json.dumps({"port": int(port), "max_sessions": int(max_sessions)}) + "\n")
+
+    def orphaned(self) -> bool:
+        """True once the front is gone."""
+        return os.getppid() != self.parent
+
+
+class Worker:
+    """The front's record of one worker process."""
+
+    def __init__(self, index: int) -> None:
+        self.index = index
+        self.proc: subprocess.Popen[bytes] | None = None
+        self.port = 0
+        self.places = 0
+        #: websockets relayed to it now (its tabs, and tabs it told the lab is full)
+        self.tabs = 0
+        self.ready = False
+
+
+class Front:
+    """Serves ``host:port`` from ``count`` worker processes started with ``command``
+    (see the module docstring); ``max_sessions``: places in all (None: each worker works
+    out its own from the lab's measured cost and its share of the cores)."""
+
+    def __init__(self, command: Sequence[str], host: str, port: int, *, count: int, max_sessions: int | None) -> None:
+        self.command = list(command)
+        self.host = host
+        self.port = port
+        self.workers = [Worker(i) for i in range(count)]
+        self.places = split_places(max_sessions, count) if max_sessions is not None else [None] * count
+        self.cpus = min(1.0, (os.cpu_count() or 1) / count)  # a process runs Python on one core at most
+        self._turn = itertools.count()
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._server: asyncio.base_events.Server | None = None
+        self._stopping = False
+
+    # -- the workers ---------------------------------------------------------------------------------
+    def start(self) -> None:
+        """Start the workers (in parallel) and wait for each to report; raises RuntimeError
+        if one does not start."""
+        pending = [self._spawn(w) for w in self.workers]
+        for worker, read_fd in zip(self.workers, pending):
+            self._await_report(worker, read_fd)
+
+    def _spawn(self, worker: Worker) -> int:
+        read_fd, write_fd = os.pipe()
+        role = WorkerRole(worker.index, self.host, self.cpus, self.places[worker.index], write_fd, os.getpid())
+        env = dict(os.environ, **{WORKER_ENV: role.to_env()})
+        try:
+            # its own process group: Ctrl+C reaches the front, which stops the workers
+            worker.proc = subprocess.Popen(self.command, env=env, pass_fds=(write_fd,), stdin=subprocess.DEVNULL,
+                                           process_group=0)
+        finally:
+            os.close(write_fd)
+        worker.ready = False
+        return read_fd
+
+    def _await_report(self, worker: Worker, read_fd: int) -> None:
+        data = b""
+        deadline = time.monotonic() + START_SECONDS
+        try:
+            while not data.endswith(b"\n"):
+                left = deadline - time.monotonic()
+                if left <= 0 or not select.select([read_fd], [], [], min(left, 0.5))[0]:
+                    if left <= 0 or (worker.proc is not None and worker.proc.poll() is not None):
+                        break
+                    continue
+                chunk = os.read(read_fd, 4096)
+                if not chunk:
+                    break
+                data += chunk
+        finally:
+            os.close(read_fd)
+        try:
+            report = json.loads(data)
+            worker.port, worker.places = int(report["port"]), int(report["max_sessions"])
+        except (ValueError, KeyError, TypeError):
+            status = worker.proc.poll() if worker.proc is not None else None
+            raise RuntimeError(f"serving process {worker.index} did not start"
+                               + (f" (it ended with status {status})" if status is not None else "")) from None
+        worker.tabs = 0
+        worker.ready = True
+
+    def supervise(self) -> None:
+        """Start again a worker that has stopped (called every half second)."""
+        for worker in self.workers:
+            proc = worker.proc
+            if self._stopping or proc is None or proc.poll() is None:
+                continue
+            worker.ready = False
+            log.warning("ejsrl: serving process %d stopped (status %s); starting a new one "
+                        "(the sessions it served are lost: their tabs reload to a new one)", worker.index, proc.returncode)
+            try:
+                self._await_report(worker, self._spawn(worker))
+            except RuntimeError as exc:
+                log.error("ejsrl: %s", exc)
+
+    def stop(self) -> None:
+        """Stop relaying and stop the workers (SIGTERM, then SIGKILL after STOP_SECONDS)."""
+        self._stopping = True
+        loop, server = self._loop, self._server
+        if loop is not None and server is not None and loop.is_running():
+            with contextlib.suppress(RuntimeError):
+                loop.call_soon_threadsafe(server.close)
+        procs = [w.proc for w in self.workers if w.proc is not None]
+        for proc in procs:
+            with contextlib.suppress(ProcessLookupError):
+                proc.send_signal(signal.SIGTERM)
+        deadline = time.monotonic() + STOP_SECONDS
+        for proc in procs:
+            try:
+                proc.wait(max(0.0, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+    @property
+    def max_sessions(self) -> int:
+        return sum(w.places for w in self.workers)
+
+    # -- relaying ------------------------------------------------------------------------------------
+    def listen(self) -> int:
+        """Listen on ``host:port`` (the next free port if taken; 0: any) in a thread of its
+        own; returns the port."""
+        ready = threading.Event()
+        failure: list[BaseException] = []
+
+        def run() -> None:
+            loop = asyncio.new_event_loop()
+            self._loop = loop
+            try:
+                self._server = loop.run_until_complete(self._bind())
+            except BaseException as exc:  # noqa: BLE001 - reported to listen()
+                failure.append(exc)
+                ready.set()
+                loop.close()
+                return
+            ready.set()
+            try:
+                loop.run_until_complete(self._server.serve_forever())
+            except (asyncio.CancelledError, RuntimeError):
+                pass
+            finally:
+                loop.close()
+
+        threading.Thread(target=run, name="ejsrl-front", daemon=True).start()
+        ready.wait()
+        if failure:
+            raise failure[0]
+        assert self._server is not None
+        return int(self._server.sockets[0].getsockname()[1])
+
+    async def _bind(self) -> asyncio.base_events.Server:
+        host = None if self.host in ("", "0.0.0.0") else self.host
+        tries = 1 if self.port == 0 else 100
+        for port in range(self.port, self.port + tries):
+            try:
+                return await asyncio.start_server(self._relay, host, port, limit=HEAD_LIMIT)
+            except OSError:
+                if port == self.port + tries - 1:
+                    raise
+        raise AssertionError("unreachable")
+
+    def route(self, path: str, websocket: bool) -> Worker | None:
+        """The worker a request for ``path`` goes to (None if none is ready)."""
+        ready = [w for w in self.workers if w.ready]
+        if not ready:
+            return None
+        match = _TOKEN.match(path)
+        if match is not None:
+            index = int(match.group(1))
+            if index < len(self.workers) and self.workers[index].ready:
+                return self.workers[index]
+        if websocket:  # a new tab: the least full (shares the cores evenly), then the most free places
+            return min(ready, key=lambda w: (w.tabs / max(w.places, 1), w.tabs - w.places, w.index))
+        return ready[next(self._turn) % len(ready)]
+
+    async def _relay(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        try:
+            head = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), HEAD_SECONDS)
+        except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, asyncio.TimeoutError, ConnectionError, ValueError):
+            writer.close()
+            return
+        parts = head.split(b"\r\n", 1)[0].split(b" ")
+        path = parts[1].decode("latin-1") if len(parts) == 3 else ""
+        websocket = _UPGRADE.search(head) is not None
+        worker = self.route(path, websocket)
+        upstream: tuple[asyncio.StreamReader, asyncio.StreamWriter] | None = None
+        if worker is not None:
+            try:
+                upstream = await asyncio.open_connection("127.0.0.1", worker.port)
+            except OSError:
+                upstream = None
+        if worker is None or upstream is None:
+            body = b"This lab is starting again: reload the page in a few seconds.\n"
+            writer.write(b"HTTP/1.1 503 Service Unavailable\r\nContent-Type: text/plain; charset=utf-8\r\n"
+                         b"Retry-After: 5\r\nConnection: close\r\nContent-Length: %d\r\n\r\n%s" % (len(body), body))
+            with contextlib.suppress(ConnectionError):
+                await writer.drain()
+            writer.close()
+            return
+        up_reader, up_writer = upstream
+        up_writer.write(head)
+        if websocket:
+            worker.tabs += 1
+        try:
+            to_worker = asyncio.ensure_future(_pipe(reader, up_writer, half_close=True))
+            to_client = asyncio.ensure_future(_pipe(up_reader, writer, half_close=False))
+            done, _ = await asyncio.wait({to_worker, to_client}, return_when=asyncio.FIRST_COMPLETED)
+            if to_client in done or to_worker.exception() is not None:
+                to_worker.cancel()
+                to_client.cancel()
+            else:  # the client said all it had to say: the worker's answer may still be coming
+                await to_client
+        finally:
+            if websocket:
+                worker.tabs -= 1
+            for w in (writer, up_writer):
+                w.close()
+
+
+async def _pipe(reader: asyncio.StreamReader, writer: asyncio.StreamWriter, *, half_close: bool) -> None:
+    """Copy ``reader`` to ``writer`` until the end; ``half_close``: pass the end on."""
+    try:
+        while True:
+            data = await reader.read(1 << 16)
+            if not data:
+                break
+            writer.write(data)
+            await writer.drain()
+        if half_close and writer.can_write_eof():
+            writer.write_eof()
+    except (ConnectionError, OSError):
+        pass
+
+
+def serve_front(
+    command: Sequence[str], host: str, port: int, *, count: int, max_sessions: int | None,
+    stopped: threading.Event, announce: Any,
+) -> int:
+    """Serve a class from ``count`` processes until ``stopped`` is set or a KeyboardInterrupt
+    (a stop signal) arrives; ``announce(port, places)`` prints the start-up lines."""
+    front = Front(command, host, port, count=count, max_sessions=max_sessions)
+    try:
+        front.start()
+        bound = front.listen()
+        announce(bound, front.max_sessions)
+        while not stopped.wait(0.5):
+            front.supervise()
+    except RuntimeError as exc:
+        print(f"error: {exc}", file=sys.stderr, flush=True)
+        return 1
+    except OSError as exc:
+        print(f"error: cannot serve on {host}:{port}: {exc.strerror or exc}", file=sys.stderr, flush=True)
+        return 1
+    finally:
+        front.stop()
+    return 0

@@ -1,0 +1,301 @@
+"""A class served from several processes (``--processes N``, by default one per core): the
+front relays each tab to a worker process; every guarantee of one process holds through it.
+
+The apps run as a teacher runs them (``python app.py``); raw viser clients play students."""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from websockets.exceptions import InvalidStatus
+
+from ejsrl.app._front import Front, Worker, default_processes, split_places, worker_command
+from testkit.guard_client import Client, gui_update, run_async
+
+_READOUT = re.compile(r"^\*\*t\*\* = ([-+0-9.eE]+)")
+
+
+# -- routing, without processes ----------------------------------------------------------------------
+
+
+def ready_front(places: list[int]) -> Front:
+    front = Front(["true"], "127.0.0.1", 0, count=len(places), max_sessions=sum(places))
+    for w, p in zip(front.workers, places):
+        w.ready, w.places, w.port = True, p, 1000 + w.index
+    return front
+
+
+def test_a_session_address_goes_to_the_process_named_in_its_token():
+    front = ready_front([2, 2, 2])
+    assert front.route("/s/2xAbCdEfGhIjKl/", websocket=True) is front.workers[2]
+    assert front.route("/s/1xAbCdEfGhIjKl/?x=1", websocket=False) is front.workers[1]
+    assert front.route("/s/1xAbCdEfGhIjKl", websocket=True) is front.workers[1]
+    # a token naming no process (another server's, or made up) is a new tab
+    front.workers[0].tabs = 1
+    assert front.route("/s/7xAbCdEfGhIjKl/", websocket=True) is front.workers[1]
+    # ... and so is a session whose process is starting again
+    front.workers[2].ready = False
+    assert front.route("/s/2xAbCdEfGhIjKl/", websocket=True) is front.workers[1]
+
+
+def test_a_new_tab_goes_to_the_least_full_process_and_files_go_in_turn():
+    front = ready_front([2, 1])
+    chosen = []
+    for _ in range(3):
+        w = front.route("/", websocket=True)
+        w.tabs += 1
+        chosen.append(w.index)
+    assert chosen == [0, 1, 0]  # the least full first: the class spreads over the cores
+    assert front.route("/", websocket=True).index == 0  # all full: the first tells the tab so
+    files = [front.route("/assets/index.js", websocket=False).index for _ in range(4)]
+    assert sorted(files) == [0, 0, 1, 1]
+    for w in front.workers:
+        w.ready = False
+    assert front.route("/", websocket=True) is None
+
+
+def test_places_are_shared_evenly_and_processes_follow_the_cores():
+    assert split_places(5, 2) == [3, 2] and split_places(7, 3) == [3, 2, 2] and split_places(1, 3) == [1, 1, 1]
+    assert default_processes(1) == 1 and default_processes(2) == 2 and default_processes(64) == 8
+
+
+def test_the_workers_are_started_with_the_apps_own_command_line(monkeypatch, tmp_path):
+    app = tmp_path / "app.py"
+    app.write_text("")
+    monkeypatch.setattr(sys, "argv", [str(app), "--port", "9000"])
+    monkeypatch.setattr(sys, "orig_argv", ["python3", "-P", "-X", "utf8", str(app), "--port", "9000"])
+    assert worker_command() == [sys.executable, "-P", "-X", "utf8", str(app), "--port", "9000"]
+    # run as a module or a command string: nothing to start again
+    monkeypatch.setattr(sys, "orig_argv", ["python3", "-m", "lab", "--port", "9000"])
+    monkeypatch.setattr(sys, "argv", [str(app), "--port", "9000"])
+    assert worker_command() is None
+    monkeypatch.setattr(sys, "argv", ["-c"])
+    monkeypatch.setattr(sys, "orig_argv", ["python3", "-c", "pass"])
+    assert worker_command() is None
+
+
+# -- a served lab ------------------------------------------------------------------------------------
+
+
+class Served:
+    """``python app.py --port 0 ...`` in its own process; ``port`` once it serves."""
+
+    def __init__(self, app_dir: Path, tmp: Path, *args: str) -> None:
+        self.out, self.err = tmp / "out.txt", tmp / "err.txt"
+        env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
+        self.proc = subprocess.Popen([sys.executable, "-P", str(app_dir / "app.py"), "--port", "0", *args],
+                                     stdout=self.out.open("w"), stderr=self.err.open("w"), env=env)
+        deadline = time.monotonic() + 180
+        while (m := re.search(r"serving on http://127\.0\.0\.1:(\d+)", self.out.read_text())) is None:
+            if self.proc.poll() is not None or time.monotonic() > deadline:
+                raise AssertionError(f"the app did not serve:\n{self.out.read_text()}\n{self.err.read_text()}")
+            time.sleep(0.1)
+        self.port = int(m.group(1))
+
+    def children(self) -> list[int]:
+        path = Path(f"/proc/{self.proc.pid}/task/{self.proc.pid}/children")
+        return [int(p) for p in path.read_text().split()] if path.exists() else []
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(20)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+
+
+def cpu_seconds(pid: int) -> float:
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+def token_of(client: Client) -> str | None:
+    for text in client.texts():
+        match = re.search(r"s/([A-Za-z0-9_-]{8,64})/'", text)
+        if match:
+            return match.group(1)
+    return None
+
+
+def sim_time(client: Client) -> float | None:
+    """The latest simulated time the student's panel shows."""
+    found = None
+    for m in client.received:
+        if m.get("type") in ("GuiUpdateMessage", "GuiMarkdownMessage"):
+            data = m.get("updates", m.get("props", {}))
+            match = _READOUT.match(str(data.get("_markdown", data.get("content", ""))))
+            if match:
+                found = float(match.group(1))
+    return found
+
+
+async def student(port: int, path: str = "") -> Client:
+    client = await Client.open(port, path=path)
+    await client.until(lambda: token_of(client) is not None or "This lab is full" in " ".join(client.texts()),
+                       "the panel", timeout=90)
+    return client
+
+
+async def play(client: Client) -> None:
+    uuid = next(m["uuid"] for m in client.received if m.get("type") == "GuiButtonMessage" and m["props"]["label"] == "Play")
+    await client.send(gui_update(uuid, value=True))
+
+
+@pytest.fixture(scope="module")
+def served(built, tmp_path_factory):
+    server = Served(built("pendulum"), tmp_path_factory.mktemp("front"), "--processes", "2", "--max-sessions", "3", "--grace", "30")
+    yield server
+    server.stop()
+
+
+def test_a_class_is_served_from_two_processes_that_both_run_simulations(served):
+    assert "up to 3 at once from 2 processes" in served.out.read_text()
+    workers = served.children()
+    assert len(workers) == 2
+
+    async def scenario() -> None:
+        a, b = await student(served.port), await student(served.port)
+        try:
+            # one tab in each process: the class spreads over the cores
+            assert sorted(token_of(c)[:2] for c in (a, b)) == ["0x", "1x"], [token_of(a), token_of(b)]
+            before = [cpu_seconds(p) for p in workers]
+            await play(a)
+            await play(b)
+            await Client.until(lambda: all((sim_time(c) or 0) > 1.0 for c in (a, b)), "both simulations to run", timeout=60)
+            used = [cpu_seconds(p) - c0 for p, c0 in zip(workers, before)]
+            assert min(used) > 0.05, used  # both processes stepped a simulation
+        finally:
+            await a.close()
+            await b.close()
+
+    run_async(scenario(), timeout=120)
+
+
+def test_a_reload_through_the_front_finds_its_session_and_state(served):
+    async def scenario() -> None:
+        a = await student(served.port)
+        token = token_of(a)
+        await play(a)
+        await Client.until(lambda: (sim_time(a) or 0) > 0.5, "the simulation to run", timeout=60)
+        await a.close()
+        shown = sim_time(a)
+        again = await student(served.port, path=f"/s/{token}/")
+        try:
+            assert token_of(again) == token
+            # the same simulation: its time goes on from where the tab left it, not from 0
+            await Client.until(lambda: sim_time(again) is not None, "the time readout", timeout=30)
+            assert sim_time(again) >= shown
+        finally:
+            await again.close()
+
+    run_async(scenario(), timeout=120)
+
+
+def test_the_tab_after_the_last_place_is_told_the_lab_is_full(served):
+    async def scenario() -> None:
+        tabs = [await student(served.port) for _ in range(3)]
+        extra = await student(served.port)
+        try:
+            assert all(token_of(t) for t in tabs)
+            assert len({token_of(t) for t in tabs}) == 3
+            assert token_of(extra) is None and "This lab is full" in " ".join(extra.texts())
+        finally:
+            for c in (*tabs, extra):
+                await c.close()
+
+    run_async(scenario(), timeout=180)
+
+
+def test_the_front_refuses_other_sites_pages_and_unknown_hosts(served):
+    async def scenario() -> None:
+        for kw in ({"origin": "http://evil.example"}, {"host": f"evil.example:{served.port}"}):
+            with pytest.raises(InvalidStatus) as refused:
+                await Client.open(served.port, camera=False, **kw)
+            assert refused.value.response.status_code == 403, kw
+        ok = await Client.open(served.port, camera=False, origin=f"http://127.0.0.1:{served.port}")
+        await ok.close()
+
+    run_async(scenario(), timeout=60)
+
+
+def test_a_process_that_dies_is_started_again_and_new_tabs_are_served(built, tmp_path):
+    server = Served(built("pendulum"), tmp_path, "--processes", "2", "--max-sessions", "4")
+    try:
+        old = server.children()
+        assert len(old) == 2
+        os.kill(old[0], signal.SIGKILL)
+        deadline = time.monotonic() + 120
+        while not (len(server.children()) == 2 and old[0] not in server.children()
+                   and "starting a new one" in server.err.read_text()):
+            assert time.monotonic() < deadline, server.err.read_text()
+            time.sleep(0.2)
+
+        async def scenario() -> None:
+            tabs = [await student(server.port) for _ in range(4)]  # needs both processes' places
+            try:
+                assert all(token_of(t) for t in tabs), [t.texts() for t in tabs]
+            finally:
+                for t in tabs:
+                    await t.close()
+
+        # the new process reports itself before the front relays to it: every tab is served
+        time.sleep(0.5)
+        run_async(scenario(), timeout=180)
+        assert server.proc.poll() is None
+    finally:
+        server.stop()
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_stopping_the_front_stops_every_process(built, tmp_path, sig):
+    server = Served(built("pendulum"), tmp_path, "--processes", "2")
+    workers = server.children()
+    assert len(workers) == 2
+    server.proc.send_signal(sig)
+    status = server.proc.wait(30)
+    err = server.err.read_text()
+    assert status == 128 + sig and "Traceback" not in err, err
+    assert err.count("stopped by") == 1, err  # one line, the front's
+    deadline = time.monotonic() + 10
+    while any(alive(p) for p in workers):
+        assert time.monotonic() < deadline, "a serving process outlived its front"
+        time.sleep(0.1)
+
+
+def test_processes_whose_front_is_killed_stop_on_their_own(built, tmp_path):
+    server = Served(built("pendulum"), tmp_path, "--processes", "2")
+    workers = server.children()
+    server.proc.kill()
+    server.proc.wait(10)
+    deadline = time.monotonic() + 15
+    while any(alive(p) for p in workers):
+        assert time.monotonic() < deadline, "a serving process outlived its front"
+        time.sleep(0.1)
+
+
+def test_shared_serving_and_one_process_need_no_front(built, tmp_path):
+    for args in (("--shared",), ("--processes", "1")):
+        server = Served(built("pendulum"), tmp_path, *args)
+        try:
+            assert server.children() == []
+        finally:
+            server.stop()
+    r = subprocess.run([sys.executable, "-P", str(built("pendulum") / "app.py"), "--shared", "--processes", "2"],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "--shared serves one simulation from one process" in r.stderr
