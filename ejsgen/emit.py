@@ -44,7 +44,7 @@ def runtime_callable(fn: str) -> Any:
     return obj
 
 
-def _defaults(fn: str) -> dict[str, Any]:
+def runtime_defaults(fn: str) -> dict[str, Any]:
     """The keyword defaults of a runtime callable (plain values only)."""
     import inspect
 
@@ -58,7 +58,7 @@ def _defaults(fn: str) -> dict[str, Any]:
 
 def kwargs_of(call: Call) -> dict[str, Any]:
     """The keyword arguments worth writing: those that differ from the runtime's defaults."""
-    defaults = _defaults(call.fn)
+    defaults = runtime_defaults(call.fn)
     out = {}
     for k, v in call.kwargs.items():
         if k in defaults and k not in call.keep and not isinstance(v, (Call, Expr, Ref, Src)) and type(v) is type(defaults[k]) and v == defaults[k]:

@@ -19,11 +19,12 @@ import zipapp
 from pathlib import Path
 
 import jinja2
+from ejsrl.sim.model import ModelBase
 from ejsrl.sim.names import MATH_NAMES
 
 from ejsgen import __version__
 from ejsgen.errors import EjsError, SpecError
-from ejsgen.emit import WIDTH, call_lines, flat, meta_call, method_lines, program_call, sim_call, used_names, view_lines
+from ejsgen.emit import WIDTH, call_lines, flat, meta_call, method_lines, program_call, runtime_defaults, sim_call, used_names, view_lines
 from ejsgen.plan import AppPlan, Line
 
 __all__ = ["render_app", "write_app", "REQUIREMENTS", "runtime_dir"]
@@ -31,6 +32,7 @@ __all__ = ["render_app", "write_app", "REQUIREMENTS", "runtime_dir"]
 REQUIREMENTS = ["numpy>=1.26", "scipy>=1.11", "viser>=1.1,<1.2", "trimesh>=4.0", "opencv-python-headless>=4.8"]
 _MARK = "  #@@ejsloc:"
 _MARK_RE = re.compile(r"  #@@ejsloc:(\d+)$")
+_TABLE = "@@SPEC_LINES@@"  # where the class's SPEC_LINES go, once the lines below are numbered
 
 
 def runtime_dir() -> Path:
@@ -119,8 +121,9 @@ def _marked(lines: list[Line], locs: list[tuple[int, int]]) -> list[str]:
     return out
 
 
-def _line_table(table: list[tuple[int, int, int]]) -> str:
-    """``Model.SPEC_LINES`` in runs: consecutive app lines on consecutive spec lines, same column."""
+def _line_table(table: list[tuple[int, int, int]]) -> list[str]:
+    """``SPEC_LINES`` in runs (consecutive app lines on consecutive spec lines, same column), as
+    the class attribute's lines: the compact text that ``ModelBase`` turns into the table."""
     runs: list[list[int]] = []
     for app, line, col in table:
         last = runs[-1] if runs else None
@@ -128,34 +131,63 @@ def _line_table(table: list[tuple[int, int, int]]) -> str:
             last[1] = app
         else:
             runs.append([app, app, line, col])
+    if not runs:
+        return []
     entries = [f"{a}={ln}:{c}" if a == b else f"{a}-{b}={ln}:{c}" for a, b, ln, c in runs]
-    chunks = textwrap.wrap(" ".join(entries), width=WIDTH - 8)
+    chunks = textwrap.wrap(" ".join(entries), width=WIDTH - 10)
     note = "  # app.py line=spec line:column, for errors"
-    if len(chunks) <= 1:
-        one = f'Model.SPEC_LINES = Model._ejs_lines("{chunks[0] if chunks else ""}")'
-        return one + note if len(one + note) <= WIDTH else one
-    return "\n".join([f"Model.SPEC_LINES = Model._ejs_lines({note}", *[f'    "{c} "' for c in chunks[:-1]], f'    "{chunks[-1]}"', ")"])
+    if len(chunks) == 1:
+        one = f'    SPEC_LINES = "{chunks[0]}"'
+        return [one + note if len(one + note) <= WIDTH else one]
+    return [f"    SPEC_LINES = ({note}", *[f'        "{c} "' for c in chunks[:-1]], f'        "{chunks[-1]}"', "    )"]
+
+
+def _with_line_table(text: str, locs: list[tuple[int, int]]) -> str:
+    """``text`` with its location marks taken off and the ``SPEC_LINES`` placeholder (in the class,
+    above every marked line) replaced by the table of the marked lines.
+
+    The table's own lines move the lines below it; the number of lines it takes grows with the
+    line numbers it holds, so it is laid out again until that number stays the same.
+    """
+    lines = text.split("\n")
+    at = lines.index(_TABLE)
+    table = []
+    for lineno, line in enumerate(lines, start=1):
+        m = _MARK_RE.search(line)
+        if m:
+            if lineno <= at:
+                raise EjsError(f"internal error: app.py line {lineno} is marked above SPEC_LINES; please report it")
+            table.append((lineno, *locs[int(m.group(1))]))
+            lines[lineno - 1] = line[: m.start()]
+    size, rows = 1, _line_table(table)
+    while rows and len(rows) != size:  # ends: more lines above only ever lengthen the table
+        size = len(rows)
+        rows = _line_table([(n + size - 1, ln, col) for n, ln, col in table])
+    lines[at : at + 1] = rows
+    return "\n".join(lines)
 
 
 def render_app(plan: AppPlan) -> str:
     """The text of ``app.py`` for a plan."""
     locs: list[tuple[int, int]] = []
     methods = [_marked(method_lines(m), locs) for m in plan.methods]
-    class_lines = [*_dict_lines("VARIABLES", plan.variables, 4), f"    INDEPENDENT = {plan.independent!r}"]
+    class_lines = _dict_lines("VARIABLES", plan.variables, 4)
+    if plan.independent != ModelBase.INDEPENDENT:
+        class_lines.append(f"    INDEPENDENT = {plan.independent!r}")
+    class_lines.append(_TABLE)
     blocks: list[list[str]] = []
     if plan.programs:
         blocks.append(["Model.PROGRAMS = {", *(f"    {p.name!r}: {flat(program_call(p))}," for p in plan.programs), "}"])
     if plan.after_class:
         blocks.append(list(plan.after_class))
     blocks.append(_marked(view_lines(plan.view), locs))
-    blocks.append([ln.text for ln in call_lines(sim_call(plan), 0, "SIMULATION = ", "")] + [ln.text for ln in call_lines(meta_call(plan), 0, "META = ", "")])
-    texts = [ln for m in methods for ln in m] + [ln for b in blocks for ln in b] + ["ModelBase", "main", "AppMeta", "SimConfig"]
+    all_default = _default_sim(plan)
+    sim = [] if all_default else [ln.text for ln in call_lines(sim_call(plan), 0, "SIMULATION = ", "")]
+    blocks.append(sim + [ln.text for ln in call_lines(meta_call(plan), 0, "META = ", "")])
+    texts = [ln for m in methods for ln in m] + [ln for b in blocks for ln in b] + ["ModelBase", "main", "AppMeta"]
     math_lines, uses_numpy = _prelude_imports(texts)
     text = _env().get_template("app.py.j2").render(
-        version=__version__,
         header=_header(plan),
-        spec_name=plan.spec_name,
-        spec_name_repr=repr(plan.spec_name),
         prelude_imports=math_lines,
         numpy=uses_numpy,
         runtime_imports=_imports(texts) + list(plan.runtime_imports),
@@ -163,18 +195,15 @@ def render_app(plan: AppPlan) -> str:
         class_lines=class_lines,
         methods=methods,
         module_blocks=blocks,
-        spec_lines="@@SPEC_LINES@@",
+        main_args="Model, VIEW, meta=META" if all_default else "Model, VIEW, sim=SIMULATION, meta=META",
     )
-    out_lines = []
-    table = []
-    for lineno, line in enumerate(text.split("\n"), start=1):
-        m = _MARK_RE.search(line)
-        if m:
-            spec_line, spec_col = locs[int(m.group(1))]
-            table.append((lineno, spec_line, spec_col))
-            line = line[: m.start()]
-        out_lines.append(line)
-    return "\n".join(out_lines).replace("@@SPEC_LINES@@", _line_table(table))
+    return _with_line_table(text, locs)
+
+
+def _default_sim(plan: AppPlan) -> bool:
+    """Whether every run setting of the spec is the runtime's default (``SIMULATION`` is then left out)."""
+    defaults = runtime_defaults("SimConfig")
+    return all(k in defaults and v == defaults[k] for k, v in plan.sim.items())
 
 
 def _header(plan: AppPlan) -> str:

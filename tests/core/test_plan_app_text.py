@@ -18,11 +18,10 @@ import pytest
 
 from ejsgen.cli import load_plan
 from ejsgen.generate import render_app
-from testkit import EXAMPLES, ROOT
+from testkit import EXAMPLES, ROOT, bench_module
 
-SPECS = sorted(EXAMPLES.glob("*.ejs.yaml")) + sorted((EXAMPLES / "paper").glob("*.ejs.yaml")) + sorted((EXAMPLES / "tutorial").glob("*.ejs.yaml"))
-#: tutorial step 1 is a 20-line spec: a runnable app's own lines (imports, run settings, main) weigh more
-SMALL = {"tutorial/step1_pendulum": 2.5}
+#: every example bench/app_lines.py measures (core examples, paper labs, tutorial steps)
+SPECS = bench_module("app_lines").example_specs()
 
 
 def _id(p: Path) -> str:
@@ -42,7 +41,7 @@ def _methods(text: str) -> dict[str, ast.FunctionDef]:
 def test_app_is_at_most_twice_its_spec(spec: Path) -> None:
     n_spec = len(spec.read_text(encoding="utf-8").splitlines())
     n_app = len(render_app(load_plan(spec)).splitlines())
-    assert n_app / n_spec <= SMALL.get(_id(spec), 2.0), f"{_id(spec)}: app.py has {n_app} lines for a {n_spec}-line spec"
+    assert n_app / n_spec <= 2.0, f"{_id(spec)}: app.py has {n_app} lines for a {n_spec}-line spec"
 
 
 @pytest.mark.parametrize("spec", SPECS, ids=_id)

@@ -138,7 +138,9 @@ def loaded(ref: AppRef) -> LoadedApp:
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # tracebacks and SPEC_LINES find the module
     spec.loader.exec_module(module)
-    app = LoadedApp(module.Model, module.VIEW, module.SIMULATION, module.META, folder)
+    from ejsrl.app._loop import SimConfig
+
+    app = LoadedApp(module.Model, module.VIEW, getattr(module, "SIMULATION", SimConfig()), module.META, folder)  # left out when all defaults
     _CACHE[ref.digest] = app
     return app
 

@@ -326,7 +326,7 @@ def locate_error(exc: BaseException, model_cls: type, tb: TracebackType | None =
     module = sys.modules.get(model_cls.__module__)
     app_file = getattr(module, "__file__", None)
     lines: dict[int, tuple[int, int]] = getattr(model_cls, "SPEC_LINES", {})
-    spec = getattr(model_cls, "SPEC", "")
+    spec = getattr(model_cls, "SPEC", "") or getattr(getattr(module, "META", None), "spec", "")
     where = ""
     for frame, lineno in traceback.walk_tb(tb or exc.__traceback__):
         if app_file is not None and frame.f_code.co_filename == app_file and lineno in lines:
@@ -349,16 +349,19 @@ class ModelBase:
     """Base of generated models.
 
     Class attributes set by the generated code:
-    ``SPEC`` (the spec's file name), ``SPEC_LINES`` (app.py line -> (spec line, column)),
     ``VARIABLES`` (name -> value type: ``float``, ``int``, ``bool``, ``str``, ``array``,
-    ``object``, or ``auto`` for an ``expr:`` variable), ``INDEPENDENT`` (the independent variable of the first ODE page, or
-    ``"t"`` if declared, else None).
+    ``object``, or ``auto`` for an ``expr:`` variable), ``INDEPENDENT`` (the independent
+    variable of the first ODE page, or ``"t"`` if declared, else None; left out when ``"t"``),
+    ``SPEC_LINES`` (app.py line -> (spec line, column), written as the compact text
+    :meth:`_ejs_lines` reads, turned into the table when the class is made).
+    ``SPEC`` (the spec's file name, for error locations) is left out too: the module's
+    ``META.spec`` is read instead.
     """
 
     SPEC: ClassVar[str] = ""
     SPEC_LINES: ClassVar[dict[int, tuple[int, int]]] = {}
     VARIABLES: ClassVar[dict[str, str]] = {}
-    INDEPENDENT: ClassVar[str | None] = None
+    INDEPENDENT: ClassVar[str | None] = "t"
     PROGRAMS: ClassVar[dict[str, Any]] = {}
 
     def __init__(
@@ -377,6 +380,11 @@ class ModelBase:
             self._ejs_programs = Programs(self, self.PROGRAMS)
         if start:
             self._ejs_reset()
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if isinstance(cls.__dict__.get("SPEC_LINES"), str):
+            cls.SPEC_LINES = ModelBase._ejs_lines(cls.__dict__["SPEC_LINES"])
 
     @staticmethod
     def _ejs_lines(table: str) -> dict[int, tuple[int, int]]:
