@@ -9,6 +9,8 @@ An ``App`` holds no state shared with other apps of the process.
 
 from __future__ import annotations
 
+import contextlib
+import io
 import sys
 import threading
 import time
@@ -434,7 +436,9 @@ class App(Controller):
                 pass
             finally:
                 self.classroom.stop()
-                server.stop()
+                # a front's process stops quietly: the front says the lab stopped
+                with contextlib.nullcontext() if role is None else contextlib.redirect_stdout(io.StringIO()):
+                    server.stop()
             return server
         if not block:
             self._loop_thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)

@@ -237,8 +237,8 @@ def main(
             if stop.signum is None:
                 stop.signum = signal.SIGINT
     if stop.signum is not None:
-        if status != 128 + stop.signum and WORKER_ENV not in os.environ:  # a headless run reports its own stop; a front, its processes'
-
+        # a headless run reports its own stop, and a front reports its processes' stop
+        if status != 128 + stop.signum and WORKER_ENV not in os.environ:
             print(f"{meta.title}: stopped by {signal.Signals(stop.signum).name}", file=sys.stderr, flush=True)
         return 128 + int(stop.signum)
     return status
