@@ -4,8 +4,8 @@
                               [--no-browser] [--spy LAB=N]
 
 For each lab (pendulum, six_axis_kinematics, visual_servoing_eih by default) the generated
-app is served as a teacher would (``python app.py --port P --max-sessions 1000``, its own
-process), and N simulated students connect: real viser websocket clients that complete
+app is served as a teacher would (``python app.py --port P --max-sessions 1000``: a front
+and a worker process per core, ``--processes N`` to change), and N simulated students connect: real viser websocket clients that complete
 the handshake (subprotocol, camera message), read and decode every message, and press
 Play on their own session. Over ``--seconds`` we measure, per student, the display frames
 delivered (the time readout's updates) and the simulated time per wall second over what
@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import os
 import re
 import socket
@@ -78,31 +79,54 @@ def build(name: str, out_root: Path) -> Path:
 
 
 class Server:
-    """The lab's app.py serving in its own process."""
+    """The lab's app.py serving in its own process (a front and its worker processes, unless
+    ``processes`` is 1); CPU and memory are the whole tree's."""
 
-    def __init__(self, app_dir: Path) -> None:
+    def __init__(self, app_dir: Path, processes: int | None = None) -> None:
         self.port = free_port()
         self.log = Path(tempfile.mkdtemp()) / "server.log"
         env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
+        more = [] if processes is None else ["--processes", str(processes)]
         self.proc = subprocess.Popen(
-            [sys.executable, "-P", str(app_dir / "app.py"), "--port", str(self.port), "--max-sessions", "1000", "--grace", "1"],
+            [sys.executable, "-P", str(app_dir / "app.py"), "--port", str(self.port), "--max-sessions", "1000", "--grace", "1", *more],
             stdout=self.log.open("w"), stderr=subprocess.STDOUT, env=env,
         )
-        deadline = time.monotonic() + 120
+        deadline = time.monotonic() + 180
         while "serving on" not in self.log.read_text():
             if self.proc.poll() is not None or time.monotonic() > deadline:
                 raise RuntimeError(f"the server did not start:\n{self.log.read_text()}")
             time.sleep(0.2)
 
+    def pids(self) -> list[int]:
+        """The server's process and its worker processes."""
+        out, todo = [], [self.proc.pid]
+        while todo:
+            pid = todo.pop()
+            out.append(pid)
+            path = Path(f"/proc/{pid}/task/{pid}/children")
+            todo += [int(p) for p in path.read_text().split()] if path.exists() else []
+        return out
+
+    def cpu_by_process(self) -> list[float]:
+        """CPU seconds of each process: the front (or the one process) first."""
+        out = []
+        for pid in self.pids():
+            with contextlib.suppress(OSError):
+                fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+                out.append((int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK"))
+        return out
+
     def cpu_seconds(self) -> float:
-        fields = Path(f"/proc/{self.proc.pid}/stat").read_text().rsplit(")", 1)[1].split()
-        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+        return sum(self.cpu_by_process())
 
     def rss_mb(self) -> float:
-        for line in Path(f"/proc/{self.proc.pid}/status").read_text().splitlines():
-            if line.startswith("VmRSS:"):
-                return int(line.split()[1]) / 1024
-        return float("nan")
+        total = 0.0
+        for pid in self.pids():
+            with contextlib.suppress(OSError):
+                for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+                    if line.startswith("VmRSS:"):
+                        total += int(line.split()[1]) / 1024
+        return total
 
     def stop(self) -> None:
         self.proc.terminate()
@@ -165,17 +189,18 @@ async def _measure(port: int, n: int, seconds: float, server: Server, asked_pace
     await asyncio.sleep(2.0)  # every session playing
     before = [len(s.readouts()) for s in students]
     t_before = [s.readouts()[-1] if s.readouts() else 0.0 for s in students]
-    cpu0, wall0, mine0 = server.cpu_seconds(), time.perf_counter(), time.process_time()
+    each0, wall0, mine0 = server.cpu_by_process(), time.perf_counter(), time.process_time()
     await asyncio.sleep(seconds)
     wall = time.perf_counter() - wall0
-    cpu = server.cpu_seconds() - cpu0
+    each = [b - a for a, b in zip(each0, server.cpu_by_process())]
+    cpu = sum(each)
     students_cpu = time.process_time() - mine0
     rss = server.rss_mb()
     frames = [len(s.readouts()) - b for s, b in zip(students, before)]
     rates = [((s.readouts()[-1] if s.readouts() else 0.0) - t0) / wall / asked_pace for s, t0 in zip(students, t_before)]
     for s in students:
         await s.client.close()
-    return {"fps": [f / wall for f in frames], "rate": rates, "cpu": cpu / wall, "students_cpu": students_cpu / wall, "rss": rss,
+    return {"fps": [f / wall for f in frames], "rate": rates, "cpu": cpu / wall, "each": [c / wall for c in each], "students_cpu": students_cpu / wall, "rss": rss,
             "load": os.getloadavg()[0]}
 
 
@@ -220,14 +245,15 @@ def chromium_check(port: int, seconds: float = 4.0) -> str:
     return f"Chromium page: readout {a!r} -> {b!r}: {(vb - va) / (t1 - t0):.2f} simulated s per s"
 
 
-def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser: bool) -> None:
+def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser: bool, processes: int | None = None) -> None:
     app_dir = build(name, out_root)
     fps, pace = lab_settings(app_dir)
-    server = Server(app_dir)
+    server = Server(app_dir, processes)
     try:
         time.sleep(1.0)
         idle_rss = server.rss_mb()
-        print(f"{name}: {fps:.0f} frames/s asked, {pace:.3g} simulated s per s; server idle RSS {idle_rss:.0f} MB "
+        print(f"{name}: {fps:.0f} frames/s asked, {pace:.3g} simulated s per s; served by {len(server.pids())} process(es), "
+              f"idle RSS {idle_rss:.0f} MB "
               f"(target: {TARGETS[name]} sessions at >= {MIN_FPS:.0f} fps and >= {MIN_RATE} of the asked rate)", flush=True)
         # one student first: what every session shares is loaded by the first one (viser's
         # page, compressors, the lab's meshes); the memory of an extra session is measured from here
@@ -242,7 +268,7 @@ def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser
             best = n if ok else best
             print(f"   N={n:3d}: fps min {min(r['fps']):5.1f} median {sorted(r['fps'])[n // 2]:5.1f}; rate min {min(r['rate']):.2f} "
                   f"median {sorted(r['rate'])[n // 2]:.2f}; server CPU {r['cpu']:.2f} cores = {1000 * r['cpu'] / n:.1f} ms per "
-                  f"session-second (students' clients {r['students_cpu']:.2f} cores); RSS {r['rss']:.0f} MB, {(r['rss'] - one_rss) / n:.1f} MB per extra session; "
+                  f"session-second ({' + '.join(f'{c:.2f}' for c in r['each'])} by process; students' clients {r['students_cpu']:.2f} cores); RSS {r['rss']:.0f} MB, {(r['rss'] - one_rss) / n:.1f} MB per extra session; "
                   f"load {r['load']:.1f}  {'HELD' if ok else 'NOT HELD'}", flush=True)
             time.sleep(2.5)  # the sessions are freed (--grace 1)
             if not ok:
@@ -256,7 +282,7 @@ def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser
         server.stop()
 
 
-def spy(name: str, n: int, seconds: float, out_root: Path) -> None:
+def spy(name: str, n: int, seconds: float, out_root: Path, processes: int | None = None) -> None:
     """Sample the server with py-spy while ``n`` students play ``name``: where the time goes."""
     import shutil
     from collections import Counter
@@ -265,7 +291,7 @@ def spy(name: str, n: int, seconds: float, out_root: Path) -> None:
         sys.exit("--spy needs py-spy: pip install py-spy")
     app_dir = build(name, out_root)
     fps, pace = lab_settings(app_dir)
-    server = Server(app_dir)
+    server = Server(app_dir, processes)
     out = Path(tempfile.mkdtemp()) / "stacks.txt"
 
     async def students() -> None:
@@ -275,7 +301,7 @@ def spy(name: str, n: int, seconds: float, out_root: Path) -> None:
         await asyncio.sleep(1.0)
         proc = await asyncio.create_subprocess_exec(
             "py-spy", "record", "--pid", str(server.proc.pid), "--duration", str(int(seconds)), "--rate", "100",
-            "--format", "raw", "--threads", "--output", str(out), "--nonblocking",
+            "--format", "raw", "--threads", "--subprocesses", "--output", str(out), "--nonblocking",
             stdout=asyncio.subprocess.DEVNULL, stderr=asyncio.subprocess.DEVNULL)
         await proc.wait()
         for s in joined:
@@ -325,6 +351,7 @@ def main() -> int:
     p.add_argument("--seconds", type=float, default=None, help="measuring time per size (default 8; 4 with --quick)")
     p.add_argument("--ladder", action="append", default=[], metavar="LAB=N,N,...", help="the sizes to try for LAB")
     p.add_argument("--no-browser", action="store_true", help="skip the Chromium page")
+    p.add_argument("--processes", type=int, metavar="N", help="serve from N processes (default: the app's own, one per core)")
     p.add_argument("--spy", metavar="LAB=N", help="profile the server with py-spy while N students play LAB")
     args = p.parse_args()
     out_root = Path(tempfile.mkdtemp(prefix="ejsgen-classroom-"))
@@ -332,7 +359,7 @@ def main() -> int:
           f"Python speed: {python_speed():.2f} s for 10 M additions (compare runs by it: a virtual machine's CPU varies)", flush=True)
     if args.spy:
         name, _, n = args.spy.partition("=")
-        spy(name, int(n or 10), args.seconds or 10.0, out_root)
+        spy(name, int(n or 10), args.seconds or 10.0, out_root, args.processes)
         return 0
     ladders = dict(QUICK if args.quick else LADDER)
     for item in args.ladder:
@@ -340,7 +367,7 @@ def main() -> int:
         ladders[name] = [int(x) for x in sizes.split(",") if x]
     seconds = args.seconds or (4.0 if args.quick else 8.0)
     for name in [x.strip() for x in args.labs.split(",") if x.strip()]:
-        run_lab(name, ladders[name], seconds, out_root, browser=not args.no_browser)
+        run_lab(name, ladders[name], seconds, out_root, browser=not args.no_browser, processes=args.processes)
     return 0
 
 
