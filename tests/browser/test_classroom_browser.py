@@ -8,6 +8,7 @@ import pytest
 
 from testkit.browser import wait_until
 from testkit.browser_lab import make_app
+from testkit.served import Served
 
 
 #: a loaded machine (several WebGL pages on software rendering) needs patience
@@ -181,4 +182,46 @@ def test_shared_serving_still_shares_one_simulation(browser_context):
             if p is not None:
                 p.close()
         app.stop()
+        server.stop()
+
+
+def shown_time(page) -> float:
+    """The simulated time the tab's panel shows (its time readout)."""
+    text = page.evaluate("Array.from(document.querySelectorAll('p')).map(p=>p.textContent)"
+                         ".filter(t=>/^t = [-0-9.e]+/.test(t))[0]||''")
+    return float(text.split("=")[1].split()[0]) if "=" in text else float("nan")
+
+
+@pytest.mark.browser
+def test_tabs_served_from_two_processes_each_run_their_own_simulation(built, tmp_path, browser_context):
+    """``python app.py`` as a teacher runs it, from two processes: a tab in each, through the front."""
+    server = Served(built("pendulum"), tmp_path, "--processes", "2", "--max-sessions", "4", "--grace", "30")
+    url = f"http://127.0.0.1:{server.port}"
+    a = b = None
+    try:
+        a, b = open_tab(browser_context, url), open_tab(browser_context, url)
+        token = lambda page: re.search(r"/s/([A-Za-z0-9_-]+)/", address(page)).group(1)  # noqa: E731
+        assert sorted(token(p)[:2] for p in (a, b)) == ["0x", "1x"]  # one in each process
+
+        front(a).get_by_role("button", name="Play").click()
+        a.get_by_role("button", name="Pause").wait_for()
+        wait_until(lambda: shown_time(a) > 0.5, what="A's time to run")
+        front(b)
+        b.get_by_role("button", name="Play").wait_for()
+        assert shown_time(b) == 0.0  # B's simulation did not move
+
+        # A reloads: its own simulation again, from where it was
+        front(a).get_by_role("button", name="Pause").click()
+        a.get_by_role("button", name="Play").wait_for()
+        t = shown_time(a)
+        before = token(a)
+        a.reload()
+        a.get_by_text("Length").first.wait_for(timeout=SLOW)
+        wait_until(lambda: "/s/" in address(a), what="the address to carry the session")
+        assert token(a) == before
+        wait_until(lambda: shown_time(a) == t, what=f"the time shown before the reload ({t})")
+    finally:
+        for p in (a, b):
+            if p is not None:
+                p.close()
         server.stop()

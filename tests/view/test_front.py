@@ -5,20 +5,19 @@ The apps run as a teacher runs them (``python app.py``); raw viser clients play 
 
 from __future__ import annotations
 
-import asyncio
 import os
 import re
 import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import pytest
 from websockets.exceptions import InvalidStatus
 
-from ejsrl.app._front import Front, Worker, default_processes, split_places, worker_command
+from ejsrl.app._front import Front, default_processes, split_places, worker_command
 from testkit.guard_client import Client, gui_update, run_async
+from testkit.served import Served, alive, cpu_seconds
 
 _READOUT = re.compile(r"^\*\*t\*\* = ([-+0-9.eE]+)")
 
@@ -83,46 +82,6 @@ def test_the_workers_are_started_with_the_apps_own_command_line(monkeypatch, tmp
 
 
 # -- a served lab ------------------------------------------------------------------------------------
-
-
-class Served:
-    """``python app.py --port 0 ...`` in its own process; ``port`` once it serves."""
-
-    def __init__(self, app_dir: Path, tmp: Path, *args: str) -> None:
-        self.out, self.err = tmp / "out.txt", tmp / "err.txt"
-        env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1")
-        self.proc = subprocess.Popen([sys.executable, "-P", str(app_dir / "app.py"), "--port", "0", *args],
-                                     stdout=self.out.open("w"), stderr=self.err.open("w"), env=env)
-        deadline = time.monotonic() + 180
-        while (m := re.search(r"serving on http://127\.0\.0\.1:(\d+)", self.out.read_text())) is None:
-            if self.proc.poll() is not None or time.monotonic() > deadline:
-                raise AssertionError(f"the app did not serve:\n{self.out.read_text()}\n{self.err.read_text()}")
-            time.sleep(0.1)
-        self.port = int(m.group(1))
-
-    def children(self) -> list[int]:
-        path = Path(f"/proc/{self.proc.pid}/task/{self.proc.pid}/children")
-        return [int(p) for p in path.read_text().split()] if path.exists() else []
-
-    def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(20)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-
-
-def cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
-
-
-def alive(pid: int) -> bool:
-    try:
-        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
-    except FileNotFoundError:
-        return False
 
 
 def token_of(client: Client) -> str | None:
