@@ -255,12 +255,14 @@ def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser
         print(f"{name}: {fps:.0f} frames/s asked, {pace:.3g} simulated s per s; served by {len(server.pids())} process(es), "
               f"idle RSS {idle_rss:.0f} MB "
               f"(target: {TARGETS[name]} sessions at >= {MIN_FPS:.0f} fps and >= {MIN_RATE} of the asked rate)", flush=True)
-        # one student first: what every session shares is loaded by the first one (viser's
-        # page, compressors, the lab's meshes); the memory of an extra session is measured from here
-        asyncio.run(_measure(server.port, 1, 1.0, server, pace, fps))
+        # a student per process first: what every session of a process shares is loaded by its
+        # first one (viser's page, compressors, the lab's meshes); the memory of an extra
+        # session is measured from here
+        processes = max(1, len(server.pids()) - 1)
+        asyncio.run(_measure(server.port, processes, 1.0, server, pace, fps))
         time.sleep(2.5)
         one_rss = server.rss_mb()
-        print(f"   with one session (then freed): RSS {one_rss:.0f} MB", flush=True)
+        print(f"   with one session per process (then freed): RSS {one_rss:.0f} MB", flush=True)
         best = 0
         for n in sizes:
             r = asyncio.run(_measure(server.port, n, seconds, server, pace, fps))
