@@ -34,6 +34,17 @@ def corners_world(T_world_square: np.ndarray, half: float = SQUARE_HALF) -> np.n
     return V @ T_world_square[:3, :3].T + T_world_square[:3, 3]
 
 
+@pytest.fixture(params=["numpy", "numba"])
+def susan_path(request: pytest.FixtureRequest, monkeypatch: pytest.MonkeyPatch) -> str:
+    """Run a test once with each SUSAN implementation: the NumPy/OpenCV path and numba's compiled
+    kernels (the ``[fast]`` extra, in the test extra too, so both run here and in CI)."""
+    from ejsrl.vision import _susan
+
+    monkeypatch.setattr(_susan, "BACKEND", request.param)
+    assert _susan.susan_backend() == request.param
+    return request.param
+
+
 @pytest.fixture
 def rng() -> np.random.Generator:
     return np.random.default_rng(1234)

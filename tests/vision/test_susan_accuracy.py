@@ -15,6 +15,9 @@ from skimage import data
 
 from ejsrl.vision import susan_corners
 
+
+pytestmark = pytest.mark.usefixtures("susan_path")  # each test on both SUSAN paths (conftest.py)
+
 TOL = 1.5  # px: a vertex is found when a corner lies this close
 MAX_ANGLE = 150.0  # degrees: vertices sharper than this must be found
 

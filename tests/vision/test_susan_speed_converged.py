@@ -14,6 +14,8 @@ from skimage import data
 
 from ejsrl.vision import susan_corners
 
+pytestmark = pytest.mark.usefixtures("susan_path")  # each test on both SUSAN paths (conftest.py)
+
 
 def _grey(name: str) -> np.ndarray:
     im = getattr(data, name)()

@@ -10,6 +10,8 @@ from ejsrl.robotics.transforms import r2t, rotx, roty, rotz
 from ejsrl.vision import SUSAN_MASK, CameraModel, Pipeline, add_gaussian_noise, susan, susan_corners, susan_edges, to_gray, usan_area
 from ejsrl.world import render
 
+pytestmark = pytest.mark.usefixtures("susan_path")  # each test on both SUSAN paths (conftest.py)
+
 CAM = CameraModel(320, 240, fov_deg=50)
 
 

@@ -4,7 +4,9 @@ Images are (H, W) grey or (H, W, 3) RGB arrays (channel order R, G, B), uint8 0.
 bool masks, uint16 (scaled to 0..255) or finite floats in [0, 1]; every image function
 checks its input and refuses an empty, NaN, wrongly shaped or typed image, or an unknown
 option, with a ``ValueError`` that says what to do (the rules: ``ejsrl.vision._util``).
-Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV. Everything public
+Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV. SUSAN corners run
+compiled, 2-3x faster and outside the GIL, when numba is installed: ``pip install 'ejsgen[fast]'``
+(the same corners either way; ``EJSRL_SUSAN=numpy`` forces the NumPy path). Everything public
 is importable from here:
 
     from ejsrl.vision import Pipeline, susan, CameraModel, interaction_matrix, ibvs_velocity

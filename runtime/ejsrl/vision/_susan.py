@@ -23,12 +23,20 @@ USAN is at the anti-aliased apex, and gives true sub-pixel output with ``cornerS
 X-junctions (checkerboard corners) are recognised by their brighter and darker pixels
 lying in opposite quadrants around the nucleus.
 
+Speed: with numba installed (``pip install 'ejsgen[fast]'``), ``susan_corners`` runs its loops
+compiled (``_susan_numba``: the same corners, response and sub-pixel positions, bit for bit,
+about twice as fast, and outside the GIL); without it, this NumPy/OpenCV code, unchanged.
+``EJSRL_SUSAN=numpy`` (or ``_susan.BACKEND = "numpy"``) forces the NumPy path, ``numba`` the
+compiled one (an ``ImportError`` with the install hint without numba).
+
 Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV.
 """
 
 from __future__ import annotations
 
 import functools
+import os
+from types import ModuleType
 from typing import NamedTuple
 
 import cv2
@@ -47,6 +55,36 @@ _R = 3  # mask radius in whole pixels
 _CHORD = 6.8  # the mask's diameter in pixels
 _MID_SLACK = 1.0  # in-between pixels kept for the test as the side they belong to: whole-image estimate >= min_response - this
 _SCALE = 100  # c is stored as round(100 c) in a uint8 look-up table, as in the original code
+
+#: which implementation ``susan_corners`` runs: "auto" (the numba kernels when numba can be
+#: imported, else NumPy), "numpy" or "numba"; from ``EJSRL_SUSAN``, read at each call
+BACKEND: str = os.environ.get("EJSRL_SUSAN", "auto")
+FAST_HINT = "SUSAN's compiled kernels need numba: pip install 'ejsgen[fast]' (or: pip install numba)"
+
+
+@functools.lru_cache(maxsize=1)
+def _import_kernels() -> ModuleType | None:
+    try:
+        from ejsrl.vision import _susan_numba
+    except ImportError:
+        return None
+    return _susan_numba
+
+
+def _kernels() -> ModuleType | None:
+    """The compiled kernels module for this call, or None for the NumPy path (``BACKEND``)."""
+    which = choice(BACKEND, ("auto", "numpy", "numba"), "SUSAN backend (EJSRL_SUSAN)")
+    if which == "numpy":
+        return None
+    mod = _import_kernels()
+    if mod is None and which == "numba":
+        raise ImportError(FAST_HINT)
+    return mod
+
+
+def susan_backend() -> str:
+    """"numba" or "numpy": the implementation ``susan_corners`` runs now (``BACKEND``)."""
+    return "numpy" if _kernels() is None else "numba"
 
 
 def _lut(t: float) -> NDArray[np.uint8]:
@@ -179,12 +217,22 @@ _MOMENTS = np.column_stack([np.ones(len(SUSAN_MASK)), SUSAN_MASK[:, 0], SUSAN_MA
 _GEMM_ROWS = 2000
 
 
-def _moments(c: NDArray[np.float32]) -> NDArray[np.float64]:
-    """(K, 3): the sum, x and y moments over the mask of each row of ``c`` (K, 37) float32."""
-    out = np.empty((len(c), 3), np.float32)
+def _moments(c: NDArray) -> NDArray[np.float64]:
+    """(K, 3): the sum, x and y moments over the mask of each row of ``c`` (K, 37), float32 or float64.
+
+    Exact either way, whatever order the matrix product sums in: float32 holds integers (the
+    c of the smooth test) below 2^24; float64 holds the coverage test's float32 shares (in
+    [0.25, 100] or 0, multiples of 2^-25) and their sums over the mask (below 2^14) exactly.
+    So the compiled kernels (``_susan_numba``) and any BLAS give the same moments, bit for bit.
+    """
+    out = np.empty((len(c), 3), c.dtype)
+    mom = _MOMENTS if c.dtype == np.float32 else _MOMENTS64
     for i in range(0, len(c), _GEMM_ROWS):
-        cv2.gemm(c[i : i + _GEMM_ROWS], _MOMENTS, 1.0, None, 0.0, dst=out[i : i + _GEMM_ROWS])
-    return out.astype(np.float64)  # exact: sums of integers below 2^24 (or close for coverage)
+        cv2.gemm(c[i : i + _GEMM_ROWS], mom, 1.0, None, 0.0, dst=out[i : i + _GEMM_ROWS])
+    return out.astype(np.float64)
+
+
+_MOMENTS64 = _MOMENTS.astype(np.float64)
 
 
 def _corner_tests(pf: NDArray[np.uint8], Wp: int, base: NDArray, c: NDArray, brighter, similar, *, return_saddle: bool = False):
@@ -294,7 +342,8 @@ def _coverage_test(pf: NDArray[np.uint8], Wp: int, base: NDArray, vals: NDArray,
         np.minimum(x, span8[rows], out=x)
         share = np.divide(x, spanf[rows], dtype=np.float32)
         np.subtract(np.float32(1.0), share, out=share, where=d[rows])
-        return np.multiply(share, np.float32(_SCALE), out=share)
+        # float64 (the float32 values): their sums over the mask are then exact (see _moments)
+        return np.multiply(share, np.float32(_SCALE), out=share).astype(np.float64)
 
     # the pixels unlike the side are all on the other side (brighter than the dark side,
     # darker than the bright one), never split into two: the one-sided test cannot fail
@@ -492,16 +541,42 @@ def susan_corners(
         below = np.nextafter(below, np.float32(-np.inf))
     lut = _lut(t)
     mid_slack = floor - _MID_SLACK * _SCALE
-    b = _R + 1
     # 1. the pixels that may have a response (n <= g - floor), from a cheap bound over the image
     L_max = _bound_limit(t, g100 - floor + 1.0)
+    kernels = _kernels() if L_max is not None else None
+    if kernels is not None:
+        found = _corners_compiled(kernels, gray, float(t), g100, floor, below, mid_slack, lut, L_max, r)
+    else:
+        found = _corners_numpy(gray, t, g100, floor, below, mid_slack, lut, L_max, r)
+    if found is None:
+        pts = np.zeros((0, 2))
+        return (pts, np.zeros((H, W), np.float32)) if return_response else pts
+    resp, ci = found
+    py, px = np.divmod(ci, W)
+    strength = resp[py, px] / _SCALE
+    if len(strength) and quality > 0:
+        strong = strength >= quality * strength.max()
+        py, px, strength = py[strong], px[strong], strength[strong]
+    order = np.lexsort((py * W + px, -strength))
+    pts = np.column_stack([px[order], py[order]]).astype(np.float64)
+    if max_corners is not None:
+        pts = pts[: int(max_corners)]
+    if subpixel and len(pts):
+        pts = _refine(gray, pts)
+    return (pts, resp / _SCALE) if return_response else pts
+
+
+def _corners_numpy(gray, t, g100: float, floor: float, below, mid_slack: float, lut, L_max: int | None, r: int):
+    """Steps 1-5 of ``susan_corners`` with NumPy and OpenCV: the response map (x100, float32)
+    and the corners' flat indices, or None when no pixel has a response."""
+    H, W = gray.shape
+    b = _R + 1
     if L_max is not None:
         idx = _candidates_by_bound(gray, t, L_max, b, H - b)
     else:  # a geometric threshold so large that the bound cannot tell: the exact pass
         idx = _exact_candidates(gray, t, g100, below)
     if len(idx) == 0:
-        pts = np.zeros((0, 2))
-        return (pts, np.zeros((H, W), np.float32)) if return_response else pts
+        return None
     pad = cv2.copyMakeBorder(gray, _R, _R, _R, _R, cv2.BORDER_REPLICATE)
     pf, Wp = pad.ravel(), W + 2 * _R
     # 2-3. each pixel judged on its own: its USAN, the in-between-grey test, the false-positive tests
@@ -535,18 +610,75 @@ def susan_corners(
     ci = passing[rf[passing] >= _window_max(resp, r, passing)] if len(passing) else passing
     cy, cx = np.divmod(ci, W)
     keep = _local_max(resp, r, cy, cx)
-    py, px = cy[keep], cx[keep]
-    strength = resp[py, px] / _SCALE
-    if len(strength) and quality > 0:
-        strong = strength >= quality * strength.max()
-        py, px, strength = py[strong], px[strong], strength[strong]
-    order = np.lexsort((py * W + px, -strength))
-    pts = np.column_stack([px[order], py[order]]).astype(np.float64)
-    if max_corners is not None:
-        pts = pts[: int(max_corners)]
-    if subpixel and len(pts):
-        pts = _refine(gray, pts)
-    return (pts, resp / _SCALE) if return_response else pts
+    return resp, ci[keep]
+
+
+def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: float, below, mid_slack: float, lut, L_max: int, r: int):
+    """``_corners_numpy`` with numba's kernels (``_susan_numba``): the same steps, arithmetic and
+    result; the side-coverage estimate and the coverage test of the in-between pixels that
+    need it (a few) are the NumPy path's own functions."""
+    H, W = gray.shape
+    T, m, _ = _ramp_bound(float(t))
+    gray = np.ascontiguousarray(gray)
+    idx, rv, v0, lo3, hi3, mom = kernels.candidates(gray, lut, _MDX, _MDY, T, m, L_max, g100, below)
+    K = len(idx)
+    if K == 0:
+        return None
+    v16 = v0.astype(np.int16)
+    half_t = 0.5 * t
+    mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
+    r_dark = np.zeros(K, np.float32)
+    if mid.any():
+        r_dark[mid] = _coverage_response(gray, g100, idx[mid], kernels)
+    flat = mid & (np.abs(r_dark) < mid_slack)
+    wt = np.flatnonzero(~flat)
+    value = rv.copy()
+    ok = np.zeros(K, bool)
+    ok[wt] = kernels.smooth_tests(gray, lut, mom, wt, idx, _CONTIG, 0.0, _FULL)[0]
+    sel = np.flatnonzero(mid & ~flat & ~ok)
+    if len(sel):
+        lo, hi, v, dark = lo3[sel], hi3[sel], v0[sel], r_dark[sel] > 0
+        ok_m, n_m = kernels.coverage_tests(gray, _MDX, _MDY, _share_table(), idx, sel, lo, hi, dark, _CONTIG)
+        got, r_mid = _mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor)
+        value[sel[got]] = r_mid[got].astype(np.float32)
+        ok[sel[got]] = True
+    # saddles among the flat pixels (as in _corners_numpy)
+    k3 = np.ones((3, 3), np.uint8)
+    wf = np.flatnonzero(flat)
+    own_mid = np.zeros((H, W), np.float32)
+    own_mid.ravel()[idx[wf]] = rv[wf]
+    ws = wf[rv[wf] >= cv2.dilate(own_mid, k3).ravel().take(idx[wf])]
+    ws = ws[kernels.smooth_tests(gray, lut, mom, ws, idx, _CONTIG, _SADDLE_AREA, _FULL)[1]]
+    resp = np.zeros((H, W), np.float32)
+    rf = resp.ravel()
+    rf[idx[ws]] = rv[ws]
+    rf[idx[wt]] = value[wt]
+    okt = ok[wt]
+    passing = np.concatenate([idx[ws], idx[wt[okt]]])
+    failing = idx[wt[~okt]]
+    fv = value[wt[~okt]]
+    rf[failing] = 0
+    pmax = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8)).ravel()
+    return resp, kernels.suppress(resp, r, passing, failing, fv, pmax)
+
+
+_MDX = np.ascontiguousarray(SUSAN_MASK[:, 0])
+_MDY = np.ascontiguousarray(SUSAN_MASK[:, 1])
+_CONTIG = 2.9 * _SCALE  # the contiguity test: the three pixels towards the centroid sum to more
+_SADDLE_AREA = 0.35 * _SCALE * len(SUSAN_MASK)  # the saddle test: the unlike pixels cover more
+_FULL = float(_SCALE * len(SUSAN_MASK))  # the mask's area, x100
+
+
+@functools.lru_cache(maxsize=1)
+def _share_table() -> NDArray[np.float64]:
+    """(2, 256, 256): ``[dark, span, x]``, the coverage test's share (x100) of a pixel ``x`` grey
+    levels above the low one (clipped to ``span``), for the bright side and the dark one: the
+    float32 operations of ``_coverage_test``'s ``side``, as float64."""
+    span = np.maximum(np.arange(256), 1).astype(np.uint8)[:, None]
+    x = np.minimum(np.arange(256)[None, :], span).astype(np.uint8)
+    share = np.divide(x, span.astype(np.float32), dtype=np.float32)
+    dark = np.subtract(np.float32(1.0), share)
+    return (np.stack([share, dark]) * np.float32(_SCALE)).astype(np.float64)
 
 
 class _Judged(NamedTuple):
@@ -604,24 +736,34 @@ def _judge(pf, Wp: int, W: int, lut, t: float, g100: float, floor: float, below,
     ok[wt] = _smooth_test(pf, Wp, base, vals, c8, lut, kk[wt])[0]
     sel = np.flatnonzero(mid & ~flat & ~ok)
     if len(sel):
-        lo, hi, v = lo3[sel], hi3[sel], v0[sel]
-        # judged as the side that falls short of its share (the sign of the estimate): a
-        # straight edge cutting the nucleus pixel so that a share a of it lies on one side
-        # leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord is 6.8
-        # pixels long); only what falls short of that is a corner
-        dark = r_dark[sel] > 0
-        a_dark = (hi.astype(np.float64) - v) / np.maximum(hi.astype(np.float64) - lo, 1.0)
-        a_side = np.where(dark, a_dark, 1.0 - a_dark)
-        ok_m, n_m = _coverage_test(pf, Wp, base[kk[sel]], vals[kk[sel]], lo, hi, dark)
-        r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
-        got = r_mid >= floor
-        got &= r_mid > 0
+        got, r_mid = _judge_mid(pf, Wp, base[kk[sel]], vals[kk[sel]], lo3[sel], hi3[sel], v0[sel], r_dark[sel], g100, floor)
         value[sel[got]] = r_mid[got].astype(np.float32)
         ok[sel[got]] = True
     return _Judged(idx, rv, flat, value, ok)
 
 
-def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int64]) -> NDArray[np.float32]:
+def _judge_mid(pf, Wp: int, base: NDArray, vals: NDArray, lo: NDArray, hi: NDArray, v: NDArray, r_dark: NDArray, g100: float, floor: float):
+    """In-between pixels that failed the tests on their own, judged as the side they belong to:
+    which are corners that way (bool) and their response (x100, float64)."""
+    dark = r_dark > 0
+    return _mid_response(*_coverage_test(pf, Wp, base, vals, lo, hi, dark), dark, lo, hi, v, g100, floor)
+
+
+def _mid_response(ok_m: NDArray, n_m: NDArray, dark: NDArray, lo: NDArray, hi: NDArray, v: NDArray, g100: float, floor: float):
+    """``_judge_mid``'s answer from the coverage test's result (which pass, and their USAN as the side)."""
+    # judged as the side that falls short of its share (the sign of the estimate): a
+    # straight edge cutting the nucleus pixel so that a share a of it lies on one side
+    # leaves about g + 6.8 (a - 1/2) of the mask on that side (the disc's chord is 6.8
+    # pixels long); only what falls short of that is a corner
+    a_dark = (hi.astype(np.float64) - v) / np.maximum(hi.astype(np.float64) - lo, 1.0)
+    a_side = np.where(dark, a_dark, 1.0 - a_dark)
+    r_mid = np.where(ok_m, g100 + _CHORD * _SCALE * (a_side - 0.5) - n_m, 0.0)
+    got = r_mid >= floor
+    got &= r_mid > 0
+    return got, r_mid
+
+
+def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int64], kernels: ModuleType | None = None) -> NDArray[np.float32]:
     """The corner response (x100) of the pixels at flat indices ``idx`` judged as the dark side
     of their 7x7 neighbourhood (negative: the bright side's, of that size), from the pixels' dark shares.
 
@@ -633,16 +775,23 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     falls short (the other side then has more than its share).
 
     Whole-image OpenCV operations in float32 (``max7 - I`` saturates at 0: a share below 0 is
-    clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit.
+    clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit. The sums
+    over the mask at ``idx`` (at least 3 from the border): a whole-image filter, or with
+    ``kernels`` (``_susan_numba``) at those pixels only.
     """
     k7 = np.ones((7, 7), np.uint8)
     levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
     lo, hi = cv2.erode(levels, k7), cv2.dilate(levels, k7)
     share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
     cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
-    disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
-    disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
-    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
+    if kernels is not None:
+        n_dark = kernels.disc_sums(share, idx)
+    else:
+        # summed in float64: exact (float32 shares in [2^-8, 1] or 0 over 37 pixels), whatever
+        # order OpenCV sums in, so the compiled kernels' sums are the same, bit for bit
+        disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float64)
+        disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
+        n_dark = cv2.filter2D(share.astype(np.float64), cv2.CV_64F, disc, borderType=cv2.BORDER_REPLICATE).ravel().take(idx).astype(np.float32)
     own = share.ravel().take(idx)
     return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
 

@@ -1,0 +1,327 @@
+"""SUSAN corners' loops compiled with numba (the ``[fast]`` extra), imported by ``_susan`` lazily.
+
+The NumPy/OpenCV path of ``_susan.susan_corners`` spends its time in whole-image passes and
+in gathering the 37 mask pixels of the 15-25 thousand pixels with a response of a photograph;
+here each of those is one loop over the image or over the candidate pixels, with the same
+arithmetic (integer sums, the same float64 and float32 operations in the same order), so the
+corners, the response and the sub-pixel positions are the same, bit for bit
+(tests/vision/test_susan_numba.py). What stays in NumPy/OpenCV: the side-coverage estimate
+(OpenCV's float32 filters), the coverage test of the few in-between pixels that need it, and
+``cv2.cornerSubPix``.
+
+The kernels release the GIL (``nogil``: a classroom server's sessions run them side by side
+in threads) and run on one thread each (``parallel`` is not used: the server already has a
+thread per session); they are cached on disk (``cache``: numba writes next to this file
+when it can, else to its user-wide cache, ``~/.cache/numba`` or ``$NUMBA_CACHE_DIR``), so only
+the first call on a machine compiles them.
+"""
+
+from __future__ import annotations
+
+import numba as nb
+import numpy as np
+
+_JIT = {"nogil": True, "cache": True}
+_HALF = (1, 2, 3, 3, 3, 2, 1)  # the mask's half-widths on its rows dy = -3 .. 3 (37 pixels)
+
+
+@nb.njit(**_JIT)
+def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below):
+    """The pixels at least 4 from the border with a response ``g - n > below`` (x100, float32).
+
+    ``mdx``/``mdy``: the mask offsets (nucleus included). A ramp sum over the 36 neighbours,
+    ``L = sum min((T - d)+, m)``, bounds the USAN from below (``_susan._ramp_bound``): only the
+    pixels with ``L <= L_max`` get the exact USAN from the look-up table. Row by row, one
+    offset at a time over the row, in uint8 (LLVM makes it byte-wide SIMD).
+
+    Returns flat indices (raster order), the response rv (float32), the grey level, the 3x3
+    minimum and maximum, and the USAN's integer moments (K, 3): n and its x and y moments.
+    """
+    H, W = gray.shape
+    f = gray.ravel()
+    b = 4
+    nm = len(mdx)
+    off = mdy * W + mdx
+    cap = 4096
+    idx = np.empty(cap, np.int64)
+    rv = np.empty(cap, np.float32)
+    mom = np.empty((cap, 3), np.int32)
+    K = 0
+    acc = np.zeros(W - 2 * b, np.uint8)
+    Tu, mu, sat = np.uint8(T), np.uint8(m), np.uint8(255)
+    g = np.float32(g100)
+    Lm = np.int64(L_max)
+    for y in range(b, H - b):
+        acc[:] = 0
+        r = gray[y, b : W - b]
+        for k in range(nm):
+            dx, dy = mdx[k], mdy[k]
+            if dx == 0 and dy == 0:
+                continue
+            o = gray[y + dy, b + dx : W - b + dx]
+            # uint8 throughout, each step truncated back to uint8: byte-wide SIMD (absolute
+            # difference, saturating subtraction, minimum, saturating sum)
+            for x in range(W - 2 * b):
+                p, q = r[x], o[x]
+                d = np.uint8(max(p, q) - min(p, q))
+                e = min(np.uint8(max(Tu, d) - d), mu)
+                s = np.uint8(acc[x] + e)
+                acc[x] = s if s >= e else sat
+        for x in range(W - 2 * b):
+            if np.int64(acc[x]) > Lm:
+                continue
+            pc = y * W + x + b
+            v = np.int32(f[pc])
+            n, sx, sy = np.int32(0), np.int32(0), np.int32(0)
+            for dy in range(-3, 4):
+                w = _HALF[dy + 3]
+                base = pc + dy * W
+                for dx in range(-w, w + 1):
+                    c = np.int32(lut[np.uint32(abs(np.int32(f[np.uint64(base + dx)]) - v))])
+                    n += c
+                    sx += c * dx
+                    sy += c * dy
+            rr = g - np.float32(n)
+            if not rr > below:
+                continue
+            if K == cap:
+                cap *= 2
+                idx = _grow(idx, cap)
+                rv = _grow(rv, cap)
+                mom = _grow2(mom, cap)
+            idx[K] = pc
+            rv[K] = rr
+            mom[K, 0] = n
+            mom[K, 1] = sx
+            mom[K, 2] = sy
+            K += 1
+    v0s = np.empty(K, np.uint8)
+    lo3 = np.empty(K, np.uint8)
+    hi3 = np.empty(K, np.uint8)
+    for i in range(K):
+        pc = idx[i]
+        lo, hi = f[pc], f[pc]
+        for yy in range(-1, 2):
+            for xx in range(-1, 2):
+                q = f[np.uint64(pc + yy * W + xx)]
+                lo = min(lo, q)
+                hi = max(hi, q)
+        v0s[i] = f[pc]
+        lo3[i] = lo
+        hi3[i] = hi
+    return idx[:K], rv[:K], v0s, lo3, hi3, mom[:K]
+
+
+@nb.njit(**_JIT)
+def _grow(a, cap):
+    out = np.empty(cap, a.dtype)
+    out[: len(a)] = a
+    return out
+
+
+@nb.njit(**_JIT)
+def _grow2(a, cap):
+    out = np.empty((cap, a.shape[1]), a.dtype)
+    out[: len(a)] = a
+    return out
+
+
+@nb.njit(**_JIT)
+def _contiguity(sx, sy, W):
+    """The flat offsets of the three pixels from the nucleus towards the USAN centroid (sx, sy)
+    (``_susan._corner_tests``: along the centroid's larger axis, rounded half away from zero)."""
+    ax, ay = abs(sx), abs(sy)
+    along_x = ay < ax
+    if along_x:
+        slope = sy / (ax if ax > 0 else 1.0)
+        sgn = np.int64(np.sign(sx))
+    else:
+        slope = sx / (ay if ay > 0 else 1.0)
+        sgn = np.int64(np.sign(sy))
+    out = np.empty(3, np.int64)
+    for kk in range(1, 4):
+        ks = kk * slope
+        o = np.int64(np.trunc(ks + np.copysign(0.5, ks)))
+        along = kk * sgn
+        out[kk - 1] = o * W + along if along_x else along * W + o
+    return out
+
+
+@nb.njit(**_JIT)
+def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
+    """SUSAN's false-positive tests (``_susan._corner_tests`` with the smooth test) on the
+    pixels ``idx[rows]``, from their moments ``mom`` (``candidates``): which pass, and which
+    are saddles (X-junctions; only when ``saddle_area`` > 0).
+
+    The moments are integers (exact in float64, as the float32 matrix products of the NumPy
+    path are), every comparison the same float64 expression:
+    1. the USAN centroid lies more than 1/sqrt(2) pixel from the nucleus;
+    2. the three pixels towards it are in the USAN (their c sums to more than ``contig``);
+    3. the unlike pixels are not split into brighter ones on one side and darker ones on
+       the other (``full``: the mask's area x100; ``saddle_area``: 0.35 of it).
+    """
+    W = gray.shape[1]
+    f = gray.ravel()
+    N = len(rows)
+    ok = np.zeros(N, np.bool_)
+    saddle = np.zeros(N, np.bool_)
+    for i in range(N):
+        j = rows[i]
+        n, sx, sy = np.float64(mom[j, 0]), np.float64(mom[j, 1]), np.float64(mom[j, 2])
+        centroid = sx * sx + sy * sy > 0.5 * n * n
+        if not centroid and saddle_area <= 0:
+            continue
+        p = idx[j]
+        v = np.int32(f[p])
+        st = _contiguity(sx, sy, W)
+        total = 0.0
+        for kk in range(3):
+            total += lut[abs(np.int32(f[p + st[kk]]) - v)]
+        if not total > contig and saddle_area <= 0:
+            continue
+        # the moments of the unlike pixels brighter than the nucleus (weights 100 - c)
+        mb_, bx_, by_ = np.int32(0), np.int32(0), np.int32(0)
+        for dy in range(-3, 4):
+            w = _HALF[dy + 3]
+            base = p + dy * W
+            for dx in range(-w, w + 1):
+                q = np.int32(f[base + dx])
+                if q > v:
+                    u = 100 - np.int32(lut[q - v])
+                    mb_ += u
+                    bx_ += u * dx
+                    by_ += u * dy
+        mb, bx, by = np.float64(mb_), np.float64(bx_), np.float64(by_)
+        md = full - n - mb
+        ddx = -sx - bx
+        ddy = -sy - by
+        if saddle_area > 0:
+            ob = np.hypot(bx, by) / (mb if mb > 0 else 1.0)
+            od = np.hypot(ddx, ddy) / (md if md > 0 else 1.0)
+            saddle[i] = min(mb, md) > 0.3 * (mb + md) and mb + md > saddle_area and ob < 0.8 and od < 0.8
+        if not (centroid and total > contig):
+            continue
+        opposite = bx * ddx + by * ddy < 0
+        balanced = min(mb, md) > 0.25 * (mb + md)
+        ok[i] = not (opposite and balanced)
+    return ok, saddle
+
+
+@nb.njit(**_JIT)
+def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
+    """The centroid and contiguity tests (``_susan._coverage_test``) on the in-between pixels
+    ``idx[rows]`` judged as the dark side (where ``dark``) or the bright one, each mask pixel
+    counting by its share of that side between the grey levels ``lo`` and ``hi``: which pass,
+    and their USAN as that side (x100).
+
+    ``share[dark, span, x]``: the NumPy path's float32 share (x100, as float64) of a pixel
+    ``x`` grey levels above ``lo``, for a span ``hi - lo``; its sums over the mask are exact in
+    float64 (``_susan._moments``), so the result is the same bit for bit.
+    """
+    W = gray.shape[1]
+    f = gray.ravel()
+    nm = len(mdx)
+    off = mdy * W + mdx
+    N = len(rows)
+    ok = np.zeros(N, np.bool_)
+    nn = np.zeros(N, np.float64)
+    for i in range(N):
+        p = idx[rows[i]]
+        l8 = np.int32(lo[i])
+        span = max(np.int32(hi[i]) - l8, np.int32(1))
+        tab = share[np.int64(dark[i]), span]
+        n, sx, sy = 0.0, 0.0, 0.0
+        for dy in range(-3, 4):
+            w = _HALF[dy + 3]
+            base = p + dy * W
+            for dx in range(-w, w + 1):
+                c = tab[min(max(np.int32(f[base + dx]) - l8, np.int32(0)), span)]
+                n += c
+                sx += c * dx
+                sy += c * dy
+        nn[i] = n
+        if not sx * sx + sy * sy > 0.5 * n * n:
+            continue
+        st = _contiguity(sx, sy, W)
+        total = 0.0
+        for kk in range(3):
+            total += tab[min(max(np.int32(f[p + st[kk]]) - l8, np.int32(0)), span)]
+        ok[i] = total > contig
+    return ok, nn
+
+
+@nb.njit(**_JIT)
+def suppress(resp, r, passing, failing, fv, pmax):
+    """The corners among ``passing`` (flat indices into ``resp``, (H, W) float32): maxima of their
+    (2r+1)^2 window (on a plateau the first in raster order), after the failing pixels
+    (``failing``, values ``fv``, zero in ``resp``) that are hidden under a larger pixel that
+    stays are put back (``_susan._hidden_failures``: a failing pixel stays when a larger
+    pixel that stays lies in its window). ``pmax`` (flat): the window maxima of ``resp``: a
+    failing pixel under a larger passing one stays; from those, the windows of the pixels
+    found to stay are searched for smaller failing ones, which stay in turn (the NumPy path's
+    search, depth first: the same pixels). ``resp`` is updated in place.
+    """
+    H, W = resp.shape
+    f = resp.ravel()
+    pendv = np.full(H * W, -np.inf, np.float32)  # the failing pixels not (yet) found to stay
+    stack = np.empty(len(failing), np.int64)
+    top = 0
+    for i in range(len(failing)):
+        p = failing[i]
+        if pmax[p] > fv[i]:
+            f[p] = fv[i]
+            stack[top] = p
+            top += 1
+        else:
+            pendv[p] = fv[i]
+    # those under a failing pixel that stays, from the stayed pixels down through their windows
+    while top > 0:
+        top -= 1
+        p = stack[top]
+        v = f[p]
+        y, x = p // W, p % W
+        for yy in range(max(y - r, 0), min(y + r + 1, H)):
+            for xx in range(max(x - r, 0), min(x + r + 1, W)):
+                q = yy * W + xx
+                u = pendv[q]
+                if u > -np.inf and u < v:
+                    f[q] = u
+                    pendv[q] = -np.inf
+                    stack[top] = q
+                    top += 1
+    keep = np.zeros(len(passing), np.bool_)
+    for i in range(len(passing)):
+        p = passing[i]
+        v = f[p]
+        if not v > 0:
+            continue
+        y, x = p // W, p % W
+        good = True
+        for yy in range(max(y - r, 0), min(y + r + 1, H)):
+            for xx in range(max(x - r, 0), min(x + r + 1, W)):
+                q = f[yy * W + xx]
+                if q > v or (q == v and (yy < y or (yy == y and xx < x))):
+                    good = False
+            if not good:
+                break
+        keep[i] = good
+    return passing[keep]
+
+
+@nb.njit(**_JIT)
+def disc_sums(share, idx):
+    """The sum over the mask of ``share`` (H, W) float32 around the pixels ``idx`` (flat, at
+    least 3 from the border), in float64 (exact for the coverage shares) rounded to float32."""
+    W = share.shape[1]
+    f = share.ravel()
+    out = np.empty(len(idx), np.float32)
+    for i in range(len(idx)):
+        p = idx[i]
+        s = 0.0
+        for dy in range(-3, 4):
+            w = _HALF[dy + 3]
+            base = p + dy * W
+            for dx in range(-w, w + 1):
+                s += f[np.uint64(base + dx)]
+        out[i] = np.float32(s)
+    return out
