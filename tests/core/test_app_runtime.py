@@ -28,7 +28,7 @@ def checks_module(tmp_path_factory):
 
 
 def make_app(module, out, clock=None, **sim) -> App:
-    cfg = SimConfig(**{**vars(module.SIMULATION), **sim})
+    cfg = SimConfig(**{**vars(getattr(module, "SIMULATION", SimConfig())), **sim})  # app.py leaves out default settings
     extra = {} if clock is None else {"clock": clock}
     return App(module.Model, module.VIEW, sim=cfg, meta=module.META, base_dir=out, **extra)
 

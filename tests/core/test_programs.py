@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ejsrl.app import App, load_app
+from ejsrl.app import App, SimConfig, load_app
 from ejsrl.view.elements import Button, Label
 
 SPECS = Path(__file__).parent / "specs"
@@ -23,7 +23,8 @@ def moves(tmp_path_factory):
 
 
 def make(module, out, **overrides) -> App:
-    return App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=out, overrides=overrides)
+    sim = getattr(module, "SIMULATION", SimConfig())  # app.py leaves out default settings
+    return App(module.Model, module.VIEW, sim=sim, meta=module.META, base_dir=out, overrides=overrides)
 
 
 def press(app: App, module, label: str) -> None:

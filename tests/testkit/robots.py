@@ -44,7 +44,7 @@ def random_q(robot: Any, rng: np.random.Generator) -> np.ndarray:
 
 def load_built(app_dir: Path) -> Any:
     """Import a built app's ``app.py`` and make its ``App`` (not serving, not playing)."""
-    from ejsrl.app import App
+    from ejsrl.app import App, SimConfig
 
     name = f"robots_app_{abs(hash(str(app_dir)))}"
     spec = importlib.util.spec_from_file_location(name, app_dir / "app.py")
@@ -52,7 +52,7 @@ def load_built(app_dir: Path) -> Any:
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module
     spec.loader.exec_module(module)
-    return App(module.Model, module.VIEW, sim=module.SIMULATION, meta=module.META, base_dir=app_dir)
+    return App(module.Model, module.VIEW, sim=getattr(module, "SIMULATION", SimConfig()), meta=module.META, base_dir=app_dir)
 
 
 Model = SimpleNamespace
