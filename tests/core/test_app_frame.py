@@ -160,3 +160,33 @@ def test_a_long_spec_lines_table_in_the_class_still_points_into_the_spec() -> No
             continue
         words = set(re.findall(r"[A-Za-z_]\w*", source)) - {"self"}
         assert words & set(re.findall(r"[A-Za-z_]\w*", code)), (app_line, code, line, source)
+
+
+def test_a_spec_may_import_sys_and_path_which_app_py_no_longer_binds(tmp_path: Path) -> None:
+    spec = """\
+ejs: 1
+title: Imports
+imports:
+  - import sys
+  - from pathlib import Path
+model:
+  variables:
+    t: 0.0
+    dt: 0.1
+    name: ""
+    big: 0
+    y: 0.0
+  init: |
+    name = Path("data/run.csv").stem
+    big = int(sys.maxsize > 2**31)
+  evolution:
+    - ode:
+        equations:
+          y: 1.0
+view: []
+"""
+    out, text = _build(tmp_path, spec)
+    assert text.count("import sys") == 1 and text.count("from pathlib import Path") == 1
+    r = _run_in(out, tmp_path, "--headless", "--duration", "0.1", "--csv", "-", "--vars", "name,big")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split()[:2] == ["name,big", "run,1"]

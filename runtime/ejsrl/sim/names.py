@@ -63,8 +63,6 @@ RUNTIME_PREFIX = "_ejs"
 APP_GLOBALS: frozenset[str] = frozenset(
     {
         "annotations",  # from __future__ import annotations
-        "sys",
-        "Path",
         "np",
         "AppMeta",
         "SimConfig",
