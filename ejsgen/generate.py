@@ -133,12 +133,12 @@ def _line_table(table: list[tuple[int, int, int]]) -> list[str]:
             runs.append([app, app, line, col])
     if not runs:
         return []
-    entries = [f"{a}={ln}:{c}" if a == b else f"{a}-{b}={ln}:{c}" for a, b, ln, c in runs]
-    chunks = textwrap.wrap(" ".join(entries), width=WIDTH - 10)
+    text = " ".join(f"{a}={ln}:{c}" if a == b else f"{a}-{b}={ln}:{c}" for a, b, ln, c in runs)
     note = "  # app.py line=spec line:column, for errors"
-    if len(chunks) == 1:
-        one = f'    SPEC_LINES = "{chunks[0]}"'
+    one = f'    SPEC_LINES = "{text}"'
+    if len(one) <= WIDTH:
         return [one + note if len(one + note) <= WIDTH else one]
+    chunks = textwrap.wrap(text, width=WIDTH - 11)  # 8 spaces, the quotes and the space that joins two
     return [f"    SPEC_LINES = ({note}", *[f'        "{c} "' for c in chunks[:-1]], f'        "{chunks[-1]}"', "    )"]
 
 
