@@ -52,12 +52,15 @@ def test_the_first_tutorial_app_is_its_spec_and_a_small_frame() -> None:
     assert lines[-2:] == ['if __name__ == "__main__":', "    raise SystemExit(main(Model, VIEW, meta=META))"]
 
 
-def test_the_tutorial_shows_the_app_ejsgen_writes_for_step_1() -> None:
+def test_the_tutorial_shows_the_app_ejsgen_writes_for_step_1(tmp_path: Path) -> None:
+    """The app.py of step 1 saved, as the tutorial says, as ``pendulum.ejs.yaml``."""
     tutorial = (ROOT / "specs" / "tutorial.md").read_text(encoding="utf-8")
     shown = re.search(r"```python\n(\"\"\"Pendulum: generated.*?)```", tutorial, re.S)
     assert shown is not None, "the tutorial no longer shows step 1's app.py"
+    saved = tmp_path / "pendulum.ejs.yaml"
+    saved.write_text(STEP1.read_text(encoding="utf-8"), encoding="utf-8")
     version = re.compile(r"ejsgen \d+\.\d+\.\d+\S*")
-    assert version.sub("ejsgen V", shown.group(1)) == version.sub("ejsgen V", render_app(load_plan(STEP1)))
+    assert version.sub("ejsgen V", shown.group(1)) == version.sub("ejsgen V", render_app(load_plan(saved)))
     n_spec = len(STEP1.read_text(encoding="utf-8").splitlines())
     n_app = len(shown.group(1).splitlines())
     assert f"{n_app} lines for your {n_spec}" in tutorial
