@@ -5,9 +5,12 @@
 1. SUSAN corners (``susan_corners`` at its defaults) against ``cv2.goodFeaturesToTrack``
    (100 corners, quality 0.01, 5 px apart) on scikit-image's real photographs resized to
    640x480 grey, and on a rendered scene of a few objects (flat, mostly empty: the easy case)
-   (target: SUSAN at most 3x its time on the photographs). The two are timed interleaved,
-   call for call, and medians reported, so a shared machine's load hits both alike; the
-   whole measurement is repeated in rounds and the rounds' spread of each ratio printed.
+   (target: SUSAN at most 3x its time on the photographs), for both SUSAN paths side by side:
+   the NumPy/OpenCV one and numba's compiled kernels (the ``[fast]`` extra; same corners).
+   They are timed interleaved, call for call, and medians reported, so a shared machine's
+   load hits all alike; the whole measurement is repeated in rounds and the rounds' spread of
+   each ratio printed; then CPU time with one thread each, and numba's compile time (first
+   call in a new process, with an empty and with a warm cache).
    (Testing only the local maxima, then the maxima of failing ones' windows, was measured
    1.1-1.8x slower than the shipped order: its code and bench are in commit 2fa4817.)
 2. Virtual-camera rendering, frames per second at 320x240 and 640x480, for a ~200-triangle
@@ -95,20 +98,6 @@ def photographs() -> dict[str, np.ndarray]:
     return out
 
 
-def interleaved(fa: Callable[[], object], fb: Callable[[], object], repeat: int, clock: Callable[[], float] = time.perf_counter) -> tuple[float, float]:
-    """Median seconds of ``fa`` and of ``fb``, timed alternately after one warm-up each."""
-    fa(), fb()
-    ta, tb = [], []
-    for _ in range(repeat):
-        t0 = clock()
-        fa()
-        ta.append(clock() - t0)
-        t0 = clock()
-        fb()
-        tb.append(clock() - t0)
-    return statistics.median(ta), statistics.median(tb)
-
-
 def busy_threads_after(fn: Callable[[], object]) -> float:
     """CPU time over wall time of a one-thread NumPy loop run right after ``fn``: about 1, unless
     ``fn`` left threads of this process busy (OpenBLAS's spin after a large matrix product)."""
@@ -120,45 +109,108 @@ def busy_threads_after(fn: Callable[[], object]) -> float:
     return (time.process_time() - c0) / (time.perf_counter() - w0)
 
 
+def interleaved_n(fns: list[Callable[[], object]], repeat: int, clock: Callable[[], float] = time.perf_counter) -> list[float]:
+    """Median seconds of each of ``fns``, timed in turn, call for call, after one warm-up each."""
+    for f in fns:
+        f()
+    ts: list[list[float]] = [[] for _ in fns]
+    for _ in range(repeat):
+        for f, t in zip(fns, ts):
+            t0 = clock()
+            f()
+            t.append(clock() - t0)
+    return [statistics.median(t) for t in ts]
+
+
+def susan_with(backend: str, img: np.ndarray):
+    """``susan_corners(img)`` on one SUSAN path ("numpy" or "numba")."""
+    from ejsrl.vision import _susan
+
+    def run():
+        _susan.BACKEND = backend
+        return susan_corners(img)
+
+    return run
+
+
+def compile_times() -> str:
+    """First-call time of the numba kernels in a fresh process: compiled (an empty numba cache)
+    and loaded from the cache (numba's import included), and where the cache is."""
+    import os
+    import subprocess
+    import sys
+    import tempfile
+
+    code = (
+        "import time; t0 = time.perf_counter()\n"
+        "from ejsrl.vision import _susan\n"
+        "_susan.BACKEND = 'numba'; _susan.susan_backend()\n"
+        "print(time.perf_counter() - t0)"
+    )
+    out = []
+    with tempfile.TemporaryDirectory() as d:
+        env = {**os.environ, "NUMBA_CACHE_DIR": d}
+        for label in ("cold (compile)", "warm (cache)"):
+            r = subprocess.run([sys.executable, "-P", "-c", code], capture_output=True, text=True, env=env, timeout=600)
+            out.append(f"{label} {float(r.stdout.split()[-1]):.2f} s" if r.returncode == 0 else f"{label} failed: {r.stderr[-200:]}")
+    return ", ".join(out)
+
+
 def bench_susan(n: int, rounds: int) -> None:
     import os
 
+    from ejsrl.vision import _susan
+
+    have_numba = _susan.susan_backend(wait=True) == "numba"  # compiles (or loads) numba's kernels first
+    paths = ["numpy", "numba"] if have_numba else ["numpy"]
     print("== SUSAN corners (defaults) vs cv2.goodFeaturesToTrack(100, 0.01, 5), 640x480 grey, interleaved medians ==")
-    print(f"load average before: {os.getloadavg()[0]:.2f} (the machine may be shared: both detectors see the same load)")
-    print(f"{rounds} rounds, each timing every image {n} times, SUSAN and GFTT call for call; per image the median of the rounds' medians, and the rounds' spread of the ratio")
-    print(f"{'image':12s} {'SUSAN ms':>9s} {'GFTT ms':>8s} {'ratio':>6s} {'spread':>11s} {'SUSAN corners':>13s}")
+    print(f"load average before: {os.getloadavg()[0]:.2f} (the machine may be shared: both detectors see the same load); "
+          f"OpenCV threads: {cv2.getNumThreads()} (GFTT uses them; SUSAN's numba kernels run on one thread)")
+    if not have_numba:
+        print("numba is not installed: only the NumPy path (pip install 'ejsgen[fast]' for the compiled one)")
+    print(f"{rounds} rounds, each timing every image {n} times, each SUSAN path and GFTT call for call; per image the median of the rounds' medians, and the rounds' spread of the ratio")
+    head = " ".join(f"{p + ' ms':>9s} {'ratio':>6s} {'spread':>11s}" for p in paths)
+    print(f"{'image':12s} {'GFTT ms':>8s} {head} {'corners':>8s}")
     images = {**photographs(), "rendered": rendered_image()}
-    runs: dict[str, list[tuple[float, float]]] = {name: [] for name in images}
+    runs: dict[str, list[list[float]]] = {name: [] for name in images}
     for _ in range(rounds):
         for name, img in images.items():
-            runs[name].append(interleaved(lambda img=img: susan_corners(img), lambda img=img: cv2.goodFeaturesToTrack(img, 100, 0.01, 5), n))
-    ratios = []
+            fns = [susan_with(p, img) for p in paths] + [lambda img=img: cv2.goodFeaturesToTrack(img, 100, 0.01, 5)]
+            runs[name].append(interleaved_n(fns, n))
+    ratios: dict[str, list[float]] = {p: [] for p in paths}
     for name, img in images.items():
-        r = [a / b for a, b in runs[name]]
-        t_s, t_g = statistics.median(a for a, _ in runs[name]), statistics.median(b for _, b in runs[name])
-        if name != "rendered":
-            ratios.append(statistics.median(r))
-        print(f"{name:12s} {t_s * 1e3:9.2f} {t_g * 1e3:8.2f} {statistics.median(r):6.2f} {min(r):5.2f}-{max(r):<5.2f} {len(susan_corners(img)):13d}")
-    worst, med = max(ratios), statistics.median(ratios)
-    print(
-        f"SUSAN / goodFeaturesToTrack on the photographs: median {med:.1f}x, worst {worst:.1f}x "
-        f"(target <= 3x: {'met' if worst <= 3 else 'NOT met'}); load average after: {os.getloadavg()[0]:.2f}"
-    )
-    # the same in CPU time with one OpenCV thread (SUSAN uses no BLAS threads): a loaded machine stretches
-    # wall-clock times unevenly (SUSAN's many short calls more than one long one), CPU time much less
+        t_g = statistics.median(r[-1] for r in runs[name])
+        cols = []
+        for i, p in enumerate(paths):
+            r = [x[i] / x[-1] for x in runs[name]]
+            if name != "rendered":
+                ratios[p].append(statistics.median(r))
+            cols.append(f"{statistics.median(x[i] for x in runs[name]) * 1e3:9.2f} {statistics.median(r):6.2f} {min(r):5.2f}-{max(r):<5.2f}")
+        print(f"{name:12s} {t_g * 1e3:8.2f} {' '.join(cols)} {len(susan_corners(img)):8d}")
+    for p in paths:
+        worst, med = max(ratios[p]), statistics.median(ratios[p])
+        print(f"SUSAN ({p}) / goodFeaturesToTrack on the photographs: median {med:.1f}x, worst {worst:.1f}x (target <= 3x: {'met' if worst <= 3 else 'NOT met'})")
+    print(f"load average after: {os.getloadavg()[0]:.2f}")
+    # the same in CPU time with one OpenCV thread: a loaded machine stretches wall-clock times
+    # unevenly (SUSAN's many short calls more than one long one), CPU time much less
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)
-    cpu = []
+    cpu: dict[str, list[float]] = {p: [] for p in paths}
     for name, img in images.items():
         if name != "rendered":
-            t_s, t_g = interleaved(lambda img=img: susan_corners(img), lambda img=img: cv2.goodFeaturesToTrack(img, 100, 0.01, 5), n, time.process_time)
-            cpu.append(t_s / t_g)
+            fns = [susan_with(p, img) for p in paths] + [lambda img=img: cv2.goodFeaturesToTrack(img, 100, 0.01, 5)]
+            t = interleaved_n(fns, n, time.process_time)
+            for i, p in enumerate(paths):
+                cpu[p].append(t[i] / t[-1])
     cv2.setNumThreads(threads)
-    print(f"in CPU time (one thread each): median {statistics.median(cpu):.1f}x, worst {max(cpu):.1f}x")
+    print("in CPU time (one thread each): " + "; ".join(f"{p} median {statistics.median(cpu[p]):.1f}x, worst {max(cpu[p]):.1f}x" for p in paths))
     # a detector that leaves threads spinning (OpenBLAS after a large product) also slows whatever runs
     # next, GFTT in the interleaved timing above included: that would flatter the ratio
     img = images["camera"]
-    print(f"threads left busy: CPU/wall of a one-thread loop right after SUSAN {busy_threads_after(lambda: susan_corners(img)):.2f} (1.00: none)")
+    print("threads left busy: CPU/wall of a one-thread loop right after SUSAN " + ", ".join(f"{p} {busy_threads_after(susan_with(p, img)):.2f}" for p in paths) + " (1.00: none)")
+    if have_numba:
+        print(f"numba kernels' first call in a new process: {compile_times()}")
+    _susan.BACKEND = "auto"
 
 
 def main() -> None:

@@ -35,7 +35,9 @@ Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV.
 from __future__ import annotations
 
 import functools
+import importlib.util
 import os
+import threading
 from types import ModuleType
 from typing import NamedTuple
 
@@ -62,28 +64,81 @@ BACKEND: str = os.environ.get("EJSRL_SUSAN", "auto")
 FAST_HINT = "SUSAN's compiled kernels need numba: pip install 'ejsgen[fast]' (or: pip install numba)"
 
 
-@functools.lru_cache(maxsize=1)
-def _import_kernels() -> ModuleType | None:
-    try:
-        from ejsrl.vision import _susan_numba
-    except ImportError:
-        return None
-    return _susan_numba
+class _Compiled:
+    """numba's kernels, compiled (or loaded from numba's cache) once per process in a thread.
+
+    The first process on a machine compiles them (about 6-12 s on a busy 2-core machine);
+    later ones load them from the cache (about 0.5 s, numba's import included). With
+    ``BACKEND = "auto"`` no SUSAN call waits for that: until the kernels are ready the NumPy
+    path runs (the same corners). LLVM's passes run outside the GIL, so a served lab's
+    threads keep running meanwhile.
+    """
+
+    def __init__(self) -> None:
+        self.lock = threading.Lock()
+        self.thread: threading.Thread | None = None
+        self.module: ModuleType | None = None
+        self.error: BaseException | None = None
+
+    def get(self, wait: bool) -> ModuleType | None:
+        if self.module is not None:
+            return self.module
+        with self.lock:
+            if self.thread is None:
+                if importlib.util.find_spec("numba") is None:  # not installed: the NumPy path, silently
+                    self.error = ImportError(FAST_HINT)
+                    return None
+                self.thread = threading.Thread(target=self._compile, name="ejsrl-susan-numba", daemon=True)
+                self.thread.start()
+        if wait:
+            self.thread.join()
+        return self.module
+
+    def _compile(self) -> None:
+        try:
+            from ejsrl.vision import _susan_numba
+
+            _warm_up(_susan_numba)
+        except Exception as e:  # noqa: BLE001 - numba that cannot run here: the NumPy path
+            self.error = e
+            return
+        self.module = _susan_numba
+
+
+_COMPILED = _Compiled()
+
+
+def _warm_up(kernels: ModuleType) -> None:
+    """Run every kernel once (with the argument types of real calls) on a small scene that takes
+    every branch of ``_corners_compiled``: anti-aliased polygons and an X-junction in noise."""
+    big = np.full((768, 768), 40, np.uint8)  # 8x supersampled, averaged down: anti-aliased edges
+    cv2.fillPoly(big, [np.array([[60, 80], [400, 130], [150, 420]], np.int32)], 200)
+    big[480:600, 480:600] = big[600:720, 600:720] = 230  # an X-junction
+    img = cv2.resize(big, (96, 96), interpolation=cv2.INTER_AREA)
+    noisy = np.clip(img + np.random.default_rng(0).normal(0, 4, img.shape), 0, 255).astype(np.uint8)
+    for g in (img, noisy):
+        t, g100, floor = 25.0, 1850.0, 150.0
+        below = np.nextafter(np.float32(floor), np.float32(-np.inf))
+        _corners_compiled(kernels, g, t, g100, floor, below, floor - _MID_SLACK * _SCALE, _lut(t), _bound_limit(t, g100 - floor + 1.0), 3)
 
 
 def _kernels() -> ModuleType | None:
-    """The compiled kernels module for this call, or None for the NumPy path (``BACKEND``)."""
+    """The compiled kernels module for this call, or None for the NumPy path (``BACKEND``:
+    "auto" takes the kernels once they are ready, "numba" waits for them)."""
     which = choice(BACKEND, ("auto", "numpy", "numba"), "SUSAN backend (EJSRL_SUSAN)")
     if which == "numpy":
         return None
-    mod = _import_kernels()
+    mod = _COMPILED.get(wait=which == "numba")
     if mod is None and which == "numba":
-        raise ImportError(FAST_HINT)
+        raise ImportError(f"{FAST_HINT} ({_COMPILED.error})") from _COMPILED.error
     return mod
 
 
-def susan_backend() -> str:
-    """"numba" or "numpy": the implementation ``susan_corners`` runs now (``BACKEND``)."""
+def susan_backend(wait: bool = False) -> str:
+    """"numba" or "numpy": the implementation ``susan_corners`` runs now (``BACKEND``); with
+    ``wait``, once numba's kernels are compiled (where numba is installed)."""
+    if wait and BACKEND == "auto":
+        _COMPILED.get(wait=True)
     return "numpy" if _kernels() is None else "numba"
 
 

@@ -2,18 +2,19 @@
 
 The NumPy/OpenCV path of ``_susan.susan_corners`` spends its time in whole-image passes and
 in gathering the 37 mask pixels of the 15-25 thousand pixels with a response of a photograph;
-here each of those is one loop over the image or over the candidate pixels, with the same
-arithmetic (integer sums, the same float64 and float32 operations in the same order), so the
-corners, the response and the sub-pixel positions are the same, bit for bit
-(tests/vision/test_susan_numba.py). What stays in NumPy/OpenCV: the side-coverage estimate
-(OpenCV's float32 filters), the coverage test of the few in-between pixels that need it, and
-``cv2.cornerSubPix``.
+here the bound, the exact USAN and its moments, the false-positive tests (the in-between
+pixels' coverage test too) and the suppression are loops over the image or over those
+pixels, with the same arithmetic (integer sums, float64 sums that are exact, the same
+float64 and float32 operations), so the corners, the response and the sub-pixel positions
+are the same, bit for bit (tests/vision/test_susan_numba.py). What stays in OpenCV: the
+side shares' whole-image estimate, the window maxima (``dilate``) and ``cornerSubPix``.
 
 The kernels release the GIL (``nogil``: a classroom server's sessions run them side by side
 in threads) and run on one thread each (``parallel`` is not used: the server already has a
-thread per session); they are cached on disk (``cache``: numba writes next to this file
-when it can, else to its user-wide cache, ``~/.cache/numba`` or ``$NUMBA_CACHE_DIR``), so only
-the first call on a machine compiles them.
+thread per session, and OpenCV's own threads share the same cores). They are cached on disk
+(``cache``): numba writes next to this file when it can (an editable install), else to its
+user-wide cache (``~/.cache/numba``, or ``$NUMBA_CACHE_DIR``: a wheel in a read-only
+site-packages), so only the first process on a machine compiles them.
 """
 
 from __future__ import annotations
@@ -21,11 +22,20 @@ from __future__ import annotations
 import numba as nb
 import numpy as np
 
-_JIT = {"nogil": True, "cache": True}
+
+def _jit(fn):
+    """``numba.njit(nogil=True, cache=True)``; without a writable cache (a read-only install and
+    no user cache directory: numba refuses ``cache=True``) compiled again in each process."""
+    try:
+        return nb.njit(nogil=True, cache=True)(fn)
+    except RuntimeError:  # "cannot cache function ...: no locator available"
+        return nb.njit(nogil=True)(fn)
+
+
 _HALF = (1, 2, 3, 3, 3, 2, 1)  # the mask's half-widths on its rows dy = -3 .. 3 (37 pixels)
 
 
-@nb.njit(**_JIT)
+@_jit
 def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below):
     """The pixels at least 4 from the border with a response ``g - n > below`` (x100, float32).
 
@@ -112,21 +122,21 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below):
     return idx[:K], rv[:K], v0s, lo3, hi3, mom[:K]
 
 
-@nb.njit(**_JIT)
+@_jit
 def _grow(a, cap):
     out = np.empty(cap, a.dtype)
     out[: len(a)] = a
     return out
 
 
-@nb.njit(**_JIT)
+@_jit
 def _grow2(a, cap):
     out = np.empty((cap, a.shape[1]), a.dtype)
     out[: len(a)] = a
     return out
 
 
-@nb.njit(**_JIT)
+@_jit
 def _contiguity(sx, sy, W):
     """The flat offsets of the three pixels from the nucleus towards the USAN centroid (sx, sy)
     (``_susan._corner_tests``: along the centroid's larger axis, rounded half away from zero)."""
@@ -147,7 +157,7 @@ def _contiguity(sx, sy, W):
     return out
 
 
-@nb.njit(**_JIT)
+@_jit
 def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
     """SUSAN's false-positive tests (``_susan._corner_tests`` with the smooth test) on the
     pixels ``idx[rows]``, from their moments ``mom`` (``candidates``): which pass, and which
@@ -207,7 +217,7 @@ def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
     return ok, saddle
 
 
-@nb.njit(**_JIT)
+@_jit
 def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
     """The centroid and contiguity tests (``_susan._coverage_test``) on the in-between pixels
     ``idx[rows]`` judged as the dark side (where ``dark``) or the bright one, each mask pixel
@@ -250,7 +260,7 @@ def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
     return ok, nn
 
 
-@nb.njit(**_JIT)
+@_jit
 def suppress(resp, r, passing, failing, fv, pmax):
     """The corners among ``passing`` (flat indices into ``resp``, (H, W) float32): maxima of their
     (2r+1)^2 window (on a plateau the first in raster order), after the failing pixels
@@ -308,7 +318,7 @@ def suppress(resp, r, passing, failing, fv, pmax):
     return passing[keep]
 
 
-@nb.njit(**_JIT)
+@_jit
 def disc_sums(share, idx):
     """The sum over the mask of ``share`` (H, W) float32 around the pixels ``idx`` (flat, at
     least 3 from the border), in float64 (exact for the coverage shares) rounded to float32."""

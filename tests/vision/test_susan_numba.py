@@ -1,0 +1,172 @@
+"""SUSAN's numba kernels (the ``[fast]`` extra) against its NumPy/OpenCV path: the same corners,
+responses and sub-pixel positions, bit for bit, on scikit-image's photographs, anti-aliased
+polygons in noise, a checkerboard and a parameter grid; the kernels run outside the GIL; without
+numba (or without a writable cache) SUSAN still runs, silently; the backend switch.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import textwrap
+import threading
+import time
+
+import cv2
+import numpy as np
+import pytest
+from skimage import data
+from test_susan_accuracy import polygons_image
+
+from ejsrl.vision import _susan, susan_corners
+
+
+def _grey(name: str) -> np.ndarray:
+    im = getattr(data, name)()
+    if im.ndim == 3:
+        im = cv2.cvtColor(im, cv2.COLOR_RGB2GRAY)
+    return cv2.resize(im, (640, 480), interpolation=cv2.INTER_AREA)
+
+
+def _both(img: np.ndarray, monkeypatch: pytest.MonkeyPatch, **kw):
+    out = {}
+    for be in ("numpy", "numba"):
+        monkeypatch.setattr(_susan, "BACKEND", be)
+        assert _susan.susan_backend() == be
+        out[be] = susan_corners(img, return_response=True, **kw)
+    return out["numpy"], out["numba"]
+
+
+SCENES = {
+    **{name: (lambda name=name: _grey(name)) for name in ("camera", "astronaut", "coins", "brick", "text")},
+    "polygons noise 4": lambda: polygons_image(3, 4.0)[0],
+    "polygons clean": lambda: polygons_image(4, 0.0)[0],
+    "checkerboard": lambda: data.checkerboard(),
+}
+
+
+@pytest.mark.parametrize("scene", list(SCENES))
+def test_the_numba_kernels_give_the_numpy_paths_corners_bit_for_bit(scene, monkeypatch):
+    img = SCENES[scene]()
+    (pa, ra), (pb, rb) = _both(img, monkeypatch)
+    assert len(pa) > 10
+    np.testing.assert_array_equal(pb, pa)  # sub-pixel positions too: the same pixels into cornerSubPix
+    np.testing.assert_array_equal(rb, ra)  # every response value, float32 bit for bit
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"t": 8.0},
+        {"t": 12.0, "subpixel": False},
+        {"t": 40.0, "nms_radius": 5},
+        {"t": 25.0, "nms_radius": 1, "min_response": 0.0},
+        {"t": 20.0, "g": 22.0, "min_response": 3.0},
+        {"t": 25.0, "quality": 0.2, "max_corners": 50},
+    ],
+)
+def test_the_same_on_a_parameter_grid(kw, monkeypatch):
+    for img in (_grey("camera"), polygons_image(5, 2.0)[0]):
+        (pa, ra), (pb, rb) = _both(img, monkeypatch, **kw)
+        np.testing.assert_array_equal(pb, pa)
+        np.testing.assert_array_equal(rb, ra)
+
+
+def test_the_kernels_run_outside_the_gil(monkeypatch):
+    """While one thread runs the candidate search on a large image, another keeps running Python."""
+    monkeypatch.setattr(_susan, "BACKEND", "numba")
+    assert _susan.susan_backend() == "numba"
+    from ejsrl.vision import _susan_numba as K
+
+    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "disc_sums"):
+        assert getattr(K, name).targetoptions.get("nogil") is True, name
+    big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
+    t = 25.0
+    args = (big, _susan._lut(t), _susan._MDX, _susan._MDY, *_susan._ramp_bound(t)[:2], 200, 1850.0, np.float32(150.0))
+    started, done = threading.Event(), threading.Event()
+
+    def work():
+        started.set()
+        K.candidates(*args)
+        done.set()
+
+    th = threading.Thread(target=work)
+    th.start()
+    started.wait()
+    t0, count = time.perf_counter(), 0
+    while not done.is_set():
+        count += 1
+        time.sleep(0)
+    took = time.perf_counter() - t0
+    th.join()
+    # with the GIL held for the whole call this thread would not run at all until it returned
+    assert took > 0.02 and count > 20, (took, count)
+
+
+def _child(code: str, env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess:
+    import os
+
+    full = {k: v for k, v in {**os.environ, **(env or {})}.items() if v is not None}
+    return subprocess.run([sys.executable, "-P", "-W", "error", "-c", textwrap.dedent(code)], capture_output=True, text=True, timeout=600, env=full)
+
+
+def test_without_numba_susan_runs_the_numpy_path_silently():
+    code = """
+        import sys
+        sys.modules["numba"] = None  # as if numba were not installed
+        import numpy as np, cv2
+        from skimage import data
+        from ejsrl.vision import susan_corners, _susan
+        img = cv2.resize(data.camera(), (640, 480), interpolation=cv2.INTER_AREA)
+        pts = susan_corners(img)
+        print(_susan.susan_backend(wait=True), len(pts), float(pts.sum()))
+        _susan.BACKEND = "numba"
+        try:
+            susan_corners(img)
+        except ImportError as e:
+            print("ImportError:", e)
+    """
+    r = _child(code, {"EJSRL_SUSAN": "auto"})
+    assert r.returncode == 0, r.stderr
+    assert r.stderr == ""  # no warnings (they would be errors here), nothing printed
+    first, second = r.stdout.splitlines()
+    backend, n, total = first.split()
+    img = _grey("camera")
+    expect = susan_corners(img)
+    assert backend == "numpy" and int(n) == len(expect) and float(total) == float(expect.sum())
+    assert "pip install 'ejsgen[fast]'" in second
+
+
+def test_the_kernels_cache_in_numbas_user_dir_when_the_package_dir_is_read_only(tmp_path):
+    """A wheel in a read-only site-packages: numba caches in its user-wide directory; with no
+    writable place at all the kernels are compiled in each process and still run."""
+    code = """
+        import os, numba.core.caching as caching
+        mode = os.environ["TEST_MODE"]
+        real = caching._CacheLocator.ensure_cache_path
+        in_tree = getattr(caching, "InTreeCacheLocator", None) or caching._InTreeCacheLocator
+        def ensure(self):
+            if isinstance(self, in_tree) or mode == "none":
+                raise PermissionError("read-only")
+            return real(self)
+        caching._CacheLocator.ensure_cache_path = ensure
+        from ejsrl.vision import _susan, _susan_numba as K
+        _susan.BACKEND = "numba"
+        print(_susan.susan_backend(), K.candidates._cache.__class__.__name__, getattr(K.candidates._cache, "_cache_path", ""))
+    """
+    home = tmp_path / "home"
+    env = {"HOME": str(home), "XDG_CACHE_HOME": str(home / ".cache"), "NUMBA_CACHE_DIR": None}
+    r = _child(code, {**env, "TEST_MODE": "user"})
+    assert r.returncode == 0, r.stderr
+    backend, cache, path = r.stdout.split()
+    assert backend == "numba" and cache == "FunctionCache" and path.startswith(str(home / ".cache" / "numba")), r.stdout
+    assert any((home / ".cache" / "numba").rglob("*.nbi"))  # the index of the compiled kernels
+    r = _child(code, {**env, "TEST_MODE": "none"})
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split()[:2] == ["numba", "NullCache"], r.stdout
+
+
+def test_an_unknown_backend_is_a_clear_error(monkeypatch):
+    monkeypatch.setattr(_susan, "BACKEND", "numbaa")
+    with pytest.raises(ValueError, match=r"EJSRL_SUSAN.*did you mean 'numba'"):
+        susan_corners(_grey("camera"))
