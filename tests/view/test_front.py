@@ -5,6 +5,7 @@ The apps run as a teacher runs them (``python app.py``); raw viser clients play 
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 import signal
@@ -191,6 +192,22 @@ def test_the_front_refuses_other_sites_pages_and_unknown_hosts(served):
         await ok.close()
 
     run_async(scenario(), timeout=60)
+
+
+def test_a_broken_request_gets_an_error_and_the_front_serves_on(served):
+    import socket
+    import urllib.request
+
+    for junk in (b"NONSENSE\r\n\r\n", b"GET / HTTP/1.1\r\n" + b"X-Long: " + b"a" * 70_000 + b"\r\n\r\n"):
+        with socket.create_connection(("127.0.0.1", served.port), timeout=20) as s:
+            s.sendall(junk)
+            answer = b""
+            with contextlib.suppress(ConnectionError):
+                while chunk := s.recv(4096):
+                    answer += chunk
+        assert answer == b"" or answer.startswith(b"HTTP/1.1 4"), answer[:80]
+    with urllib.request.urlopen(f"http://127.0.0.1:{served.port}/", timeout=30) as r:
+        assert r.status == 200 and b"<html" in r.read().lower()
 
 
 def test_a_process_that_dies_is_started_again_and_new_tabs_are_served(built, tmp_path):

@@ -160,6 +160,7 @@ class Front:
         self._turn = itertools.count()
         self._loop: asyncio.AbstractEventLoop | None = None
         self._server: asyncio.base_events.Server | None = None
+        self._thread: threading.Thread | None = None
         self._stopping = False
 
     # -- the workers ---------------------------------------------------------------------------------
@@ -227,8 +228,8 @@ class Front:
         """Stop relaying and stop the workers (SIGTERM, then SIGKILL after STOP_SECONDS)."""
         self._stopping = True
         loop, server = self._loop, self._server
-        if loop is not None and server is not None and loop.is_running():
-            with contextlib.suppress(RuntimeError):
+        if loop is not None and server is not None:
+            with contextlib.suppress(RuntimeError):  # the loop has ended already
                 loop.call_soon_threadsafe(server.close)
         procs = [w.proc for w in self.workers if w.proc is not None]
         for proc in procs:
@@ -241,6 +242,11 @@ class Front:
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
+        if loop is not None:
+            with contextlib.suppress(RuntimeError):
+                loop.call_soon_threadsafe(loop.stop)
+        if self._thread is not None:
+            self._thread.join(STOP_SECONDS)
 
     @property
     def max_sessions(self) -> int:
@@ -255,7 +261,7 @@ class Front:
 
         def run() -> None:
             loop = asyncio.new_event_loop()
-            self._loop = loop
+            asyncio.set_event_loop(loop)
             try:
                 self._server = loop.run_until_complete(self._bind())
             except BaseException as exc:  # noqa: BLE001 - reported to listen()
@@ -263,15 +269,20 @@ class Front:
                 ready.set()
                 loop.close()
                 return
+            self._loop = loop
             ready.set()
             try:
-                loop.run_until_complete(self._server.serve_forever())
-            except (asyncio.CancelledError, RuntimeError):
-                pass
-            finally:
+                loop.run_forever()
+            finally:  # stopped: end the relays still open, then the loop
+                pending = asyncio.all_tasks(loop)
+                for task in pending:
+                    task.cancel()
+                if pending:
+                    loop.run_until_complete(asyncio.gather(*pending, return_exceptions=True))
                 loop.close()
 
-        threading.Thread(target=run, name="ejsrl-front", daemon=True).start()
+        self._thread = threading.Thread(target=run, name="ejsrl-front", daemon=True)
+        self._thread.start()
         ready.wait()
         if failure:
             raise failure[0]
@@ -304,6 +315,15 @@ class Front:
         return ready[next(self._turn) % len(ready)]
 
     async def _relay(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        try:
+            await self._relay_one(reader, writer)
+        except (ConnectionError, OSError):  # a client or a worker went away mid-way: nothing to tell
+            writer.close()
+        except Exception:  # noqa: BLE001 - one connection's failure must not reach the others
+            log.debug("ejsrl: relaying a connection failed", exc_info=True)
+            writer.close()
+
+    async def _relay_one(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         try:
             head = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), HEAD_SECONDS)
         except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, asyncio.TimeoutError, ConnectionError, ValueError):
