@@ -37,6 +37,11 @@ def _both(img: np.ndarray, monkeypatch: pytest.MonkeyPatch, **kw):
     return out["numpy"], out["numba"]
 
 
+def _same_bits(a: np.ndarray, b: np.ndarray) -> None:
+    np.testing.assert_array_equal(a, b)
+    assert a.dtype == b.dtype and a.tobytes() == b.tobytes()  # -0.0 and 0.0 too
+
+
 SCENES = {
     **{name: (lambda name=name: _grey(name)) for name in ("camera", "astronaut", "coins", "brick", "text")},
     "polygons noise 4": lambda: polygons_image(3, 4.0)[0],
@@ -50,8 +55,8 @@ def test_the_numba_kernels_give_the_numpy_paths_corners_bit_for_bit(scene, monke
     img = SCENES[scene]()
     (pa, ra), (pb, rb) = _both(img, monkeypatch)
     assert len(pa) > 10
-    np.testing.assert_array_equal(pb, pa)  # sub-pixel positions too: the same pixels into cornerSubPix
-    np.testing.assert_array_equal(rb, ra)  # every response value, float32 bit for bit
+    _same_bits(pb, pa)  # sub-pixel positions too: the same pixels into cornerSubPix
+    _same_bits(rb, ra)  # every response value, float32 bit for bit
 
 
 @pytest.mark.parametrize(
@@ -63,13 +68,15 @@ def test_the_numba_kernels_give_the_numpy_paths_corners_bit_for_bit(scene, monke
         {"t": 25.0, "nms_radius": 1, "min_response": 0.0},
         {"t": 20.0, "g": 22.0, "min_response": 3.0},
         {"t": 25.0, "quality": 0.2, "max_corners": 50},
+        {"t": 25.0, "min_response": -1.0},
+        {"t": 25.0, "g": 36.0},
     ],
 )
 def test_the_same_on_a_parameter_grid(kw, monkeypatch):
     for img in (_grey("camera"), polygons_image(5, 2.0)[0]):
         (pa, ra), (pb, rb) = _both(img, monkeypatch, **kw)
-        np.testing.assert_array_equal(pb, pa)
-        np.testing.assert_array_equal(rb, ra)
+        _same_bits(pb, pa)
+        _same_bits(rb, ra)
 
 
 def test_the_kernels_run_outside_the_gil(monkeypatch):

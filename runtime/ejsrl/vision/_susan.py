@@ -598,7 +598,8 @@ def susan_corners(
     mid_slack = floor - _MID_SLACK * _SCALE
     # 1. the pixels that may have a response (n <= g - floor), from a cheap bound over the image
     L_max = _bound_limit(t, g100 - floor + 1.0)
-    kernels = _kernels() if L_max is not None else None
+    # the kernels keep responses >= 0 (a floor below 0, or a g the bound cannot use: the NumPy path)
+    kernels = _kernels() if L_max is not None and floor >= 0 else None
     if kernels is not None:
         found = _corners_compiled(kernels, gray, float(t), g100, floor, below, mid_slack, lut, L_max, r)
     else:
@@ -698,11 +699,7 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
         value[sel[got]] = r_mid[got].astype(np.float32)
         ok[sel[got]] = True
     # saddles among the flat pixels (as in _corners_numpy)
-    k3 = np.ones((3, 3), np.uint8)
-    wf = np.flatnonzero(flat)
-    own_mid = np.zeros((H, W), np.float32)
-    own_mid.ravel()[idx[wf]] = rv[wf]
-    ws = wf[rv[wf] >= cv2.dilate(own_mid, k3).ravel().take(idx[wf])]
+    ws = kernels.local_max3(idx, rv, np.flatnonzero(flat), H, W)
     ws = ws[kernels.smooth_tests(gray, lut, mom, ws, idx, _CONTIG, _SADDLE_AREA, _FULL)[1]]
     resp = np.zeros((H, W), np.float32)
     rf = resp.ravel()
@@ -713,8 +710,7 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     failing = idx[wt[~okt]]
     fv = value[wt[~okt]]
     rf[failing] = 0
-    pmax = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8)).ravel()
-    return resp, kernels.suppress(resp, r, passing, failing, fv, pmax)
+    return resp, kernels.suppress(resp, r, passing, failing, fv)
 
 
 _MDX = np.ascontiguousarray(SUSAN_MASK[:, 0])
@@ -837,11 +833,12 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     k7 = np.ones((7, 7), np.uint8)
     levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
     lo, hi = cv2.erode(levels, k7), cv2.dilate(levels, k7)
-    share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
-    cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
-    if kernels is not None:
+    if kernels is not None:  # the same shares (a float32 division of the same integers), then the sums
+        share = kernels.share_image(gray, lo, hi)
         n_dark = kernels.disc_sums(share, idx)
     else:
+        share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
+        cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
         # summed in float64: exact (float32 shares in [2^-8, 1] or 0 over 37 pixels), whatever
         # order OpenCV sums in, so the compiled kernels' sums are the same, bit for bit
         disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float64)

@@ -261,30 +261,30 @@ def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
 
 
 @_jit
-def suppress(resp, r, passing, failing, fv, pmax):
+def suppress(resp, r, passing, failing, fv):
     """The corners among ``passing`` (flat indices into ``resp``, (H, W) float32): maxima of their
     (2r+1)^2 window (on a plateau the first in raster order), after the failing pixels
     (``failing``, values ``fv``, zero in ``resp``) that are hidden under a larger pixel that
     stays are put back (``_susan._hidden_failures``: a failing pixel stays when a larger
-    pixel that stays lies in its window). ``pmax`` (flat): the window maxima of ``resp``: a
-    failing pixel under a larger passing one stays; from those, the windows of the pixels
-    found to stay are searched for smaller failing ones, which stay in turn (the NumPy path's
-    search, depth first: the same pixels). ``resp`` is updated in place.
+    pixel that stays lies in its window). A failing pixel under a larger passing one stays;
+    from those, the windows of the pixels found to stay are searched for smaller failing
+    ones, which stay in turn (the NumPy path's search, depth first: the same pixels). The
+    failing pixels not (yet) found to stay wait in ``resp`` as their negated value.
+    ``resp`` is updated in place.
     """
     H, W = resp.shape
     f = resp.ravel()
-    pendv = np.full(H * W, -np.inf, np.float32)  # the failing pixels not (yet) found to stay
+    bits = f.view(np.int32)  # float32 >= 0 order as their bits; negatives (-0.0 too) below all of them
     stack = np.empty(len(failing), np.int64)
     top = 0
     for i in range(len(failing)):
         p = failing[i]
-        if pmax[p] > fv[i]:
+        if _any_above(bits, p, r, H, W, fv[i:i + 1].view(np.int32)[0]):
             f[p] = fv[i]
             stack[top] = p
             top += 1
         else:
-            pendv[p] = fv[i]
-    # those under a failing pixel that stays, from the stayed pixels down through their windows
+            f[p] = -fv[i]
     while top > 0:
         top -= 1
         p = stack[top]
@@ -293,12 +293,14 @@ def suppress(resp, r, passing, failing, fv, pmax):
         for yy in range(max(y - r, 0), min(y + r + 1, H)):
             for xx in range(max(x - r, 0), min(x + r + 1, W)):
                 q = yy * W + xx
-                u = pendv[q]
-                if u > -np.inf and u < v:
-                    f[q] = u
-                    pendv[q] = -np.inf
+                u = f[q]
+                if u < 0 and -u < v:
+                    f[q] = -u
                     stack[top] = q
                     top += 1
+    for i in range(len(failing)):
+        if f[failing[i]] <= 0:
+            f[failing[i]] = 0.0
     keep = np.zeros(len(passing), np.bool_)
     for i in range(len(passing)):
         p = passing[i]
@@ -335,3 +337,60 @@ def disc_sums(share, idx):
                 s += f[np.uint64(base + dx)]
         out[i] = np.float32(s)
     return out
+
+
+@_jit
+def share_image(gray, lo, hi):
+    """(H, W) float32: ``min((hi - I)+ / max(hi - lo, 1), 1)``, the dark share of each pixel, as
+    ``_susan._coverage_response`` computes it with OpenCV (a float32 division of the same
+    integers: the correctly rounded quotient either way)."""
+    H, W = gray.shape
+    g, l, h = gray.ravel(), lo.ravel(), hi.ravel()
+    out = np.empty(H * W, np.float32)
+    one = np.float32(1.0)
+    for i in range(H * W):
+        a = np.float32(max(np.int32(h[i]) - np.int32(g[i]), np.int32(0)))
+        b = np.float32(max(np.int32(h[i]) - np.int32(l[i]), np.int32(1)))
+        out[i] = min(a / b, one)
+    return out.reshape(H, W)
+
+
+@_jit
+def local_max3(idx, rv, rows, H, W):
+    """The rows (of ``rows``) whose ``rv`` is at least every other of those rows' ``rv`` in its 3x3
+    window (``idx``: flat pixel indices, at least 1 from the border): ``_corners_numpy``'s
+    3x3 dilation of the flat pixels' own response."""
+    own = np.zeros(H * W, np.float32)
+    for j in range(len(rows)):
+        own[idx[rows[j]]] = rv[rows[j]]
+    keep = np.zeros(len(rows), np.bool_)
+    for j in range(len(rows)):
+        p = idx[rows[j]]
+        v = rv[rows[j]]
+        m = own[p]
+        for dy in range(-1, 2):
+            for dx in range(-1, 2):
+                m = max(m, own[p + dy * W + dx])
+        keep[j] = v >= m
+    return rows[keep]
+
+
+@_jit
+def _any_above(bits, p, r, H, W, v):
+    """Whether a value of the flat int32 image ``bits`` (H, W) in the (2r+1)^2 window of pixel ``p``
+    exceeds ``v`` (float32 values >= 0 as their bits: the same order)."""
+    y, x = p // W, p % W
+    if y >= r and x >= r and y + r < H and x + r < W:
+        for yy in range(-r, r + 1):
+            base = p + yy * W
+            m = bits[np.uint64(base - r)]
+            for xx in range(-r + 1, r + 1):
+                m = max(m, bits[np.uint64(base + xx)])
+            if m > v:
+                return True
+        return False
+    for yy in range(max(y - r, 0), min(y + r + 1, H)):
+        for xx in range(max(x - r, 0), min(x + r + 1, W)):
+            if bits[yy * W + xx] > v:
+                return True
+    return False
