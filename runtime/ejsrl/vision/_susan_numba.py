@@ -32,6 +32,7 @@ def _jit(fn):
         return nb.njit(nogil=True)(fn)
 
 
+_FIX = 33554432.0  # 2^25: the coverage shares in fixed point (``_susan._share_table``)
 _HALF = (1, 2, 3, 3, 3, 2, 1)  # the mask's half-widths on its rows dy = -3 .. 3 (37 pixels)
 
 
@@ -186,7 +187,7 @@ def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
         st = _contiguity(sx, sy, W)
         total = 0.0
         for kk in range(3):
-            total += lut[abs(np.int32(f[p + st[kk]]) - v)]
+            total += lut[np.uint64(abs(np.int32(f[np.uint64(p + st[kk])]) - v))]
         if not total > contig and saddle_area <= 0:
             continue
         # the moments of the unlike pixels brighter than the nucleus (weights 100 - c)
@@ -195,9 +196,9 @@ def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
             w = _HALF[dy + 3]
             base = p + dy * W
             for dx in range(-w, w + 1):
-                q = np.int32(f[base + dx])
+                q = np.int32(f[np.uint64(base + dx)])
                 if q > v:
-                    u = 100 - np.int32(lut[q - v])
+                    u = 100 - np.int32(lut[np.uint64(q - v)])
                     mb_ += u
                     bx_ += u * dx
                     by_ += u * dy
@@ -224,9 +225,10 @@ def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
     counting by its share of that side between the grey levels ``lo`` and ``hi``: which pass,
     and their USAN as that side (x100).
 
-    ``share[dark, span, x]``: the NumPy path's float32 share (x100, as float64) of a pixel
-    ``x`` grey levels above ``lo``, for a span ``hi - lo``; its sums over the mask are exact in
-    float64 (``_susan._moments``), so the result is the same bit for bit.
+    ``share[dark, span, x]``: the NumPy path's float32 share (x100) of a pixel ``x`` grey levels
+    above ``lo``, for a span ``hi - lo``, times 2^25 (an integer: the shares are multiples of
+    2^-25); integer sums, divided by 2^25, are the exact float64 sums of the NumPy path
+    (``_susan._moments``), so the result is the same bit for bit.
     """
     W = gray.shape[1]
     f = gray.ravel()
@@ -240,22 +242,23 @@ def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
         l8 = np.int32(lo[i])
         span = max(np.int32(hi[i]) - l8, np.int32(1))
         tab = share[np.int64(dark[i]), span]
-        n, sx, sy = 0.0, 0.0, 0.0
+        n_, sx_, sy_ = 0, 0, 0
         for dy in range(-3, 4):
             w = _HALF[dy + 3]
             base = p + dy * W
             for dx in range(-w, w + 1):
-                c = tab[min(max(np.int32(f[base + dx]) - l8, np.int32(0)), span)]
-                n += c
-                sx += c * dx
-                sy += c * dy
+                c = tab[np.uint64(min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))]
+                n_ += c
+                sx_ += c * dx
+                sy_ += c * dy
+        n, sx, sy = n_ / _FIX, sx_ / _FIX, sy_ / _FIX  # exact: below 2^53 / 2^25
         nn[i] = n
         if not sx * sx + sy * sy > 0.5 * n * n:
             continue
         st = _contiguity(sx, sy, W)
         total = 0.0
         for kk in range(3):
-            total += tab[min(max(np.int32(f[p + st[kk]]) - l8, np.int32(0)), span)]
+            total += tab[min(max(np.int32(f[p + st[kk]]) - l8, np.int32(0)), span)] / _FIX
         ok[i] = total > contig
     return ok, nn
 
@@ -290,9 +293,11 @@ def suppress(resp, r, passing, failing, fv):
         p = stack[top]
         v = f[p]
         y, x = p // W, p % W
-        for yy in range(max(y - r, 0), min(y + r + 1, H)):
-            for xx in range(max(x - r, 0), min(x + r + 1, W)):
-                q = yy * W + xx
+        y0, y1, x0, x1 = max(y - r, 0), min(y + r + 1, H), max(x - r, 0), min(x + r + 1, W)
+        for yy in range(y0, y1):
+            row = yy * W
+            for xx in range(x0, x1):
+                q = np.uint64(row + xx)
                 u = f[q]
                 if u < 0 and -u < v:
                     f[q] = -u
