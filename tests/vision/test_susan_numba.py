@@ -85,7 +85,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
-    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "disc_sums"):
+    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "share_image", "local_max3"):
         assert getattr(K, name).targetoptions.get("nogil") is True, name
     big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
     t = 25.0
@@ -108,6 +108,22 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     th.join()
     # with the GIL held for the whole call this thread would not run at all until it returned
     assert took > 0.02 and count > 20, (took, count)
+
+
+def test_the_side_shares_are_opencvs_for_every_grey_level(monkeypatch):
+    """The kernels' float32 shares ``(hi - I)+ / max(hi - lo, 1)``, clipped to 1, against OpenCV's
+    divide (as the NumPy path computes them) for every grey level, high level and several low ones."""
+    monkeypatch.setattr(_susan, "BACKEND", "numba")
+    assert _susan.susan_backend() == "numba"
+    from ejsrl.vision import _susan_numba as K
+
+    grey = np.repeat(np.arange(256, dtype=np.uint8), 256).reshape(256, 256)
+    hi = np.ascontiguousarray(grey.T)
+    for low in (0, 1, 7, 64, 100, 200, 254):
+        lo = np.minimum(low, hi).astype(np.uint8)
+        ref = cv2.divide(cv2.subtract(hi, grey), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
+        cv2.threshold(ref, 1.0, 0.0, cv2.THRESH_TRUNC, dst=ref)
+        _same_bits(K.share_image(grey, lo, hi), ref)
 
 
 def _child(code: str, env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess:

@@ -830,24 +830,20 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     falls short (the other side then has more than its share).
 
     Whole-image OpenCV operations in float32 (``max7 - I`` saturates at 0: a share below 0 is
-    clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit. The sums
-    over the mask at ``idx`` (at least 3 from the border): a whole-image filter, or with
-    ``kernels`` (``_susan_numba``) at those pixels only.
+    clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit (with
+    ``kernels``, ``_susan_numba``'s loop computes them: the same float32 division).
     """
     k7 = np.ones((7, 7), np.uint8)
     levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
     lo, hi = cv2.erode(levels, k7), cv2.dilate(levels, k7)
-    if kernels is not None:  # the same shares (a float32 division of the same integers), then the sums
+    if kernels is not None:  # the same shares: a float32 division of the same integers (OpenCV's is slow here)
         share = kernels.share_image(gray, lo, hi)
-        n_dark = kernels.disc_sums(share, idx)
     else:
         share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
         cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
-        # summed in float64: exact (float32 shares in [2^-8, 1] or 0 over 37 pixels), whatever
-        # order OpenCV sums in, so the compiled kernels' sums are the same, bit for bit
-        disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float64)
-        disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
-        n_dark = cv2.filter2D(share.astype(np.float64), cv2.CV_64F, disc, borderType=cv2.BORDER_REPLICATE).ravel().take(idx).astype(np.float32)
+    disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
+    disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
+    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
     own = share.ravel().take(idx)
     return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
 

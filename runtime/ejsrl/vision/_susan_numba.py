@@ -326,25 +326,6 @@ def suppress(resp, r, passing, failing, fv):
 
 
 @_jit
-def disc_sums(share, idx):
-    """The sum over the mask of ``share`` (H, W) float32 around the pixels ``idx`` (flat, at
-    least 3 from the border), in float64 (exact for the coverage shares) rounded to float32."""
-    W = share.shape[1]
-    f = share.ravel()
-    out = np.empty(len(idx), np.float32)
-    for i in range(len(idx)):
-        p = idx[i]
-        s = 0.0
-        for dy in range(-3, 4):
-            w = _HALF[dy + 3]
-            base = p + dy * W
-            for dx in range(-w, w + 1):
-                s += f[np.uint64(base + dx)]
-        out[i] = np.float32(s)
-    return out
-
-
-@_jit
 def share_image(gray, lo, hi):
     """(H, W) float32: ``min((hi - I)+ / max(hi - lo, 1), 1)``, the dark share of each pixel, as
     ``_susan._coverage_response`` computes it with OpenCV (a float32 division of the same
