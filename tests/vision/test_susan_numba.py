@@ -85,7 +85,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
-    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "share_image", "local_max3"):
+    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "share_image", "local_max3", "disc_sums"):
         assert getattr(K, name).targetoptions.get("nogil") is True, name
     big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
     t = 25.0

@@ -79,6 +79,7 @@ class _Compiled:
         self.thread: threading.Thread | None = None
         self.module: ModuleType | None = None
         self.error: BaseException | None = None
+        self.disc_sums_match = False  # the kernels' sums over the mask are OpenCV's filter2D's
 
     def get(self, wait: bool) -> ModuleType | None:
         if self.module is not None:
@@ -98,6 +99,7 @@ class _Compiled:
         try:
             from ejsrl.vision import _susan_numba
 
+            self.disc_sums_match = _disc_sums_match(_susan_numba)
             _warm_up(_susan_numba)
         except Exception as e:  # noqa: BLE001 - numba that cannot run here: the NumPy path
             self.error = e
@@ -841,11 +843,27 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     else:
         share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
         cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
-    disc = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)
-    disc[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
-    n_dark = cv2.filter2D(share, cv2.CV_32F, disc, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
+    if kernels is not None and _COMPILED.disc_sums_match:
+        n_dark = kernels.disc_sums(share, idx)
+    else:
+        n_dark = cv2.filter2D(share, cv2.CV_32F, _DISC, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
     own = share.ravel().take(idx)
     return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
+
+
+_DISC = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)  # the mask as a filter
+_DISC[SUSAN_MASK[:, 1] + _R, SUSAN_MASK[:, 0] + _R] = 1.0
+
+
+def _disc_sums_match(kernels: ModuleType) -> bool:
+    """Whether the kernels' float32 sums over the mask are OpenCV's ``filter2D``'s, bit for bit, on
+    random shares (OpenCV adds the taps in raster order from 0; a build that sums otherwise
+    keeps the filter, so both paths stay identical)."""
+    rng = np.random.default_rng(0)
+    share = np.minimum(rng.integers(0, 256, (64, 80)) / rng.integers(1, 256, (64, 80)), 1.0).astype(np.float32)
+    idx = (np.arange(3, 61)[:, None] * 80 + np.arange(3, 77)[None, :]).ravel()
+    ref = cv2.filter2D(share, cv2.CV_32F, _DISC, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
+    return bool(np.array_equal(ref.view(np.uint32), kernels.disc_sums(share, idx).view(np.uint32)))
 
 
 def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -343,22 +343,48 @@ def share_image(gray, lo, hi):
 
 @_jit
 def local_max3(idx, rv, rows, H, W):
-    """The rows (of ``rows``) whose ``rv`` is at least every other of those rows' ``rv`` in its 3x3
-    window (``idx``: flat pixel indices, at least 1 from the border): ``_corners_numpy``'s
-    3x3 dilation of the flat pixels' own response."""
-    own = np.zeros(H * W, np.float32)
-    for j in range(len(rows)):
-        own[idx[rows[j]]] = rv[rows[j]]
-    keep = np.zeros(len(rows), np.bool_)
-    for j in range(len(rows)):
-        p = idx[rows[j]]
+    """The rows (of ``rows``, ascending) whose ``rv`` is at least that of every other of those
+    rows in its 3x3 window (``idx``: flat pixel indices in raster order, at least 1 from the
+    border): ``_corners_numpy``'s 3x3 dilation of the flat pixels' own response. The
+    neighbours are found by binary search in the rows' sorted pixel indices."""
+    n = len(rows)
+    pix = np.empty(n, np.int64)
+    for j in range(n):
+        pix[j] = idx[rows[j]]
+    keep = np.zeros(n, np.bool_)
+    for j in range(n):
+        p = pix[j]
         v = rv[rows[j]]
-        m = own[p]
+        ok = True
         for dy in range(-1, 2):
-            for dx in range(-1, 2):
-                m = max(m, own[p + dy * W + dx])
-        keep[j] = v >= m
+            lo = p + dy * W - 1
+            k = np.searchsorted(pix, lo)
+            while k < n and pix[k] <= lo + 2:
+                if rv[rows[k]] > v:
+                    ok = False
+                k += 1
+        keep[j] = ok
     return rows[keep]
+
+
+@_jit
+def disc_sums(share, idx):
+    """The sum over the mask of ``share`` (H, W) float32 around the pixels ``idx`` (flat, at least
+    3 from the border), in float32, adding the mask's pixels in raster order from 0: what
+    OpenCV's ``filter2D`` does with the disc (``_susan._disc_sums_match`` checks it once)."""
+    W = share.shape[1]
+    f = share.ravel()
+    out = np.empty(len(idx), np.float32)
+    for i in range(len(idx)):
+        p = idx[i]
+        s = np.float32(0.0)
+        for dy in range(-3, 4):
+            w = _HALF[dy + 3]
+            base = p + dy * W
+            for dx in range(-w, w + 1):
+                s = s + f[np.uint64(base + dx)]
+        out[i] = s
+    return out
 
 
 @_jit
