@@ -678,7 +678,8 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     H, W = gray.shape
     T, m, _ = _ramp_bound(float(t))
     gray = np.ascontiguousarray(gray)
-    idx, rv, v0, lo3, hi3, mom = kernels.candidates(gray, lut, _MDX, _MDY, T, m, L_max, g100, below)
+    k3 = np.ones((3, 3), np.uint8)
+    idx, rv, v0, lo3, hi3, mom = kernels.candidates(gray, cv2.erode(gray, k3), cv2.dilate(gray, k3), lut, _MDX, _MDY, T, m, L_max, g100, below)
     K = len(idx)
     if K == 0:
         return None

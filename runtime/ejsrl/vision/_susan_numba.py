@@ -37,7 +37,7 @@ _HALF = (1, 2, 3, 3, 3, 2, 1)  # the mask's half-widths on its rows dy = -3 .. 3
 
 
 @_jit
-def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below):
+def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below):
     """The pixels at least 4 from the border with a response ``g - n > below`` (x100, float32).
 
     ``mdx``/``mdy``: the mask offsets (nucleus included). A ramp sum over the 36 neighbours,
@@ -46,7 +46,8 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below):
     offset at a time over the row, in uint8 (LLVM makes it byte-wide SIMD).
 
     Returns flat indices (raster order), the response rv (float32), the grey level, the 3x3
-    minimum and maximum, and the USAN's integer moments (K, 3): n and its x and y moments.
+    minimum and maximum (from ``lo3img``/``hi3img``), and the USAN's integer moments (K, 3):
+    n and its x and y moments.
     """
     H, W = gray.shape
     f = gray.ravel()
@@ -109,17 +110,12 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below):
     v0s = np.empty(K, np.uint8)
     lo3 = np.empty(K, np.uint8)
     hi3 = np.empty(K, np.uint8)
+    lf, hf = lo3img.ravel(), hi3img.ravel()
     for i in range(K):
-        pc = idx[i]
-        lo, hi = f[pc], f[pc]
-        for yy in range(-1, 2):
-            for xx in range(-1, 2):
-                q = f[np.uint64(pc + yy * W + xx)]
-                lo = min(lo, q)
-                hi = max(hi, q)
+        pc = np.uint64(idx[i])
         v0s[i] = f[pc]
-        lo3[i] = lo
-        hi3[i] = hi
+        lo3[i] = lf[pc]
+        hi3[i] = hf[pc]
     return idx[:K], rv[:K], v0s, lo3, hi3, mom[:K]
 
 
