@@ -10,7 +10,7 @@ bench/vision.py. Here, two guards that a shared, loaded machine cannot make flak
 - SUSAN stays within a generous multiple of GFTT in CPU time (one OpenCV thread each, best of
   several interleaved runs: load stretches wall-clock times, CPU time much less): a change
   that makes it grossly slower fails here. Measured 5.3-5.7x on this image (it was 7-8x); with
-  numba's kernels (``[fast]``) 2.6-2.8x, guarded at 4x (the NumPy path's speed fails it).
+  numba's kernels (``[fast]``) 2.4-2.8x, guarded at 4x (the NumPy path's speed fails it).
 Both SUSAN paths are checked for busy threads.
 
 And the one shortcut the speed rests on is sound: the cheap lower bound on the USAN that
@@ -80,7 +80,7 @@ def test_susan_is_not_grossly_slower_than_goodfeaturestotrack(camera, monkeypatc
 
 
 def test_susan_compiled_with_numba_keeps_its_lead(camera, monkeypatch):
-    """The numba kernels: measured 2.6-2.8x GFTT's CPU time on this image (the NumPy path 5.3-6x);
+    """The numba kernels: measured 2.4-2.8x GFTT's CPU time on this image (the NumPy path 5.2-6x);
     4x leaves room for a loaded machine and fails on a fall back to the NumPy path's speed."""
     from ejsrl.vision import _susan
 
