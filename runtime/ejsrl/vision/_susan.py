@@ -700,7 +700,7 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     sel = np.flatnonzero(mid & ~flat & ~ok)
     if len(sel):
         lo, hi, v, dark = lo3[sel], hi3[sel], v0[sel], r_dark[sel] > 0
-        ok_m, n_m = kernels.coverage_tests(gray, _MDX, _MDY, _share_table(), idx, sel, lo, hi, dark, _CONTIG)
+        ok_m, n_m = kernels.coverage_tests(gray, _share_table(), idx, sel, lo, hi, dark, _CONTIG)
         got, r_mid = _mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor)
         value[sel[got]] = r_mid[got].astype(np.float32)
         ok[sel[got]] = True

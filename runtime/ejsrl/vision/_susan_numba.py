@@ -53,7 +53,6 @@ def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below):
     f = gray.ravel()
     b = 4
     nm = len(mdx)
-    off = mdy * W + mdx
     cap = 4096
     idx = np.empty(cap, np.int64)
     rv = np.empty(cap, np.float32)
@@ -145,13 +144,15 @@ def _contiguity(sx, sy, W):
     else:
         slope = sx / (ay if ay > 0 else 1.0)
         sgn = np.int64(np.sign(sy))
-    out = np.empty(3, np.int64)
-    for kk in range(1, 4):
-        ks = kk * slope
-        o = np.int64(np.trunc(ks + np.copysign(0.5, ks)))
-        along = kk * sgn
-        out[kk - 1] = o * W + along if along_x else along * W + o
-    return out
+    return _step(1, slope, sgn, along_x, W), _step(2, slope, sgn, along_x, W), _step(3, slope, sgn, along_x, W)
+
+
+@_jit
+def _step(k, slope, sgn, along_x, W):
+    ks = k * slope
+    o = np.int64(np.trunc(ks + np.copysign(0.5, ks)))
+    along = k * sgn
+    return o * W + along if along_x else along * W + o
 
 
 @_jit
@@ -180,10 +181,10 @@ def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
             continue
         p = idx[j]
         v = np.int32(f[p])
-        st = _contiguity(sx, sy, W)
+        s1, s2, s3 = _contiguity(sx, sy, W)
         total = 0.0
-        for kk in range(3):
-            total += lut[np.uint64(abs(np.int32(f[np.uint64(p + st[kk])]) - v))]
+        for st in (s1, s2, s3):
+            total += lut[np.uint64(abs(np.int32(f[np.uint64(p + st)]) - v))]
         if not total > contig and saddle_area <= 0:
             continue
         # the moments of the unlike pixels brighter than the nucleus (weights 100 - c)
@@ -215,7 +216,7 @@ def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
 
 
 @_jit
-def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
+def coverage_tests(gray, share, idx, rows, lo, hi, dark, contig):
     """The centroid and contiguity tests (``_susan._coverage_test``) on the in-between pixels
     ``idx[rows]`` judged as the dark side (where ``dark``) or the bright one, each mask pixel
     counting by its share of that side between the grey levels ``lo`` and ``hi``: which pass,
@@ -228,8 +229,6 @@ def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
     """
     W = gray.shape[1]
     f = gray.ravel()
-    nm = len(mdx)
-    off = mdy * W + mdx
     N = len(rows)
     ok = np.zeros(N, np.bool_)
     nn = np.zeros(N, np.float64)
@@ -251,10 +250,10 @@ def coverage_tests(gray, mdx, mdy, share, idx, rows, lo, hi, dark, contig):
         nn[i] = n
         if not sx * sx + sy * sy > 0.5 * n * n:
             continue
-        st = _contiguity(sx, sy, W)
+        s1, s2, s3 = _contiguity(sx, sy, W)
         total = 0.0
-        for kk in range(3):
-            total += tab[min(max(np.int32(f[p + st[kk]]) - l8, np.int32(0)), span)] / _FIX
+        for st in (s1, s2, s3):
+            total += tab[min(max(np.int32(f[np.uint64(p + st)]) - l8, np.int32(0)), span)] / _FIX
         ok[i] = total > contig
     return ok, nn
 
