@@ -82,6 +82,24 @@ def test_the_workers_are_started_with_the_apps_own_command_line(monkeypatch, tmp
     assert worker_command() is None
 
 
+def test_a_process_that_cannot_start_is_reported_and_retried_later(caplog):
+    front = Front([sys.executable, "-c", "import sys; sys.exit(3)"], "127.0.0.1", 0, count=1, max_sessions=None)
+    with pytest.raises(RuntimeError, match=r"serving process 0 did not start \(it ended with status 3\)"):
+        front.start()
+    worker = front.workers[0]
+    worker.ready = True  # as if it had served, then died
+    with caplog.at_level("WARNING", logger="ejsrl.serve"):
+        front.supervise()
+    assert "serving process 0 stopped (status 3); starting a new one" in caplog.text
+    assert "did not start (it ended with status 3); trying again in 10 s" in caplog.text
+    tried = worker.proc
+    front.supervise()  # within the wait: no new process
+    assert worker.proc is tried and not worker.ready
+    worker.retry_at = 0.0
+    front.supervise()
+    assert worker.proc is not tried
+
+
 # -- a served lab ------------------------------------------------------------------------------------
 
 

@@ -56,6 +56,8 @@ START_SECONDS = 180.0
 HEAD_SECONDS = 15.0
 #: the longest request head relayed (bytes)
 HEAD_LIMIT = 64 * 1024
+#: seconds between tries to start again a worker that failed to start
+RETRY_SECONDS = 10.0
 #: seconds the workers get to stop before they are killed
 STOP_SECONDS = 5.0
 
@@ -143,6 +145,8 @@ class Worker:
         #: websockets relayed to it now (its tabs, and tabs it told the lab is full)
         self.tabs = 0
         self.ready = False
+        #: when a worker that failed to start may be tried again (time.monotonic())
+        self.retry_at = 0.0
 
 
 class Front:
@@ -211,18 +215,21 @@ class Front:
         worker.ready = True
 
     def supervise(self) -> None:
-        """Start again a worker that has stopped (called every half second)."""
+        """Start again a worker that has stopped (called every half second); after a
+        failed start, the next try waits :data:`RETRY_SECONDS`."""
         for worker in self.workers:
             proc = worker.proc
-            if self._stopping or proc is None or proc.poll() is None:
+            if self._stopping or proc is None or proc.poll() is None or time.monotonic() < worker.retry_at:
                 continue
+            if worker.ready:
+                log.warning("ejsrl: serving process %d stopped (status %s); starting a new one (the sessions "
+                            "it served are lost: their tabs reload to a new one)", worker.index, proc.returncode)
             worker.ready = False
-            log.warning("ejsrl: serving process %d stopped (status %s); starting a new one "
-                        "(the sessions it served are lost: their tabs reload to a new one)", worker.index, proc.returncode)
             try:
                 self._await_report(worker, self._spawn(worker))
             except RuntimeError as exc:
-                log.error("ejsrl: %s", exc)
+                worker.retry_at = time.monotonic() + RETRY_SECONDS
+                log.error("ejsrl: %s; trying again in %.0f s", exc, RETRY_SECONDS)
 
     def stop(self) -> None:
         """Stop relaying and stop the workers (SIGTERM, then SIGKILL after STOP_SECONDS)."""
