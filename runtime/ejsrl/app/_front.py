@@ -208,7 +208,10 @@ class Front:
             report = json.loads(data)
             worker.port, worker.places = int(report["port"]), int(report["max_sessions"])
         except (ValueError, KeyError, TypeError):
-            status = worker.proc.poll() if worker.proc is not None else None
+            status = None
+            if worker.proc is not None:  # it closed the pipe: give it a moment to end
+                with contextlib.suppress(subprocess.TimeoutExpired):
+                    status = worker.proc.wait(2.0)
             raise RuntimeError(f"serving process {worker.index} did not start"
                                + (f" (it ended with status {status})" if status is not None else "")) from None
         worker.tabs = 0
