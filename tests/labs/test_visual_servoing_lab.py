@@ -10,6 +10,10 @@ pinhole with the camera's field of view) land on the desired square.
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
+
 import numpy as np
 import pytest
 from testkit import run_app
@@ -69,3 +73,24 @@ def test_corners_leaving_the_image_are_reported_once_and_a_good_start_is_quiet(b
     assert _alerts(app) == []
     off = _alerts(app, "q_start_deg=[45, 45, -182, 8, -48, -135]")  # the square half out of view
     assert len(off) == 1 and "leaving the image: 2 of 4" in off[0], off
+
+
+def test_a_served_class_has_susans_compiled_kernels_before_the_first_student(built, tmp_path):
+    """Serving a class measures a few frames of the lab; when they start compiling SUSAN's
+    numba kernels, the compile is finished before the class is let in (a compile in a busy
+    server crawls, and meanwhile every session runs the slower NumPy path)."""
+    app_dir = built("paper/visual_servoing_eih")
+    script = (
+        "import sys\n"
+        "from ejsrl.app import load_app\n"
+        "from ejsrl.vision import _susan\n"
+        f"app = load_app({str(app_dir)!r})\n"
+        "server = app.serve('127.0.0.1', 0, block=False, per_client=True)\n"
+        "print('ready:', _susan._COMPILED.thread is not None, _susan._COMPILED.module is not None)\n"
+        "app.stop(); server.stop()\n"
+    )
+    # an empty numba cache: the compile takes seconds, as on a machine's first served lab
+    env = dict(os.environ, NUMBA_CACHE_DIR=str(tmp_path / "numba-cache"))
+    r = subprocess.run([sys.executable, "-P", "-c", script], capture_output=True, text=True, timeout=300, cwd=tmp_path, env=env)
+    assert r.returncode == 0, r.stderr
+    assert "ready: True True" in r.stdout, r.stdout + r.stderr

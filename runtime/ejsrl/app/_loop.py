@@ -469,6 +469,9 @@ class App(Controller):
             # a process runs Python on one core at a time (the GIL), however many the machine has
             cpus = role.cpus if role is not None else 1.0
             max_sessions = default_max_sessions(measure_frame_cost(self), self.sim.fps, cpus=cpus)
+            susan = sys.modules.get("ejsrl.vision._susan")
+            if susan is not None:  # a measured frame started compiling SUSAN's kernels: done before the class comes
+                susan.finish_compile()
 
         def make_app() -> App:
             return type(self)(self.model_cls, self.view, sim=self.sim, meta=self.meta, base_dir=self.base_dir,

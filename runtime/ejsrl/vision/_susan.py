@@ -139,6 +139,14 @@ def _kernels() -> ModuleType | None:
     return mod
 
 
+def finish_compile() -> None:
+    """Wait for the compile of numba's kernels if a SUSAN call has started it (a served
+    lab calls this before its class comes: a compile in a busy server is slow)."""
+    thread = _COMPILED.thread
+    if thread is not None:
+        thread.join()
+
+
 def susan_backend(wait: bool = False) -> str:
     """"numba" or "numpy": the implementation ``susan_corners`` runs now (``BACKEND``); with
     ``wait``, once numba's kernels are compiled (where numba is installed)."""
