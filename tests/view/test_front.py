@@ -63,7 +63,9 @@ def test_a_new_tab_goes_to_the_least_full_process_and_files_go_in_turn():
 
 
 def test_places_are_shared_evenly_and_processes_follow_the_cores():
-    assert split_places(5, 2) == [3, 2] and split_places(7, 3) == [3, 2, 2] and split_places(1, 3) == [1, 1, 1]
+    assert split_places(5, 2) == [3, 2] and split_places(7, 3) == [3, 2, 2] and split_places(2, 2) == [1, 1]
+    with pytest.raises(ValueError):
+        split_places(1, 3)
     assert default_processes(1) == 1 and default_processes(2) == 2 and default_processes(64) == 8
 
 
@@ -284,7 +286,8 @@ def test_processes_whose_front_is_killed_stop_on_their_own(built, tmp_path):
 
 
 def test_shared_serving_and_one_process_need_no_front(built, tmp_path):
-    for args in (("--shared",), ("--processes", "1")):
+    # one place is served by one process: a second would be a place more than the teacher gave
+    for args in (("--shared",), ("--processes", "1"), ("--processes", "2", "--max-sessions", "1")):
         server = Served(built("pendulum"), tmp_path, *args)
         try:
             assert server.children() == []

@@ -72,8 +72,10 @@ def default_processes(cpus: int | None = None) -> int:
 
 
 def split_places(total: int, count: int) -> list[int]:
-    """``total`` places shared as evenly as possible by ``count`` workers (each at least one)."""
-    return [max(1, total // count + (1 if i < total % count else 0)) for i in range(count)]
+    """``total`` places shared as evenly as possible by ``count`` workers (``count`` <= ``total``)."""
+    if not 1 <= count <= total:
+        raise ValueError(f"{total} places cannot be shared by {count} processes")
+    return [total // count + (1 if i < total % count else 0) for i in range(count)]
 
 
 def worker_command() -> list[str] | None:

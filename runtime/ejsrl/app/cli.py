@@ -324,6 +324,8 @@ def _main(
         return 2
     role = WorkerRole.from_env()
     count = args.processes if args.processes is not None else default_processes()
+    if args.max_sessions is not None:
+        count = min(count, args.max_sessions)  # a process with no place would serve nobody
     if role is None and not args.shared and count > 1:
         command = worker_command() if argv is None else None
         if command is not None:
