@@ -195,6 +195,9 @@ def test_the_tab_after_the_last_place_is_told_the_lab_is_full(served):
             assert all(token_of(t) for t in tabs)
             assert len({token_of(t) for t in tabs}) == 3
             assert token_of(extra) is None and "This lab is full" in " ".join(extra.texts())
+            # the class's places, not the share of the process that answered
+            assert "All **3** places are taken" in " ".join(extra.texts())
+            await Client.until(lambda: "the lab is full (3 places)" in served.err.read_text(), "the teacher's line")
         finally:
             for c in (*tabs, extra):
                 await c.close()

@@ -134,6 +134,7 @@ def test_the_client_after_the_last_place_is_told_the_lab_is_full(classroom):
         a = await connect(server)
         full = await connect(server)
         assert any("This lab is full" in t and "Try again later" in t for t in full.texts())
+        assert any("The one place is taken" in t for t in full.texts())  # (not "All 1 places")
         assert not full.seen("GuiSliderMessage")  # no panel, no simulation
         assert len(app.classroom.sessions) == 1
         await full.close()

@@ -49,4 +49,4 @@ def test_a_realtime_lab_that_falls_behind_shows_its_real_time_factor(served):
         served.app.frame()
     speed = served.app.speed
     assert speed == pytest.approx(0.1 / 0.11, abs=0.03)
-    assert f"{speed:.2f}× real time (the server is busy)" in readout(served)
+    assert f"running at {speed:.0%} of real time (the server is busy)" in readout(served)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import dataclasses
 import itertools
 import json
 import logging
@@ -38,7 +39,6 @@ import sys
 import threading
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -92,20 +92,22 @@ def worker_command() -> list[str] | None:
     return [sys.executable, *options, *argv]
 
 
-@dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True)
 class WorkerRole:
     """What a worker is told by its front (through :data:`WORKER_ENV`).
 
     ``index``: its number, which its tokens carry; ``bind``: the front's address (the names
     the worker answers to); ``cpus``: the cores it may count on when it works out its
-    places; ``max_sessions``: its places, if the teacher gave a number; ``report_fd``: where
-    it writes its port and places; ``parent``: the front's process id.
+    places; ``max_sessions``: its places, and ``class_places`` the class's, if the teacher
+    gave a number; ``report_fd``: where it writes its port and places; ``parent``: the
+    front's process id.
     """
 
     index: int
     bind: str
     cpus: float
     max_sessions: int | None
+    class_places: int | None
     report_fd: int
     parent: int
 
@@ -114,13 +116,10 @@ class WorkerRole:
         text = os.environ.get(WORKER_ENV)
         if not text:
             return None
-        d = json.loads(text)
-        return cls(int(d["index"]), str(d["bind"]), float(d["cpus"]),
-                   None if d["max_sessions"] is None else int(d["max_sessions"]), int(d["report_fd"]), int(d["parent"]))
+        return cls(**json.loads(text))
 
     def to_env(self) -> str:
-        return json.dumps({"index": self.index, "bind": self.bind, "cpus": self.cpus, "max_sessions": self.max_sessions,
-                           "report_fd": self.report_fd, "parent": self.parent})
+        return json.dumps(dataclasses.asdict(self))
 
     @property
     def token_prefix(self) -> str:
@@ -161,6 +160,7 @@ class Front:
         self.host = host
         self.port = port
         self.workers = [Worker(i) for i in range(count)]
+        self.max_sessions_asked = max_sessions
         self.places = split_places(max_sessions, count) if max_sessions is not None else [None] * count
         self.cpus = min(1.0, (os.cpu_count() or 1) / count)  # a process runs Python on one core at most
         self._turn = itertools.count()
@@ -179,7 +179,8 @@ class Front:
 
     def _spawn(self, worker: Worker) -> int:
         read_fd, write_fd = os.pipe()
-        role = WorkerRole(worker.index, self.host, self.cpus, self.places[worker.index], write_fd, os.getpid())
+        role = WorkerRole(worker.index, self.host, self.cpus, self.places[worker.index], self.max_sessions_asked,
+                          write_fd, os.getpid())
         env = dict(os.environ, **{WORKER_ENV: role.to_env()})
         try:
             # its own process group: Ctrl+C reaches the front, which stops the workers

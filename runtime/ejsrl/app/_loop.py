@@ -413,7 +413,7 @@ class App(Controller):
         if role is not None:  # one of a front's processes: on this machine only, answering to the front's address
             host, port, per_client = "127.0.0.1", 0, True
         server, _url = make_server(host, port, allow_origins=allow_origins, label=self.meta.title,
-                                   answer_as=None if role is None else role.bind, banner=role is None)
+                                   answer_as=None if role is None else role.bind, banner=False)
         if per_client:
             self._start_classroom(server, max_sessions=max_sessions, grace=grace, workers=workers, role=role)
         else:
@@ -423,7 +423,7 @@ class App(Controller):
             assert self.classroom is not None
             role.report(server.get_port(), self.classroom.max_sessions)
         else:
-            announce(self.meta.title, host, server.get_port(),
+            announce(self.meta.title, host, server.get_port(), asked_port=port,
                      places=None if self.classroom is None else self.classroom.max_sessions)
         if self.classroom is not None:
             if not block:
@@ -436,9 +436,7 @@ class App(Controller):
                 pass
             finally:
                 self.classroom.stop()
-                # a front's process stops quietly: the front says the lab stopped
-                with contextlib.nullcontext() if role is None else contextlib.redirect_stdout(io.StringIO()):
-                    server.stop()
+                _quietly(server.stop)
             return server
         if not block:
             self._loop_thread = threading.Thread(target=self.run_loop, name="ejsrl-loop", daemon=True)
@@ -449,7 +447,7 @@ class App(Controller):
         except KeyboardInterrupt:
             pass
         finally:
-            server.stop()
+            _quietly(server.stop)
         return server
 
     def _start_classroom(
@@ -480,6 +478,8 @@ class App(Controller):
         self.classroom = Classroom(make_app, server, max_sessions=max_sessions,
                                    grace=GRACE_SECONDS if grace is None else grace, workers=workers,
                                    token_prefix="" if role is None else role.token_prefix)
+        if role is not None:
+            self.classroom.class_places = role.class_places
 
     # -- headless -----------------------------------------------------------------------------------
     def run_headless(
@@ -520,18 +520,35 @@ def load_app(
     return App(module.Model, module.VIEW, sim=sim, meta=module.META, base_dir=folder, overrides=overrides, clock=clock)
 
 
-def announce(title: str, host: str, port: int, *, places: int | None, processes: int = 1) -> None:
+def _quietly(stop: Callable[[], Any]) -> None:
+    """``stop()`` without viser's "Server stopped" line: the app says it stopped (and why)."""
+    with contextlib.redirect_stdout(io.StringIO()):
+        stop()
+
+
+def announce(title: str, host: str, port: int, *, places: int | None, processes: int = 1, asked_port: int | None = None) -> None:
     """Print where a lab is served (and a warning when that is beyond this machine):
     ``places``: tabs served at once, each with its own simulation (None: one shared
-    simulation); ``processes``: how many processes serve them."""
+    simulation); ``processes``: how many processes serve them; ``asked_port``: the port
+    asked for, when the one served on may differ (it was taken)."""
     from ejsrl.view._guard import is_loopback
 
     url_host = "127.0.0.1" if host in ("127.0.0.1", "0.0.0.0", "", "::") else host
-    print(f"{title}: serving on http://{url_host}:{port} (Ctrl+C to stop)", flush=True)
+    taken = f" (port {asked_port} was taken)" if asked_port and asked_port != port else ""
+    print(f"{title}: serving on http://{url_host}:{port}{taken} (Ctrl+C to stop)", flush=True)
     if host in ("0.0.0.0", "", "::"):
         others = ", ".join(f"http://{name}:{port}" for name in network_names())
         if others:
             print(f"  from other machines on the network: {others}", flush=True)
+    if places is None:
+        print("  every browser tab shows and drives this one simulation (--shared)", flush=True)
+    else:
+        by, change = (f" from {processes} processes", "--max-sessions N, --processes N") if processes > 1 else ("", "--max-sessions N")
+        print(
+            f"  every browser tab gets its own simulation, up to {places} at once{by} "
+            f"({change} to change; --shared: one simulation for everyone)",
+            flush=True,
+        )
     if not is_loopback(host):
         where = "every network this machine is on" if host in ("0.0.0.0", "", "::") else f"the network at {host}"
         print(
@@ -539,13 +556,6 @@ def announce(title: str, host: str, port: int, *, places: int | None, processes:
             f"machine on port {port} can open it, watch it and change the simulation. "
             "Leave --host out (127.0.0.1) to keep the lab on this machine.",
             file=sys.stderr,
-            flush=True,
-        )
-    if places is not None:
-        by, change = (f" from {processes} processes", "--max-sessions N, --processes N") if processes > 1 else ("", "--max-sessions N")
-        print(
-            f"  every browser tab gets its own simulation, up to {places} at once{by} "
-            f"({change} to change; --shared: one simulation for everyone)",
             flush=True,
         )
 

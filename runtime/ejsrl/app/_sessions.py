@@ -62,6 +62,11 @@ VISER_WINDOW = 1.0 / 60.0 + 0.004
 RELOAD_WAIT_SECONDS = 2.0
 #: the share of the machine's cores that sessions may use when the default limit is derived
 CPU_SHARE = 0.8
+#: CPU seconds viser's event loop spends on a tab's frame whatever the lab (serialising,
+#: compressing, sending): ``bench/classroom.py`` measured 0.6 ms a frame in all for the
+#: pendulum, whose frame alone takes 0.2-0.35 ms; without it the pendulum's default was
+#: 100 places a process where 40 held
+SEND_SECONDS = 0.0004
 MAX_DEFAULT_SESSIONS = 100
 #: seconds between GIL hand-overs while serving a class (Python's default is 5 ms): the
 #: stepper threads and viser's event-loop thread share one GIL, and a frame ready to be sent
@@ -82,10 +87,11 @@ def _token_script(token: str) -> str:
     return f'<img style="display:none" alt="" src="data:," onerror="{js}">'
 
 
-def _full_text(limit: int) -> str:
+def _full_text(limit: int | None) -> str:
+    places = "Every place is" if limit is None else ("The one place is" if limit == 1 else f"All **{limit}** places are")
     return (
         "### This lab is full\n\n"
-        f"All **{limit}** places are taken: every student gets a simulation of their own, and this "
+        f"{places} taken: every student gets a simulation of their own, and this "
         "machine cannot run more without slowing everyone down.\n\n"
         "**Try again later**: reload this page in a few minutes, or ask your teacher."
     )
@@ -160,6 +166,9 @@ class Classroom:
         self.token_prefix = token_prefix
         self.server = server
         self.max_sessions = max(1, int(max_sessions))
+        #: the places of the whole class, which the full message gives: ``max_sessions``, or
+        #: when the class is served from several processes theirs together (None: not known here)
+        self.class_places: int | None = self.max_sessions
         self.grace = float(grace)
         self.clock = clock
         self.scheduler = Scheduler(workers or default_workers(), clock=clock)
@@ -222,7 +231,7 @@ class Classroom:
                 self._by_client[client.client_id] = session
                 fresh = True
         if session is None:
-            log.warning("ejsrl: the lab is full (%d sessions); a new tab was turned away", self.max_sessions)
+            log.warning("ejsrl: the lab is full (%s); a new tab was turned away", _places(self.class_places))
             self._show_full(client)
             return
         try:
@@ -303,7 +312,7 @@ class Classroom:
     def _show_full(self, client: Any) -> None:
         try:
             client.gui.set_panel_label("This lab is full")
-            client.gui.add_markdown(_full_text(self.max_sessions))
+            client.gui.add_markdown(_full_text(self.class_places))
             client.add_notification("This lab is full", "Try again later: reload this page in a few minutes.",
                                     color="yellow", auto_close_seconds=None)
         except Exception:
@@ -393,6 +402,10 @@ class Classroom:
             self._free(s)
 
 
+def _places(n: int | None) -> str:
+    return "every place taken" if n is None else ("1 place" if n == 1 else f"{n} places")
+
+
 def _trim_heap() -> None:
     """Give freed memory back to the system (glibc keeps it otherwise)."""
     try:
@@ -452,10 +465,11 @@ def measure_frame_cost(app: Any, frames: int = 12) -> float:
     return costs[len(costs) // 2] if costs else 0.0
 
 
-def default_max_sessions(frame_cost: float, fps: float, cpus: int | None = None) -> int:
+def default_max_sessions(frame_cost: float, fps: float, cpus: float | None = None) -> int:
     """How many sessions playing at ``fps`` frames of ``frame_cost`` CPU seconds fit in
-    :data:`CPU_SHARE` of ``cpus`` cores, with the view's own cost (sending the changes)
-    counted as half again; between 2 and :data:`MAX_DEFAULT_SESSIONS`."""
+    :data:`CPU_SHARE` of ``cpus`` cores (one process: one core, the GIL), with the view's
+    own cost counted as half again plus :data:`SEND_SECONDS` a frame; between 2 and
+    :data:`MAX_DEFAULT_SESSIONS`."""
     n = cpus if cpus is not None else (os.cpu_count() or 1)
-    per_session = max(frame_cost, 1e-4) * 1.5 * max(float(fps), 1.0)
+    per_session = (max(frame_cost, 1e-4) * 1.5 + SEND_SECONDS) * max(float(fps), 1.0)
     return int(min(MAX_DEFAULT_SESSIONS, max(2, math.floor(n * CPU_SHARE / per_session))))

@@ -151,7 +151,8 @@ def _parser(title: str) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--grace", type=float, default=60.0, metavar="SECONDS",
-        help="keep a closed tab's simulation this long, so that a reload finds it again (default 60)",
+        help="keep a closed tab's simulation this long, so that a reload finds it again (default 60); at most "
+        "--max-sessions closed tabs' simulations are kept, the oldest freed first when more tabs close",
     )
     p.add_argument("--headless", action="store_true", help="run without a server")
     p.add_argument("--duration", type=float, help="headless: how long to run, in units of the independent variable")
@@ -331,7 +332,8 @@ def _main(
         if command is not None:
             return serve_front(
                 command, args.host, args.port, count=count, max_sessions=args.max_sessions, stopped=threading.Event(),
-                announce=lambda port, places: announce(meta.title, args.host, port, places=places, processes=count),
+                announce=lambda port, places: announce(meta.title, args.host, port, places=places, processes=count,
+                                                       asked_port=args.port),
             )
         if args.processes is not None:
             print(f"warning: --processes {count}: this app was not started as a script (python app.py), so it cannot "

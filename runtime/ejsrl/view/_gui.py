@@ -90,7 +90,7 @@ SLOW_SPEED = 0.95
 def slow_text(speed: float, realtime: bool) -> str:
     """What the time readout adds when the server cannot keep up (``speed`` < :data:`SLOW_SPEED`)."""
     if realtime:
-        return f" · *{speed:.2f}× real time (the server is busy)*"
+        return f" · *running at {speed:.0%} of real time (the server is busy)*"
     return f" · *running at {speed:.0%} speed (the server is busy)*"
 
 
