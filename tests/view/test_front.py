@@ -299,3 +299,19 @@ def test_shared_serving_and_one_process_need_no_front(built, tmp_path):
     r = subprocess.run([sys.executable, "-P", str(built("pendulum") / "app.py"), "--shared", "--processes", "2"],
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 2 and "--shared serves one simulation from one process" in r.stderr
+
+
+def test_the_start_up_lines_say_where_how_many_and_what_was_taken(capsys):
+    from ejsrl.app._loop import announce
+
+    announce("Lab", "127.0.0.1", 8081, places=6, processes=2, asked_port=8080)
+    out, err = capsys.readouterr()
+    assert out.splitlines()[0] == "Lab: serving on http://127.0.0.1:8081 (port 8080 was taken) (Ctrl+C to stop)"
+    assert "up to 6 at once from 2 processes" in out and err == ""
+    announce("Lab", "127.0.0.1", 8080, places=None, asked_port=8080)
+    out, _ = capsys.readouterr()
+    assert "port 8080 was taken" not in out and "every browser tab shows and drives this one simulation (--shared)" in out
+    announce("Lab", "0.0.0.0", 8080, places=3)
+    out, err = capsys.readouterr()
+    assert "up to 3 at once (--max-sessions N to change" in out and "processes" not in out
+    assert err.startswith("warning: --host 0.0.0.0 opens this lab")
