@@ -246,7 +246,7 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
         help="build a spec and run the app; other options go to the app",
         description="Build SPEC into a temporary folder (or -o DIR) and run the app. Every other option goes "
         "to the app, before or after SPEC: --port N, --host ADDR (0.0.0.0 opens the lab to the network), "
-        "--shared (one simulation for every browser tab instead of one each), --max-sessions N, --grace S, "
+        "--shared (one simulation for every browser tab instead of one each), --max-sessions N, --processes N, --grace S, "
         "--allow-origin URL, --headless --duration T --csv FILE --vars a,b --set NAME=VALUE, --sweep ...; "
         "`python app.py --help` in a built app lists them all.",
     )
