@@ -196,6 +196,7 @@ def render_app(plan: AppPlan) -> str:
         methods=methods,
         module_blocks=blocks,
         main_args="Model, VIEW, meta=META" if all_default else "Model, VIEW, sim=SIMULATION, meta=META",
+        headless=plan.independent is not None,
     )
     return _with_line_table(text, locs)
 
@@ -265,7 +266,9 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
     _check_compiles(app_text, "app.py")
     env = _env()
     bundle_name = f"{out_dir.name}.pyz" if bundle else ""
-    readme = env.get_template("README.md.j2").render(title=plan.title, description=plan.description, version=__version__, spec_name=plan.spec_name, bundle=bundle_name)
+    readme = env.get_template("README.md.j2").render(title=plan.title, description=plan.description, version=__version__,
+                                                     spec_name=plan.spec_name, bundle=bundle_name,
+                                                     headless=plan.independent is not None)
     urdf = ["yourdfpy>=0.0.56"] if "urdf" in app_text else []  # ejsrl.robotics.load_urdf, models.ur5_urdf
     if urdf:
         _check_urdf_parser(plan)

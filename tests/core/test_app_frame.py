@@ -140,6 +140,11 @@ view: []
     assert "    INDEPENDENT = None" in text
     r = run_app(out, "--headless", "--duration", "1", timeout=120)
     assert r.returncode != 0 and "this model has no independent variable" in r.stderr
+    # ... so neither its docstring nor its README suggests a headless run (the new-user trial
+    # followed that advice in tutorial steps 6 and 7 and got the error above)
+    assert "--headless" not in text and "--headless" not in (out / "README.md").read_text()
+    s_app = tmp_path / "s" / "app"
+    assert "--headless --duration 10" in (s_app / "app.py").read_text() and "--headless" in (s_app / "README.md").read_text()
 
     out, text = _build(tmp_path / "t", "ejs: 1\ntitle: T\nmodel:\n  variables:\n    t: 0.0\nview: []\n")
     assert "INDEPENDENT" not in text
