@@ -178,6 +178,16 @@ def test_images_are_sent_only_when_they_change(served):
     assert im.pushes == 2
 
 
+@pytest.mark.parametrize("served", [{"autoplay": True}], indirect=True)
+def test_a_lab_that_plays_from_the_start_shows_pause_in_the_pause_colour(served):
+    p = served.view.panel
+    assert served.app.is_playing()
+    assert (p.play_button.label, p.play_button.color) == ("Pause", "orange")  # (it was green: the Play colour)
+    p.play_button._impl.update_cb[0](None)
+    served.app.frame()
+    assert (p.play_button.label, p.play_button.color) == ("Play", "green")
+
+
 @pytest.mark.parametrize("served", [{"controls": False}], indirect=True)
 def test_the_control_bar_can_be_left_out(served):
     assert served.view.panel.play_button is None

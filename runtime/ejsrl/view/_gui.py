@@ -267,7 +267,7 @@ class Panel:
         evolves = getattr(getattr(app, "model", None), "_ejs_evolves", lambda: True)()
         if evolves:
             playing = bool(app.is_playing())
-            self.play_button = gui.add_button("Pause" if playing else "Play", icon=None, color="green")
+            self.play_button = gui.add_button("Pause" if playing else "Play", icon=None, color="orange" if playing else "green")
             self.step_button = gui.add_button("Step")
             self._playing_shown = playing
 
