@@ -128,3 +128,32 @@ def test_help_describes_the_classroom_options(capsys):
     assert "--shared" in out and "one simulation for everyone" in out
     assert "--max-sessions N" in out and "the next one is told the lab is full" in out
     assert "--grace SECONDS" in out and "a reload finds it again" in out
+
+
+def test_the_measured_cost_counts_a_picture_at_the_rate_the_view_reads_it():
+    """An image element is read at most IMAGE_RATE times a second (the costliest thing a
+    frame computes, a virtual camera's picture, is not made 30 or 60 times a second): its
+    cost counts in that share of the frames, a label's in every frame."""
+    import numpy as np
+
+    from ejsrl.app import App, AppMeta, SimConfig
+    from ejsrl.view._plots import IMAGE_RATE
+    from ejsrl.view.elements import Dynamic, Image, Label
+    from testkit.view_lab import LabModel
+
+    def costly(m):
+        end = time.thread_time() + 0.004  # 4 ms of CPU, as a camera picture
+        while time.thread_time() < end:
+            pass
+        return np.zeros((8, 8), np.uint8)
+
+    def cost_with(element, fps: float) -> float:
+        app = App(LabModel, [element], sim=SimConfig(fps=fps), meta=AppMeta(title="T"))
+        return min(_sessions.measure_frame_cost(app, frames=6) for _ in range(2))
+
+    base = min(_sessions.measure_frame_cost(App(LabModel, [], sim=SimConfig(fps=60.0), meta=AppMeta(title="T")), frames=6)
+               for _ in range(2))
+    as_label = cost_with(Label(Dynamic(lambda m: (costly(m), "x")[1], "x"), where="t:1:1"), 60.0) - base
+    as_image = cost_with(Image(Dynamic(costly, "img"), "camera", where="t:1:1"), 60.0) - base
+    assert as_label == pytest.approx(0.004, rel=0.25)
+    assert as_image == pytest.approx(0.004 * IMAGE_RATE / 60.0, rel=0.3)

@@ -421,11 +421,14 @@ def _trim_heap() -> None:
 
 def measure_frame_cost(app: Any, frames: int = 12) -> float:
     """CPU seconds one display frame of ``app`` takes while playing: the steps, the world,
-    and every value its view shows (plots, images, labels, controls). ``app`` is played for
-    ``frames`` frames at its frame rate, then reset."""
+    and every value its view shows (plots, images, labels, controls), images counted at
+    the rate the view reads them (``IMAGE_RATE`` of ``ejsrl.view._plots``). ``app`` is
+    played for ``frames`` frames at its frame rate, then reset."""
+    from ejsrl.view._plots import IMAGE_RATE
     from ejsrl.view.elements import Control, Dynamic, Folder, Image, Label, Plot, Tabs
 
     props: list[tuple[Any, str]] = []
+    pictures: list[tuple[Any, str]] = []
 
     def walk(elements: list[Any]) -> None:
         for el in elements:
@@ -438,9 +441,9 @@ def measure_frame_cost(app: Any, frames: int = 12) -> float:
                 props.append((el.x, el.where))
                 props.extend((s.y, s.where or el.where) for s in el.series)
             elif isinstance(el, Image):
-                props.append((el.source, el.where))
+                pictures.append((el.source, el.where))
                 if el.points is not None:
-                    props.append((el.points, el.where))
+                    pictures.append((el.points, el.where))
             elif isinstance(el, Label):
                 props.append((el.text, el.where))
             elif isinstance(el, Control):
@@ -448,6 +451,7 @@ def measure_frame_cost(app: Any, frames: int = 12) -> float:
 
     walk(list(app.view or []))
     period = 1.0 / max(float(app.sim.fps), 1.0)
+    picture_share = min(1.0, IMAGE_RATE * period)
     costs: list[float] = []
     app.play()
     try:
@@ -457,7 +461,11 @@ def measure_frame_cost(app: Any, frames: int = 12) -> float:
             with app.lock:
                 for prop, where in props:
                     app.safe_value(prop, where)
-            costs.append(time.thread_time() - start)
+                middle = time.thread_time()
+                for prop, where in pictures:
+                    app.safe_value(prop, where)
+            end = time.thread_time()
+            costs.append(middle - start + (end - middle) * picture_share)
             time.sleep(period)
     finally:
         app.reset()

@@ -396,11 +396,15 @@ def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
     return a
 
 
+#: the most pictures a second an image element reads and sends
+IMAGE_RATE = 20.0
+
+
 class ImageBinding:
     """One ``Image`` element: sends the picture only when the source or the points changed."""
 
     def __init__(
-        self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = 20.0, clock: Callable[[], float] = time.monotonic
+        self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = IMAGE_RATE, clock: Callable[[], float] = time.monotonic
     ) -> None:
         self.image = image
         self.max_rate = max_rate
