@@ -85,7 +85,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
-    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "share_image", "local_max3", "disc_sums"):
+    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "hidden_seeds", "put_back", "window_maxima", "share_image", "local_max3", "disc_sums"):
         assert getattr(K, name).targetoptions.get("nogil") is True, name
     big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
     t = 25.0
@@ -95,7 +95,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
 
     def work():
         started.set()
-        K.candidates(*args)
+        K.candidates(*args, 0, big.shape[0])
         done.set()
 
     th = threading.Thread(target=work)
@@ -124,7 +124,7 @@ def test_the_side_shares_are_opencvs_for_every_grey_level(monkeypatch):
         lo = np.minimum(low, hi).astype(np.uint8)
         ref = cv2.divide(cv2.subtract(hi, grey), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
         cv2.threshold(ref, 1.0, 0.0, cv2.THRESH_TRUNC, dst=ref)
-        _same_bits(K.share_image(grey, lo, hi), ref)
+        _same_bits(K.share_image(grey, lo, hi, np.empty(grey.shape, np.float32), 0, 256), ref)
 
 
 def _child(code: str, env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess:

@@ -454,6 +454,9 @@ class App(Controller):
         self, server: Any, *, max_sessions: int | None, grace: float | None, workers: int | None, role: WorkerRole | None
     ) -> None:
         from ejsrl.app._sessions import GRACE_SECONDS, SWITCH_INTERVAL, Classroom, default_max_sessions, measure_frame_cost
+        from ejsrl.vision._susan import set_threads as set_susan_threads
+
+        set_susan_threads(1)  # the sessions already share the cores, in threads: SUSAN keeps to the calling one
 
         if sys.getswitchinterval() > SWITCH_INTERVAL:
             sys.setswitchinterval(SWITCH_INTERVAL)

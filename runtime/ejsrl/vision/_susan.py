@@ -41,6 +41,7 @@ import functools
 import importlib.util
 import os
 import threading
+from concurrent.futures import ThreadPoolExecutor
 from types import ModuleType
 from typing import NamedTuple
 
@@ -64,6 +65,11 @@ _SCALE = 100  # c is stored as round(100 c) in a uint8 look-up table, as in the 
 #: which implementation ``susan_corners`` runs: "auto" (the numba kernels when numba can be
 #: imported, else NumPy), "numpy" or "numba"; from ``EJSRL_SUSAN``, read at each call
 BACKEND: str = os.environ.get("EJSRL_SUSAN", "auto")
+#: threads one ``susan_corners`` call runs numba's kernels (and ``cornerSubPix``) on: None for the
+#: default, 2 on a machine with at least 2 cores (``EJSRL_SUSAN_THREADS`` overrides it). A served
+#: class sets 1 (``set_threads``): its sessions already run side by side in a pool of threads
+THREADS: int | None = None
+_MIN_SPLIT = 1 << 16  # images with fewer pixels stay on one thread (handing work over costs ~50 us)
 FAST_HINT = "SUSAN's compiled kernels need numba: pip install 'ejsgen[fast]' (or: pip install numba)"
 
 
@@ -153,6 +159,45 @@ def susan_backend(wait: bool = False) -> str:
     if wait and BACKEND == "auto":
         _COMPILED.get(wait=True)
     return "numpy" if _kernels() is None else "numba"
+
+
+def set_threads(n: int | None) -> None:
+    """Run each ``susan_corners`` call on ``n`` threads at most (1: the calling thread only, as a
+    served class needs; None: the default, ``susan_threads``). The result is the same either way."""
+    global THREADS
+    THREADS = None if n is None else max(1, int(n))
+
+
+def susan_threads() -> int:
+    """The threads a ``susan_corners`` call uses now (1 or 2; only numba's path uses a second)."""
+    if THREADS is not None:
+        return THREADS
+    env = os.environ.get("EJSRL_SUSAN_THREADS")
+    if env:
+        return max(1, int(env))
+    return 2 if (os.cpu_count() or 1) >= 2 else 1
+
+
+_POOL: ThreadPoolExecutor | None = None
+_POOL_LOCK = threading.Lock()
+
+
+def _pool() -> ThreadPoolExecutor:
+    global _POOL
+    if _POOL is None:
+        with _POOL_LOCK:
+            if _POOL is None:
+                _POOL = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ejsrl-susan")
+    return _POOL
+
+
+def _two(split: bool, fn, first: tuple, second: tuple):
+    """``fn(*first), fn(*second)``: the second in the pool's thread at the same time when ``split``
+    (numba's kernels and OpenCV release the GIL)."""
+    if not split:
+        return fn(*first), fn(*second)
+    fut = _pool().submit(fn, *second)
+    return fn(*first), fut.result()
 
 
 def _lut(t: float) -> NDArray[np.uint8]:
@@ -690,7 +735,15 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     T, m, _ = _ramp_bound(float(t))
     gray = np.ascontiguousarray(gray)
     k3 = np.ones((3, 3), np.uint8)
-    idx, rv, v0, lo3, hi3, mom = kernels.candidates(gray, cv2.erode(gray, k3), cv2.dilate(gray, k3), lut, _MDX, _MDY, T, m, L_max, g100, below)
+    # the candidate search on the rows' two halves in two threads (the other kernels' halves
+    # gained nothing measurable on a 2-core machine: each hand-over costs ~30 us and more under load)
+    split = H * W >= _MIN_SPLIT and susan_threads() > 1
+    args = (gray, cv2.erode(gray, k3), cv2.dilate(gray, k3), lut, _MDX, _MDY, T, m, L_max, g100, below)
+    if split:  # the rows' two halves (their pixels in raster order, one after the other)
+        halves = _two(True, kernels.candidates, (*args, 0, H // 2), (*args, H // 2, H))
+        idx, rv, v0, lo3, hi3, mom = (np.concatenate(pair) for pair in zip(*halves))
+    else:
+        idx, rv, v0, lo3, hi3, mom = kernels.candidates(*args, 0, H)
     K = len(idx)
     if K == 0:
         return None
@@ -851,7 +904,7 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
     lo, hi = cv2.erode(levels, k7), cv2.dilate(levels, k7)
     if kernels is not None:  # the same shares: a float32 division of the same integers (OpenCV's is slow here)
-        share = kernels.share_image(gray, lo, hi)
+        share = kernels.share_image(gray, lo, hi, np.empty(gray.shape, np.float32), 0, gray.shape[0])
     else:
         share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
         cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
@@ -878,12 +931,19 @@ def _disc_sums_match(kernels: ModuleType) -> bool:
     return bool(np.array_equal(ref.view(np.uint32), kernels.disc_sums(share, idx).view(np.uint32)))
 
 
+def _sub_pixel(gray: NDArray[np.uint8], p32: NDArray[np.float32]) -> NDArray[np.float32]:
+    if len(p32) == 0:
+        return p32
+    return cv2.cornerSubPix(gray, p32, (3, 3), (-1, -1), (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 20, 0.01))
+
+
 def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64]) -> NDArray[np.float64]:
     """Sub-pixel corners: ``cv2.cornerSubPix`` in a 7x7 window, kept where it moved at most 3 px."""
-    refined = cv2.cornerSubPix(
-        gray, pts.astype(np.float32).reshape(-1, 1, 2), (3, 3), (-1, -1),
-        (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 20, 0.01),
-    ).reshape(-1, 2).astype(np.float64)
+    p32 = pts.astype(np.float32).reshape(-1, 1, 2)
+    h = len(p32) // 2
+    # each corner is refined on its own: two halves in two threads give the same positions
+    halves = _two(h >= 32 and susan_threads() > 1, _sub_pixel, (gray, p32[:h]), (gray, p32[h:]))
+    refined = np.concatenate(halves).reshape(-1, 2).astype(np.float64)
     moved = np.linalg.norm(refined - pts, axis=1)
     return np.where((moved <= 3.0)[:, None], refined, pts)
 

@@ -10,8 +10,10 @@ are the same, bit for bit (tests/vision/test_susan_numba.py). What stays in Open
 side shares' whole-image estimate, the window maxima (``dilate``) and ``cornerSubPix``.
 
 The kernels release the GIL (``nogil``: a classroom server's sessions run them side by side
-in threads) and run on one thread each (``parallel`` is not used: the server already has a
-thread per session, and OpenCV's own threads share the same cores). They are cached on disk
+in threads) and each runs on one thread (``parallel`` is not used: numba's thread pools do not
+take calls from several threads at once, as a server's sessions make them). Outside a served
+class, ``_susan`` runs the biggest of them on two halves of their pixels in two threads
+(``_susan.set_threads``). They are cached on disk
 (``cache``): numba writes next to this file when it can (an editable install), else to its
 user-wide cache (``~/.cache/numba``, or ``$NUMBA_CACHE_DIR``: a wheel in a read-only
 site-packages), so only the first process on a machine compiles them.
@@ -37,8 +39,9 @@ _HALF = (1, 2, 3, 3, 3, 2, 1)  # the mask's half-widths on its rows dy = -3 .. 3
 
 
 @_jit
-def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below):
-    """The pixels at least 4 from the border with a response ``g - n > below`` (x100, float32).
+def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
+    """The pixels at least 4 from the border with a response ``g - n > below`` (x100, float32),
+    on the rows ``y0 .. y1 - 1`` (two calls on two row ranges: the same pixels, split).
 
     ``mdx``/``mdy``: the mask offsets (nucleus included). A ramp sum over the 36 neighbours,
     ``L = sum min((T - d)+, m)``, bounds the USAN from below (``_susan._ramp_bound``): only the
@@ -62,7 +65,7 @@ def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below):
     Tu, mu, sat = np.uint8(T), np.uint8(m), np.uint8(255)
     g = np.float32(g100)
     Lm = np.int64(L_max)
-    for y in range(b, H - b):
+    for y in range(max(y0, b), min(y1, H - b)):
         acc[:] = 0
         r = gray[y, b : W - b]
         for k in range(nm):
@@ -259,25 +262,34 @@ def coverage_tests(gray, share, idx, rows, lo, hi, dark, contig):
 
 
 @_jit
-def suppress(resp, r, passing, failing, fv):
-    """The corners among ``passing`` (flat indices into ``resp``, (H, W) float32): maxima of their
-    (2r+1)^2 window (on a plateau the first in raster order), after the failing pixels
-    (``failing``, values ``fv``, zero in ``resp``) that are hidden under a larger pixel that
-    stays are put back (``_susan._hidden_failures``: a failing pixel stays when a larger
-    pixel that stays lies in its window). A failing pixel under a larger passing one stays;
-    from those, the windows of the pixels found to stay are searched for smaller failing
-    ones, which stay in turn (the NumPy path's search, depth first: the same pixels). The
-    failing pixels not (yet) found to stay wait in ``resp`` as their negated value.
-    ``resp`` is updated in place.
-    """
+def hidden_seeds(resp, r, failing, fv):
+    """Which failing pixels (flat indices ``failing``, values ``fv``, zero in ``resp``) have a larger
+    pixel of ``resp`` (H, W) float32 >= 0 in their (2r+1)^2 window: those stay for certain
+    (``put_back``). Reads ``resp`` only: two calls on two halves of ``failing`` may run at once."""
+    H, W = resp.shape
+    bits = resp.ravel().view(np.int32)  # float32 >= 0 order as their bits
+    seed = np.zeros(len(failing), np.bool_)
+    for i in range(len(failing)):
+        seed[i] = _any_above(bits, failing[i], r, H, W, fv[i:i + 1].view(np.int32)[0])
+    return seed
+
+
+@_jit
+def put_back(resp, r, failing, fv, seed):
+    """Put back the failing pixels (``failing``, values ``fv``, zero in ``resp``) that are hidden
+    under a larger pixel that stays (``_susan._hidden_failures``: a failing pixel stays when a
+    larger pixel that stays lies in its window): the ``seed`` ones (``hidden_seeds``: under a
+    larger passing one), then, from the windows of the pixels found to stay, the smaller failing
+    ones, which stay in turn (depth first: the least set closed under that rule, the NumPy
+    path's pixels). The failing pixels not found to stay wait in ``resp`` as their negated
+    value meanwhile, and are zero at the end. ``resp`` is updated in place."""
     H, W = resp.shape
     f = resp.ravel()
-    bits = f.view(np.int32)  # float32 >= 0 order as their bits; negatives (-0.0 too) below all of them
     stack = np.empty(len(failing), np.int64)
     top = 0
     for i in range(len(failing)):
         p = failing[i]
-        if _any_above(bits, p, r, H, W, fv[i:i + 1].view(np.int32)[0]):
+        if seed[i]:
             f[p] = fv[i]
             stack[top] = p
             top += 1
@@ -301,6 +313,14 @@ def suppress(resp, r, passing, failing, fv):
     for i in range(len(failing)):
         if f[failing[i]] <= 0:
             f[failing[i]] = 0.0
+
+
+@_jit
+def window_maxima(resp, r, passing):
+    """Which pixels of ``passing`` (flat indices) are maxima of ``resp`` (H, W) in their (2r+1)^2
+    window, above 0 (on a plateau the first in raster order). Reads ``resp`` only."""
+    H, W = resp.shape
+    f = resp.ravel()
     keep = np.zeros(len(passing), np.bool_)
     for i in range(len(passing)):
         p = passing[i]
@@ -317,23 +337,33 @@ def suppress(resp, r, passing, failing, fv):
             if not good:
                 break
         keep[i] = good
-    return passing[keep]
+    return keep
 
 
 @_jit
-def share_image(gray, lo, hi):
-    """(H, W) float32: ``min((hi - I)+ / max(hi - lo, 1), 1)``, the dark share of each pixel, as
-    ``_susan._coverage_response`` computes it with OpenCV (a float32 division of the same
-    integers: the correctly rounded quotient either way)."""
-    H, W = gray.shape
-    g, l, h = gray.ravel(), lo.ravel(), hi.ravel()
-    out = np.empty(H * W, np.float32)
+def suppress(resp, r, passing, failing, fv):
+    """The corners among ``passing`` (flat indices into ``resp``, (H, W) float32): maxima of their
+    (2r+1)^2 window (on a plateau the first in raster order), after the failing pixels
+    (``failing``, values ``fv``, zero in ``resp``) hidden under a larger pixel that stays are
+    put back (``put_back``). ``resp`` is updated in place. One thread: ``hidden_seeds``,
+    ``put_back`` and ``window_maxima`` in turn (``_susan`` runs the first and last on two halves)."""
+    put_back(resp, r, failing, fv, hidden_seeds(resp, r, failing, fv))
+    return passing[window_maxima(resp, r, passing)]
+
+
+@_jit
+def share_image(gray, lo, hi, out, y0, y1):
+    """``out`` (H, W) float32, rows ``y0 .. y1 - 1``: ``min((hi - I)+ / max(hi - lo, 1), 1)``, the
+    dark share of each pixel, as ``_susan._coverage_response`` computes it with OpenCV (a
+    float32 division of the same integers: the correctly rounded quotient either way)."""
+    W = gray.shape[1]
+    g, l, h, o = gray.ravel(), lo.ravel(), hi.ravel(), out.ravel()
     one = np.float32(1.0)
-    for i in range(H * W):
+    for i in range(y0 * W, y1 * W):
         a = np.float32(max(np.int32(h[i]) - np.int32(g[i]), np.int32(0)))
         b = np.float32(max(np.int32(h[i]) - np.int32(l[i]), np.int32(1)))
-        out[i] = min(a / b, one)
-    return out.reshape(H, W)
+        o[i] = min(a / b, one)
+    return out
 
 
 @_jit

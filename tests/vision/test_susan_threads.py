@@ -1,0 +1,91 @@
+"""SUSAN's threads: outside a served class a call on a photograph runs its candidate search (numba's
+kernels) and ``cornerSubPix`` on two threads; a served class (many sessions in a pool of
+threads) keeps every SUSAN call on its calling thread. The corners, responses and sub-pixel
+positions are the same either way, bit for bit."""
+
+from __future__ import annotations
+
+import threading
+import types
+
+import cv2
+import numpy as np
+import pytest
+from skimage import data
+
+from ejsrl.vision import _susan, susan_corners
+
+
+def _photo(name: str) -> np.ndarray:
+    img = getattr(data, name)()
+    grey = img if img.ndim == 2 else cv2.cvtColor(img, cv2.COLOR_RGB2GRAY)
+    return cv2.resize(grey, (640, 480), interpolation=cv2.INTER_AREA)
+
+
+@pytest.fixture
+def spy(monkeypatch: pytest.MonkeyPatch) -> set[int]:
+    """The numba path, its kernels wrapped to record the threads that run the candidate search and
+    ``cornerSubPix``; the thread switch restored afterwards."""
+    monkeypatch.setattr(_susan, "BACKEND", "numba")
+    kernels = _susan._COMPILED.get(wait=True)
+    assert kernels is not None
+    seen: set[int] = set()
+
+    def candidates(*args):
+        seen.add(threading.get_ident())
+        return kernels.candidates(*args)
+
+    sub_pixel = _susan._sub_pixel
+
+    def recorded_sub_pixel(*args):
+        seen.add(threading.get_ident())
+        return sub_pixel(*args)
+
+    proxy = types.SimpleNamespace(**{k: getattr(kernels, k) for k in dir(kernels) if not k.startswith("__")})
+    proxy.candidates = candidates
+    monkeypatch.setattr(_susan._COMPILED, "module", proxy)
+    monkeypatch.setattr(_susan, "_sub_pixel", recorded_sub_pixel)
+    monkeypatch.setattr(_susan, "THREADS", None)
+    monkeypatch.delenv("EJSRL_SUSAN_THREADS", raising=False)
+    return seen
+
+
+def _bits(a: np.ndarray) -> bytes:
+    return np.ascontiguousarray(a).tobytes()
+
+
+@pytest.mark.parametrize("name", ["astronaut", "coins", "camera"])
+def test_two_threads_outside_a_served_class_give_the_same_corners(spy, name):
+    img = _photo(name)
+    assert _susan.susan_threads() == 2  # the default on this (>= 2 core) machine
+    p2, r2 = susan_corners(img, return_response=True)
+    assert len(spy) == 2, "the candidate search and cornerSubPix should run on two threads"
+    spy.clear()
+    _susan.set_threads(1)
+    p1, r1 = susan_corners(img, return_response=True)
+    assert spy == {threading.get_ident()}
+    assert len(p1) > 100 and _bits(p1) == _bits(p2) and _bits(r1) == _bits(r2)
+
+
+def test_the_environment_variable_sets_one_thread(spy, monkeypatch):
+    monkeypatch.setenv("EJSRL_SUSAN_THREADS", "1")
+    assert _susan.susan_threads() == 1
+    susan_corners(_photo("astronaut"))
+    assert spy == {threading.get_ident()}
+
+
+def test_a_served_class_keeps_susan_on_the_calling_thread(spy):
+    from testkit.browser_lab import make_app
+
+    app = make_app()
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=1.0)
+    try:
+        assert _susan.susan_threads() == 1
+        img, out = _photo("astronaut"), []
+        worker = threading.Thread(target=lambda: out.append(susan_corners(img)))  # as a session's thread would
+        worker.start()
+        worker.join()
+        assert spy == {worker.ident} and len(out[0]) > 100
+    finally:
+        app.stop()
+        server.stop()
