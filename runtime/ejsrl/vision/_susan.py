@@ -37,6 +37,7 @@ Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV.
 
 from __future__ import annotations
 
+import collections
 import functools
 import importlib.util
 import os
@@ -198,6 +199,31 @@ def _two(split: bool, fn, first: tuple, second: tuple):
         return fn(*first), fn(*second)
     fut = _pool().submit(fn, *second)
     return fn(*first), fut.result()
+
+
+def _shared(tasks: list) -> list:
+    """The results of the callables ``tasks``, run by this thread from the first and the pool's
+    thread from the last, each taking the next one left until none is (whichever is faster takes more)."""
+    results: list = [None] * len(tasks)
+    left = collections.deque(range(len(tasks)))
+
+    def run(take) -> None:
+        while True:
+            try:
+                i = take()
+            except IndexError:
+                return
+            results[i] = tasks[i]()
+
+    fut = _pool().submit(run, left.pop)
+    try:
+        run(left.popleft)
+    finally:
+        fut.result()
+    return results
+
+
+_BANDS = 4  # the candidate search's bands of rows on two threads
 
 
 def _lut(t: float) -> NDArray[np.uint8]:
@@ -735,13 +761,17 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     T, m, _ = _ramp_bound(float(t))
     gray = np.ascontiguousarray(gray)
     k3 = np.ones((3, 3), np.uint8)
-    # the candidate search on the rows' two halves in two threads (the other kernels' halves
-    # gained nothing measurable on a 2-core machine: each hand-over costs ~30 us and more under load)
+    # on two threads (``_shared``): the candidate search in bands of rows beside the side shares, the
+    # tests in halves beside the saddle search, the hidden failures' first search in halves (the
+    # same arithmetic on each pixel, the results joined in order: the same output)
     split = H * W >= _MIN_SPLIT and susan_threads() > 1
     args = (gray, cv2.erode(gray, k3), cv2.dilate(gray, k3), lut, _MDX, _MDY, T, m, L_max, g100, below)
-    if split:  # the rows' two halves (their pixels in raster order, one after the other)
-        halves = _two(True, kernels.candidates, (*args, 0, H // 2), (*args, H // 2, H))
-        idx, rv, v0, lo3, hi3, mom = (np.concatenate(pair) for pair in zip(*halves))
+    share = None
+    if split:  # bands of rows (their pixels in raster order, one after the other) and the side shares
+        ys = [H * i // _BANDS for i in range(_BANDS + 1)]
+        tasks = [functools.partial(kernels.candidates, *args, ys[i], ys[i + 1]) for i in range(_BANDS)]
+        *bands, share = _shared(tasks + [functools.partial(_share_image, gray, kernels)])
+        idx, rv, v0, lo3, hi3, mom = (np.concatenate(part) for part in zip(*bands))
     else:
         idx, rv, v0, lo3, hi3, mom = kernels.candidates(*args, 0, H)
     K = len(idx)
@@ -752,22 +782,34 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
     r_dark = np.zeros(K, np.float32)
     if mid.any():
-        r_dark[mid] = _coverage_response(gray, g100, idx[mid], kernels)
+        r_dark[mid] = _coverage_response(gray, g100, idx[mid], kernels, share)
     flat = mid & (np.abs(r_dark) < mid_slack)
     wt = np.flatnonzero(~flat)
     value = rv.copy()
     ok = np.zeros(K, bool)
-    ok[wt] = kernels.smooth_tests(gray, lut, mom, wt, idx, _CONTIG, 0.0, _FULL)[0]
+    ws = None
+    if split:  # the tests on two halves, and the saddles among the flat pixels (below) beside them
+        h = len(wt) // 2
+        tests = [functools.partial(kernels.smooth_tests, gray, lut, mom, part, idx, _CONTIG, 0.0, _FULL) for part in (wt[:h], wt[h:])]
+        first, second, ws = _shared(tests + [functools.partial(_saddles, kernels, gray, lut, mom, idx, rv, flat, H, W)])
+        ok[wt] = np.concatenate([first[0], second[0]])
+    else:
+        ok[wt] = kernels.smooth_tests(gray, lut, mom, wt, idx, _CONTIG, 0.0, _FULL)[0]
     sel = np.flatnonzero(mid & ~flat & ~ok)
     if len(sel):
         lo, hi, v, dark = lo3[sel], hi3[sel], v0[sel], r_dark[sel] > 0
-        ok_m, n_m = kernels.coverage_tests(gray, _share_table(), idx, sel, lo, hi, dark, _CONTIG)
+        if split:
+            h = len(sel) // 2
+            halves = _shared([functools.partial(kernels.coverage_tests, gray, _share_table(), idx, sel[a:b], lo[a:b], hi[a:b], dark[a:b], _CONTIG) for a, b in ((0, h), (h, len(sel)))])
+            ok_m, n_m = (np.concatenate(pair) for pair in zip(*halves))
+        else:
+            ok_m, n_m = kernels.coverage_tests(gray, _share_table(), idx, sel, lo, hi, dark, _CONTIG)
         got, r_mid = _mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor)
         value[sel[got]] = r_mid[got].astype(np.float32)
         ok[sel[got]] = True
     # saddles among the flat pixels (as in _corners_numpy)
-    ws = kernels.local_max3(idx, rv, np.flatnonzero(flat), H, W)
-    ws = ws[kernels.smooth_tests(gray, lut, mom, ws, idx, _CONTIG, _SADDLE_AREA, _FULL)[1]]
+    if ws is None:
+        ws = _saddles(kernels, gray, lut, mom, idx, rv, flat, H, W)
     resp = np.zeros((H, W), np.float32)
     rf = resp.ravel()
     rf[idx[ws]] = rv[ws]
@@ -777,7 +819,19 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     failing = idx[wt[~okt]]
     fv = value[wt[~okt]]
     rf[failing] = 0
-    return resp, kernels.suppress(resp, r, passing, failing, fv)
+    if not split:
+        return resp, kernels.suppress(resp, r, passing, failing, fv)
+    h = len(failing) // 2  # which failing pixels lie under a larger passing one: two halves
+    seed = np.concatenate(_shared([functools.partial(kernels.hidden_seeds, resp, r, failing[a:b], fv[a:b]) for a, b in ((0, h), (h, len(failing)))]))
+    kernels.put_back(resp, r, failing, fv, seed)
+    return resp, passing[kernels.window_maxima(resp, r, passing)]
+
+
+def _saddles(kernels: ModuleType, gray, lut, mom, idx, rv, flat, H: int, W: int) -> NDArray[np.int64]:
+    """The rows of the saddles (X-junctions) among the flat pixels: maxima of their own response
+    among the flat pixels' 3x3 and through the saddle test (as in ``_corners_numpy``)."""
+    ws = kernels.local_max3(idx, rv, np.flatnonzero(flat), H, W)
+    return ws[kernels.smooth_tests(gray, lut, mom, ws, idx, _CONTIG, _SADDLE_AREA, _FULL)[1]]
 
 
 _MDX = np.ascontiguousarray(SUSAN_MASK[:, 0])
@@ -885,7 +939,7 @@ def _mid_response(ok_m: NDArray, n_m: NDArray, dark: NDArray, lo: NDArray, hi: N
     return got, r_mid
 
 
-def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int64], kernels: ModuleType | None = None) -> NDArray[np.float32]:
+def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int64], kernels: ModuleType | None = None, share: NDArray[np.float32] | None = None) -> NDArray[np.float32]:
     """The corner response (x100) of the pixels at flat indices ``idx`` judged as the dark side
     of their 7x7 neighbourhood (negative: the bright side's, of that size), from the pixels' dark shares.
 
@@ -898,8 +952,21 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
 
     Whole-image OpenCV operations in float32 (``max7 - I`` saturates at 0: a share below 0 is
     clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit (with
-    ``kernels``, ``_susan_numba``'s loop computes them: the same float32 division).
+    ``kernels``, ``_susan_numba``'s loop computes them: the same float32 division). ``share``:
+    ``_share_image``'s, computed already.
     """
+    if share is None:
+        share = _share_image(gray, kernels)
+    if kernels is not None and _COMPILED.disc_sums_match:
+        n_dark = kernels.disc_sums(share, idx)
+    else:
+        n_dark = cv2.filter2D(share, cv2.CV_32F, _DISC, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
+    own = share.ravel().take(idx)
+    return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
+
+
+def _share_image(gray: NDArray[np.uint8], kernels: ModuleType | None) -> NDArray[np.float32]:
+    """(H, W) float32: each pixel's dark share ``(max7 - I) / (max7 - min7)`` (``_coverage_response``)."""
     k7 = np.ones((7, 7), np.uint8)
     levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
     lo, hi = cv2.erode(levels, k7), cv2.dilate(levels, k7)
@@ -908,12 +975,7 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     else:
         share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
         cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
-    if kernels is not None and _COMPILED.disc_sums_match:
-        n_dark = kernels.disc_sums(share, idx)
-    else:
-        n_dark = cv2.filter2D(share, cv2.CV_32F, _DISC, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
-    own = share.ravel().take(idx)
-    return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
+    return share
 
 
 _DISC = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)  # the mask as a filter
