@@ -223,7 +223,7 @@ def _shared(tasks: list) -> list:
     return results
 
 
-_BANDS = 4  # the candidate search's bands of rows on two threads
+_BANDS = 6  # the candidate search's bands of rows on two threads
 
 
 def _lut(t: float) -> NDArray[np.uint8]:

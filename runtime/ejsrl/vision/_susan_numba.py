@@ -303,6 +303,12 @@ def put_back(resp, r, failing, fv, seed):
         y0, y1, x0, x1 = max(y - r, 0), min(y + r + 1, H), max(x - r, 0), min(x + r + 1, W)
         for yy in range(y0, y1):
             row = yy * W
+            hit = False  # first without branches (most rows of a window have none to put back)
+            for xx in range(x0, x1):
+                u = f[np.uint64(row + xx)]
+                hit |= (u < 0) & (-u < v)
+            if not hit:
+                continue
             for xx in range(x0, x1):
                 q = np.uint64(row + xx)
                 u = f[q]
