@@ -6,10 +6,11 @@
    (100 corners, quality 0.01, 5 px apart) on scikit-image's real photographs resized to
    640x480 grey, and on a rendered scene of a few objects (flat, mostly empty: the easy case)
    (target: SUSAN at most 3x its time on the photographs), for both SUSAN paths side by side:
-   the NumPy/OpenCV one and numba's compiled kernels (the ``[fast]`` extra; same corners).
+   the NumPy/OpenCV one and numba's compiled kernels (the ``[fast]`` extra; same corners; on
+   two threads, as outside a served class: ``_susan.susan_threads()``).
    They are timed interleaved, call for call, and medians reported, so a shared machine's
    load hits all alike; the whole measurement is repeated in rounds and the rounds' spread of
-   each ratio printed; then CPU time with one thread each, and numba's compile time (first
+   each ratio printed; then CPU time with one thread each (SUSAN as a served class runs it), and numba's compile time (first
    call in a new process, with an empty and with a warm cache).
    (Testing only the local maxima, then the maxima of failing ones' windows, was measured
    1.1-1.8x slower than the shipped order: its code and bench are in commit 2fa4817.)
@@ -165,7 +166,7 @@ def bench_susan(n: int, rounds: int) -> None:
     paths = ["numpy", "numba"] if have_numba else ["numpy"]
     print("== SUSAN corners (defaults) vs cv2.goodFeaturesToTrack(100, 0.01, 5), 640x480 grey, interleaved medians ==")
     print(f"load average before: {os.getloadavg()[0]:.2f} (the machine may be shared: both detectors see the same load); "
-          f"OpenCV threads: {cv2.getNumThreads()} (GFTT uses them; SUSAN's numba kernels run on one thread)")
+          f"OpenCV threads: {cv2.getNumThreads()} (GFTT uses them); SUSAN's threads: {_susan.susan_threads()} (numba's path outside a served class)")
     if not have_numba:
         print("numba is not installed: only the NumPy path (pip install 'ejsgen[fast]' for the compiled one)")
     print(f"{rounds} rounds, each timing every image {n} times, each SUSAN path and GFTT call for call; per image the median of the rounds' medians, and the rounds' spread of the ratio")
@@ -195,6 +196,7 @@ def bench_susan(n: int, rounds: int) -> None:
     # unevenly (SUSAN's many short calls more than one long one), CPU time much less
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)
+    _susan.set_threads(1)  # as a served class runs it
     cpu: dict[str, list[float]] = {p: [] for p in paths}
     for name, img in images.items():
         if name != "rendered":
@@ -203,7 +205,8 @@ def bench_susan(n: int, rounds: int) -> None:
             for i, p in enumerate(paths):
                 cpu[p].append(t[i] / t[-1])
     cv2.setNumThreads(threads)
-    print("in CPU time (one thread each): " + "; ".join(f"{p} median {statistics.median(cpu[p]):.1f}x, worst {max(cpu[p]):.1f}x" for p in paths))
+    _susan.set_threads(None)
+    print("in CPU time (one thread each, as in a served class): " + "; ".join(f"{p} median {statistics.median(cpu[p]):.1f}x, worst {max(cpu[p]):.1f}x" for p in paths))
     # a detector that leaves threads spinning (OpenBLAS after a large product) also slows whatever runs
     # next, GFTT in the interleaved timing above included: that would flatter the ratio
     img = images["camera"]

@@ -127,6 +127,28 @@ def test_the_side_shares_are_opencvs_for_every_grey_level(monkeypatch):
         _same_bits(K.share_image(grey, lo, hi, np.empty(grey.shape, np.float32), 0, 256), ref)
 
 
+def test_the_side_response_is_the_numpy_paths(monkeypatch):
+    """The kernel's ``_mid_response`` (the in-between pixels judged as their side) against the NumPy
+    one, bit for bit, on random grey levels, USAN areas and floors (0 and above)."""
+    monkeypatch.setattr(_susan, "BACKEND", "numba")
+    assert _susan.susan_backend() == "numba"
+    from ejsrl.vision import _susan_numba as K
+
+    rng = np.random.default_rng(5)
+    n = 20000
+    lo = rng.integers(0, 256, n).astype(np.uint8)
+    hi = np.maximum(lo, rng.integers(0, 256, n)).astype(np.uint8)
+    v = rng.integers(0, 256, n).astype(np.uint8)
+    dark, ok = rng.random(n) < 0.5, rng.random(n) < 0.8
+    n_m = rng.integers(0, 3700 * 2**5, n) / 2.0**5
+    for floor in (0.0, 150.0, 300.0):
+        got_k, r_k = K.mid_response(ok, n_m, dark, lo, hi, v, 1850.0, floor, _susan._CHORD * _susan._SCALE)
+        got_n, r_n = _susan._mid_response(ok, n_m, dark, lo, hi, v, 1850.0, floor)
+        assert got_n.any() and not got_n.all()
+        _same_bits(got_k, got_n)
+        _same_bits(r_k, r_n)
+
+
 def _child(code: str, env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess:
     import os
 

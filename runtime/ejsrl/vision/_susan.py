@@ -25,8 +25,10 @@ lying in opposite quadrants around the nucleus.
 
 Speed: with numba installed (``pip install 'ejsgen[fast]'``), ``susan_corners`` runs its loops
 compiled (``_susan_numba``: the same corners, response and sub-pixel positions, bit for bit,
-about twice as fast, outside the GIL: on scikit-image's photographs at 640x480 2.5x the time
-of ``cv2.goodFeaturesToTrack`` at the median and 4.3x at worst, against 5.3x and 8.4x here);
+about twice as fast on one thread, outside the GIL). Outside a served class a call runs them on
+two threads (``set_threads``; a served class sets one, its sessions already sharing the cores):
+on scikit-image's photographs at 640x480 1.9x the time of ``cv2.goodFeaturesToTrack`` (on
+OpenCV's 2 threads) at the median and 2.7-3.0x at worst (astronaut), against 5.1x and 8.3x here;
 without it, this NumPy/OpenCV code. The kernels are compiled (or loaded from numba's cache)
 in a thread at the first call, this code running until they are ready (``_Compiled``).
 ``EJSRL_SUSAN=numpy`` (or ``_susan.BACKEND = "numpy"``) forces the NumPy path, ``numba`` the
@@ -755,8 +757,8 @@ def _corners_numpy(gray, t, g100: float, floor: float, below, mid_slack: float, 
 
 def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: float, below, mid_slack: float, lut, L_max: int, r: int):
     """``_corners_numpy`` with numba's kernels (``_susan_numba``): the same steps, arithmetic and
-    result (the side-coverage estimate shares ``_coverage_response`` and ``_mid_response``
-    with the NumPy path; ``cornerSubPix`` follows in ``susan_corners`` for both)."""
+    result (the side-coverage estimate shares ``_coverage_response`` with the NumPy path, and
+    ``_mid_response`` is a kernel's, the same float64 operations; ``cornerSubPix`` follows in ``susan_corners`` for both)."""
     H, W = gray.shape
     T, m, _ = _ramp_bound(float(t))
     gray = np.ascontiguousarray(gray)
@@ -804,7 +806,7 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
             ok_m, n_m = (np.concatenate(pair) for pair in zip(*halves))
         else:
             ok_m, n_m = kernels.coverage_tests(gray, _share_table(), idx, sel, lo, hi, dark, _CONTIG)
-        got, r_mid = _mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor)
+        got, r_mid = kernels.mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor, _CHORD * _SCALE)
         value[sel[got]] = r_mid[got].astype(np.float32)
         ok[sel[got]] = True
     # saddles among the flat pixels (as in _corners_numpy)

@@ -12,8 +12,8 @@ side shares' whole-image estimate, the window maxima (``dilate``) and ``cornerSu
 The kernels release the GIL (``nogil``: a classroom server's sessions run them side by side
 in threads) and each runs on one thread (``parallel`` is not used: numba's thread pools do not
 take calls from several threads at once, as a server's sessions make them). Outside a served
-class, ``_susan`` runs the biggest of them on two halves of their pixels in two threads
-(``_susan.set_threads``). They are cached on disk
+class, ``_susan`` runs them on parts of their pixels (bands of rows, halves of a list) in two
+threads, and independent ones side by side (``_susan._shared``, ``_susan.set_threads``). They are cached on disk
 (``cache``): numba writes next to this file when it can (an editable install), else to its
 user-wide cache (``~/.cache/numba``, or ``$NUMBA_CACHE_DIR``: a wheel in a read-only
 site-packages), so only the first process on a machine compiles them.
@@ -259,6 +259,23 @@ def coverage_tests(gray, share, idx, rows, lo, hi, dark, contig):
             total += tab[min(max(np.int32(f[np.uint64(p + st)]) - l8, np.int32(0)), span)] / _FIX
         ok[i] = total > contig
     return ok, nn
+
+
+@_jit
+def mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor, chord):
+    """``_susan._mid_response`` (which in-between pixels are corners as their side, and their
+    response) in the same float64 operations, in the same order: the same values."""
+    N = len(ok_m)
+    got = np.zeros(N, np.bool_)
+    r_mid = np.zeros(N, np.float64)
+    for i in range(N):
+        h = np.float64(hi[i])
+        a_dark = (h - np.float64(v[i])) / max(h - np.float64(lo[i]), 1.0)
+        a_side = a_dark if dark[i] else 1.0 - a_dark
+        rr = (g100 + chord * (a_side - 0.5)) - n_m[i] if ok_m[i] else 0.0
+        r_mid[i] = rr
+        got[i] = rr >= floor and rr > 0
+    return got, r_mid
 
 
 @_jit
