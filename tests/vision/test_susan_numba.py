@@ -85,12 +85,11 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
-    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "hidden_seeds", "put_back", "window_maxima", "share_image", "local_max3", "disc_sums"):
+    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "hidden_seeds", "put_back", "window_maxima", "mid_response", "share_image", "local_max3", "disc_sums"):
         assert getattr(K, name).targetoptions.get("nogil") is True, name
     big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
     t = 25.0
-    k3 = np.ones((3, 3), np.uint8)
-    args = (big, cv2.erode(big, k3), cv2.dilate(big, k3), _susan._lut(t), _susan._MDX, _susan._MDY, *_susan._ramp_bound(t)[:2], 200, 1850.0, np.float32(150.0))
+    args = (big, _susan._lut(t), _susan._MDX, _susan._MDY, *_susan._ramp_bound(t)[:2], 200, 1850.0, np.float32(150.0))
     started, done = threading.Event(), threading.Event()
 
     def work():

@@ -762,12 +762,12 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     H, W = gray.shape
     T, m, _ = _ramp_bound(float(t))
     gray = np.ascontiguousarray(gray)
-    k3 = np.ones((3, 3), np.uint8)
-    # on two threads (``_shared``): the candidate search in bands of rows beside the side shares, the
-    # tests in halves beside the saddle search, the hidden failures' first search in halves (the
+    # on two threads (``_shared``): the candidate search in bands of rows beside the side shares,
+    # the side estimate beside the tests of the other pixels (halves), the remaining tests beside
+    # the saddle search, the coverage tests and the hidden failures' first search in halves (the
     # same arithmetic on each pixel, the results joined in order: the same output)
     split = H * W >= _MIN_SPLIT and susan_threads() > 1
-    args = (gray, cv2.erode(gray, k3), cv2.dilate(gray, k3), lut, _MDX, _MDY, T, m, L_max, g100, below)
+    args = (gray, lut, _MDX, _MDY, T, m, L_max, g100, below)
     share = None
     if split:  # bands of rows (their pixels in raster order, one after the other) and the side shares
         ys = [H * i // _BANDS for i in range(_BANDS + 1)]
@@ -782,20 +782,27 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     v16 = v0.astype(np.int16)
     half_t = 0.5 * t
     mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
-    r_dark = np.zeros(K, np.float32)
-    if mid.any():
-        r_dark[mid] = _coverage_response(gray, g100, idx[mid], kernels, share)
-    flat = mid & (np.abs(r_dark) < mid_slack)
-    wt = np.flatnonzero(~flat)
-    value = rv.copy()
     ok = np.zeros(K, bool)
     ws = None
-    if split:  # the tests on two halves, and the saddles among the flat pixels (below) beside them
-        h = len(wt) // 2
-        tests = [functools.partial(kernels.smooth_tests, gray, lut, mom, part, idx, _CONTIG, 0.0, _FULL) for part in (wt[:h], wt[h:])]
-        first, second, ws = _shared(tests + [functools.partial(_saddles, kernels, gray, lut, mom, idx, rv, flat, H, W)])
-        ok[wt] = np.concatenate([first[0], second[0]])
+    if split:
+        # the in-between pixels' side estimate beside the tests of the others (two halves), then
+        # the tests of the in-between pixels that may be corners beside the saddle search
+        tested = np.flatnonzero(~mid)
+        h = len(tested) // 2
+        tests = [functools.partial(kernels.smooth_tests, gray, lut, mom, part, idx, _CONTIG, 0.0, _FULL) for part in (tested[:h], tested[h:])]
+        r_dark, first, second = _shared([functools.partial(_side_estimate, kernels, gray, g100, idx, mid, share)] + tests)
+        ok[tested] = np.concatenate([first[0], second[0]])
+        flat = mid & (np.abs(r_dark) < mid_slack)
+        more = np.flatnonzero(mid & ~flat)
+        third, ws = _shared([functools.partial(kernels.smooth_tests, gray, lut, mom, more, idx, _CONTIG, 0.0, _FULL),
+                             functools.partial(_saddles, kernels, gray, lut, mom, idx, rv, flat, H, W)])
+        ok[more] = third[0]
     else:
+        r_dark = _side_estimate(kernels, gray, g100, idx, mid, share)
+        flat = mid & (np.abs(r_dark) < mid_slack)
+    wt = np.flatnonzero(~flat)
+    value = rv.copy()
+    if not split:
         ok[wt] = kernels.smooth_tests(gray, lut, mom, wt, idx, _CONTIG, 0.0, _FULL)[0]
     sel = np.flatnonzero(mid & ~flat & ~ok)
     if len(sel):
@@ -827,6 +834,14 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     seed = np.concatenate(_shared([functools.partial(kernels.hidden_seeds, resp, r, failing[a:b], fv[a:b]) for a, b in ((0, h), (h, len(failing)))]))
     kernels.put_back(resp, r, failing, fv, seed)
     return resp, passing[kernels.window_maxima(resp, r, passing)]
+
+
+def _side_estimate(kernels: ModuleType, gray, g100: float, idx, mid, share) -> NDArray[np.float32]:
+    """(K,) float32: ``_coverage_response`` at the in-between pixels (``mid``), 0 elsewhere."""
+    r_dark = np.zeros(len(idx), np.float32)
+    if mid.any():
+        r_dark[mid] = _coverage_response(gray, g100, idx[mid], kernels, share)
+    return r_dark
 
 
 def _saddles(kernels: ModuleType, gray, lut, mom, idx, rv, flat, H: int, W: int) -> NDArray[np.int64]:

@@ -39,7 +39,7 @@ _HALF = (1, 2, 3, 3, 3, 2, 1)  # the mask's half-widths on its rows dy = -3 .. 3
 
 
 @_jit
-def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
+def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
     """The pixels at least 4 from the border with a response ``g - n > below`` (x100, float32),
     on the rows ``y0 .. y1 - 1`` (two calls on two row ranges: the same pixels, split).
 
@@ -49,7 +49,8 @@ def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below, y0
     offset at a time over the row, in uint8 (LLVM makes it byte-wide SIMD).
 
     Returns flat indices (raster order), the response rv (float32), the grey level, the 3x3
-    minimum and maximum (from ``lo3img``/``hi3img``), and the USAN's integer moments (K, 3):
+    minimum and maximum (what OpenCV's 3x3 ``erode``/``dilate`` give: the pixels are inside the
+    image), and the USAN's integer moments (K, 3):
     n and its x and y moments.
     """
     H, W = gray.shape
@@ -112,12 +113,17 @@ def candidates(gray, lo3img, hi3img, lut, mdx, mdy, T, m, L_max, g100, below, y0
     v0s = np.empty(K, np.uint8)
     lo3 = np.empty(K, np.uint8)
     hi3 = np.empty(K, np.uint8)
-    lf, hf = lo3img.ravel(), hi3img.ravel()
     for i in range(K):
-        pc = np.uint64(idx[i])
-        v0s[i] = f[pc]
-        lo3[i] = lf[pc]
-        hi3[i] = hf[pc]
+        pc = idx[i]
+        v0s[i] = f[np.uint64(pc)]
+        lo, hi = f[np.uint64(pc)], f[np.uint64(pc)]
+        for dy in range(-1, 2):
+            for dx in range(-1, 2):
+                q = f[np.uint64(pc + dy * W + dx)]
+                lo = min(lo, q)
+                hi = max(hi, q)
+        lo3[i] = lo
+        hi3[i] = hi
     return idx[:K], rv[:K], v0s, lo3, hi3, mom[:K]
 
 
