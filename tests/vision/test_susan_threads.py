@@ -74,6 +74,15 @@ def test_the_environment_variable_sets_one_thread(spy, monkeypatch):
     assert spy == {threading.get_ident()}
 
 
+def test_a_bad_thread_count_in_the_environment_is_a_clear_error(monkeypatch):
+    monkeypatch.setattr(_susan, "THREADS", None)
+    monkeypatch.setenv("EJSRL_SUSAN_THREADS", "two")
+    with pytest.raises(ValueError, match=r"EJSRL_SUSAN_THREADS='two': write the number of threads SUSAN may use, 1 or 2"):
+        _susan.susan_threads()
+    monkeypatch.setenv("EJSRL_SUSAN_THREADS", "8")
+    assert _susan.susan_threads() == 2  # (the kernels split their work in two at most)
+
+
 def test_a_served_class_keeps_susan_on_the_calling_thread(spy):
     from testkit.browser_lab import make_app
 

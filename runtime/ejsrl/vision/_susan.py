@@ -175,9 +175,11 @@ def susan_threads() -> int:
     """The threads a ``susan_corners`` call uses now (1 or 2; only numba's path uses a second)."""
     if THREADS is not None:
         return THREADS
-    env = os.environ.get("EJSRL_SUSAN_THREADS")
+    env = os.environ.get("EJSRL_SUSAN_THREADS", "").strip()
     if env:
-        return max(1, int(env))
+        if not env.isdigit():
+            raise ValueError(f"EJSRL_SUSAN_THREADS={env!r}: write the number of threads SUSAN may use, 1 or 2")
+        return min(2, max(1, int(env)))
     return 2 if (os.cpu_count() or 1) >= 2 else 1
 
 
