@@ -93,11 +93,15 @@ def test_susan_compiled_with_numba_keeps_its_lead(camera, monkeypatch):
     assert ratio <= 4.0, f"SUSAN (numba) took {ratio:.1f}x goodFeaturesToTrack's CPU time ({ms:.1f} ms vs {mg:.2f} ms)"
 
 
-def test_susan_on_two_threads_takes_less_time_than_on_one(monkeypatch):
-    """Outside a served class a call runs on two threads: measured 0.72-0.78 of the one-thread
-    wall-clock time on astronaut (the slowest photograph against GFTT; CPU time 1.10x), best of 9 interleaved runs
-    each (a loaded machine stretches some runs, rarely all nine); 0.92 fails if the second thread
-    stops helping. And the two threads waste no CPU time: at most 1.35x one thread's (measured ~1.1)."""
+def test_susan_on_two_threads_hands_a_real_share_of_the_work_to_the_second(monkeypatch):
+    """Outside a served class a call runs on two threads. The bench measured them at 0.72-0.78
+    of the one-thread wall-clock time on astronaut (the slowest photograph against GFTT),
+    but wall time depends on a free second core, which a loaded machine (CI's two test
+    workers) does not have. The work shared does not depend on that. With two threads the
+    calling thread's own CPU time is at most 0.85 of the whole call's on one thread (the
+    other thread did the rest: it stops if the second thread stops helping), and the two
+    threads together waste no CPU time: at most 1.35x one thread's (measured ~1.1).
+    Best of 9 interleaved runs each."""
     from ejsrl.vision import _susan
 
     monkeypatch.setattr(_susan, "BACKEND", "numba")
@@ -105,7 +109,7 @@ def test_susan_on_two_threads_takes_less_time_than_on_one(monkeypatch):
     monkeypatch.delenv("EJSRL_SUSAN_THREADS", raising=False)
     assert _susan.susan_backend() == "numba" and _susan.susan_threads() == 2
     img = cv2.resize(cv2.cvtColor(data.astronaut(), cv2.COLOR_RGB2GRAY), (640, 480), interpolation=cv2.INTER_AREA)
-    wall: dict[int, list[float]] = {1: [], 2: []}
+    mine: dict[int, list[float]] = {1: [], 2: []}
     cpu: dict[int, list[float]] = {1: [], 2: []}
     for n in (1, 2):
         _susan.set_threads(n)
@@ -113,12 +117,12 @@ def test_susan_on_two_threads_takes_less_time_than_on_one(monkeypatch):
     for _ in range(9):
         for n in (1, 2):
             _susan.set_threads(n)
-            w0, c0 = time.perf_counter(), time.process_time()
+            t0, c0 = time.thread_time(), time.process_time()
             susan_corners(img)
-            wall[n].append(time.perf_counter() - w0)
+            mine[n].append(time.thread_time() - t0)
             cpu[n].append(time.process_time() - c0)
-    gain = min(wall[2]) / min(wall[1])
-    assert gain <= 0.92, f"two threads took {gain:.2f} of one thread's time ({min(wall[2]) * 1e3:.2f} vs {min(wall[1]) * 1e3:.2f} ms)"
+    share = min(mine[2]) / min(mine[1])
+    assert share <= 0.85, f"the calling thread still did {share:.2f} of the work ({min(mine[2]) * 1e3:.2f} vs {min(mine[1]) * 1e3:.2f} ms)"
     waste = min(cpu[2]) / min(cpu[1])
     assert waste <= 1.35, f"two threads took {waste:.2f}x one thread's CPU time"
 
