@@ -160,8 +160,9 @@ class Front:
         self.host = host
         self.port = port
         self.workers = [Worker(i) for i in range(count)]
-        self.max_sessions_asked = max_sessions
-        self.places = split_places(max_sessions, count) if max_sessions is not None else [None] * count
+        self.asked = max_sessions
+        #: each worker's share of the asked places (None: it works out its own)
+        self.shares = split_places(max_sessions, count) if max_sessions is not None else [None] * count
         self.cpus = min(1.0, (os.cpu_count() or 1) / count)  # a process runs Python on one core at most
         self._turn = itertools.count()
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -179,8 +180,7 @@ class Front:
 
     def _spawn(self, worker: Worker) -> int:
         read_fd, write_fd = os.pipe()
-        role = WorkerRole(worker.index, self.host, self.cpus, self.places[worker.index], self.max_sessions_asked,
-                          write_fd, os.getpid())
+        role = WorkerRole(worker.index, self.host, self.cpus, self.shares[worker.index], self.asked, write_fd, os.getpid())
         env = dict(os.environ, **{WORKER_ENV: role.to_env()})
         try:
             # its own process group: Ctrl+C reaches the front, which stops the workers
@@ -396,17 +396,17 @@ async def _pipe(reader: asyncio.StreamReader, writer: asyncio.StreamWriter, *, h
 
 
 def serve_front(
-    command: Sequence[str], host: str, port: int, *, count: int, max_sessions: int | None,
-    stopped: threading.Event, announce: Any,
+    command: Sequence[str], host: str, port: int, *, count: int, max_sessions: int | None, announce: Any
 ) -> int:
-    """Serve a class from ``count`` processes until ``stopped`` is set or a KeyboardInterrupt
-    (a stop signal) arrives; ``announce(port, places)`` prints the start-up lines."""
+    """Serve a class from ``count`` processes until a KeyboardInterrupt (a stop signal)
+    arrives; ``announce(port, places)`` prints the start-up lines."""
     front = Front(command, host, port, count=count, max_sessions=max_sessions)
     try:
         front.start()
         bound = front.listen()
         announce(bound, front.max_sessions)
-        while not stopped.wait(0.5):
+        while True:
+            time.sleep(0.5)
             front.supervise()
     except RuntimeError as exc:
         print(f"error: {exc}", file=sys.stderr, flush=True)
@@ -416,4 +416,3 @@ def serve_front(
         return 1
     finally:
         front.stop()
-    return 0

@@ -15,7 +15,6 @@ import math
 import os
 import signal
 import sys
-import threading
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -331,7 +330,7 @@ def _main(
         command = worker_command() if argv is None else None
         if command is not None:
             return serve_front(
-                command, args.host, args.port, count=count, max_sessions=args.max_sessions, stopped=threading.Event(),
+                command, args.host, args.port, count=count, max_sessions=args.max_sessions,
                 announce=lambda port, places: announce(meta.title, args.host, port, places=places, processes=count,
                                                        asked_port=args.port),
             )
