@@ -759,18 +759,24 @@ def _corners_numpy(gray, t, g100: float, floor: float, below, mid_slack: float, 
 
 def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: float, below, mid_slack: float, lut, L_max: int, r: int):
     """``_corners_numpy`` with numba's kernels (``_susan_numba``): the same steps, arithmetic and
-    result (the side-coverage estimate shares ``_coverage_response`` with the NumPy path, and
-    ``_mid_response`` is a kernel's, the same float64 operations; ``cornerSubPix`` follows in ``susan_corners`` for both)."""
+    result (``cornerSubPix`` follows in ``susan_corners`` for both).
+
+    1. ``candidates``: the pixels with a response, their USAN's moments and 3x3 range, beside
+       ``_share_image`` (the side shares of the in-between pixels' estimate);
+    2. ``judge``: each of them judged on its own (the side estimate, the tests, the side's
+       coverage test), writing its value, pass and flatness in place;
+    3. ``saddles`` among the flat ones, ``assemble`` the response map;
+    4. the hidden failures put back (``hidden_seeds``, ``put_back``) and the window maxima.
+
+    On two threads (``_shared``) steps 1, 2 and the seeds of 4 run on parts of their pixels
+    (bands of rows, ranges of candidates, halves) side by side: the same arithmetic on each
+    pixel, the results joined in order, so the same output.
+    """
     H, W = gray.shape
     T, m, _ = _ramp_bound(float(t))
     gray = np.ascontiguousarray(gray)
-    # on two threads (``_shared``): the candidate search in bands of rows beside the side shares,
-    # the side estimate beside the tests of the other pixels (halves), the remaining tests beside
-    # the saddle search, the coverage tests and the hidden failures' first search in halves (the
-    # same arithmetic on each pixel, the results joined in order: the same output)
     split = H * W >= _MIN_SPLIT and susan_threads() > 1
     args = (gray, lut, _MDX, _MDY, T, m, L_max, g100, below)
-    share = None
     if split:  # bands of rows (their pixels in raster order, one after the other) and the side shares
         ys = [H * i // _BANDS for i in range(_BANDS + 1)]
         tasks = [functools.partial(kernels.candidates, *args, ys[i], ys[i + 1]) for i in range(_BANDS)]
@@ -778,58 +784,23 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
         idx, rv, v0, lo3, hi3, mom = (np.concatenate(part) for part in zip(*bands))
     else:
         idx, rv, v0, lo3, hi3, mom = kernels.candidates(*args, 0, H)
+        share = _share_image(gray, kernels)
     K = len(idx)
     if K == 0:
         return None
-    v16 = v0.astype(np.int16)
-    half_t = 0.5 * t
-    mid = (v16 - lo3 > half_t) & (hi3 - v16 > half_t)
-    ok = np.zeros(K, bool)
-    ws = None
+    given = not _COMPILED.disc_sums_match  # a numba whose float32 sums are not filter2D's: the estimate from OpenCV
+    r_dark = _side_estimate(gray, g100, idx, v0, lo3, hi3, t, share) if given else np.zeros(0, np.float32)
+    consts = np.array([0.5 * t, g100, floor, _CHORD * _SCALE, _CONTIG, _FULL, g100, mid_slack, _SCALE, given], np.float64)
+    value, ok, flat = np.empty(K, np.float32), np.empty(K, bool), np.empty(K, bool)
+    judged = functools.partial(kernels.judge, gray, share, lut, _share_table(), idx, rv, v0, lo3, hi3, mom, r_dark)
     if split:
-        # the in-between pixels' side estimate beside the tests of the others (two halves), then
-        # the tests of the in-between pixels that may be corners beside the saddle search
-        tested = np.flatnonzero(~mid)
-        h = len(tested) // 2
-        tests = [functools.partial(kernels.smooth_tests, gray, lut, mom, part, idx, _CONTIG, 0.0, _FULL) for part in (tested[:h], tested[h:])]
-        r_dark, first, second = _shared([functools.partial(_side_estimate, kernels, gray, g100, idx, mid, share)] + tests)
-        ok[tested] = np.concatenate([first[0], second[0]])
-        flat = mid & (np.abs(r_dark) < mid_slack)
-        more = np.flatnonzero(mid & ~flat)
-        third, ws = _shared([functools.partial(kernels.smooth_tests, gray, lut, mom, more, idx, _CONTIG, 0.0, _FULL),
-                             functools.partial(_saddles, kernels, gray, lut, mom, idx, rv, flat, H, W)])
-        ok[more] = third[0]
+        cuts = [K * i // _BANDS for i in range(_BANDS + 1)]
+        _shared([functools.partial(judged, cuts[i], cuts[i + 1], consts, value, ok, flat) for i in range(_BANDS)])
     else:
-        r_dark = _side_estimate(kernels, gray, g100, idx, mid, share)
-        flat = mid & (np.abs(r_dark) < mid_slack)
-    wt = np.flatnonzero(~flat)
-    value = rv.copy()
-    if not split:
-        ok[wt] = kernels.smooth_tests(gray, lut, mom, wt, idx, _CONTIG, 0.0, _FULL)[0]
-    sel = np.flatnonzero(mid & ~flat & ~ok)
-    if len(sel):
-        lo, hi, v, dark = lo3[sel], hi3[sel], v0[sel], r_dark[sel] > 0
-        if split:
-            h = len(sel) // 2
-            halves = _shared([functools.partial(kernels.coverage_tests, gray, _share_table(), idx, sel[a:b], lo[a:b], hi[a:b], dark[a:b], _CONTIG) for a, b in ((0, h), (h, len(sel)))])
-            ok_m, n_m = (np.concatenate(pair) for pair in zip(*halves))
-        else:
-            ok_m, n_m = kernels.coverage_tests(gray, _share_table(), idx, sel, lo, hi, dark, _CONTIG)
-        got, r_mid = kernels.mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor, _CHORD * _SCALE)
-        value[sel[got]] = r_mid[got].astype(np.float32)
-        ok[sel[got]] = True
-    # saddles among the flat pixels (as in _corners_numpy)
-    if ws is None:
-        ws = _saddles(kernels, gray, lut, mom, idx, rv, flat, H, W)
+        judged(0, K, consts, value, ok, flat)
     resp = np.zeros((H, W), np.float32)
-    rf = resp.ravel()
-    rf[idx[ws]] = rv[ws]
-    rf[idx[wt]] = value[wt]
-    okt = ok[wt]
-    passing = np.concatenate([idx[ws], idx[wt[okt]]])
-    failing = idx[wt[~okt]]
-    fv = value[wt[~okt]]
-    rf[failing] = 0
+    ws = kernels.saddles(gray, lut, idx, rv, mom, flat, resp, _CONTIG, _SADDLE_AREA, _FULL)
+    passing, failing, fv = kernels.assemble(resp, idx, value, ok, flat, ws)
     if not split:
         return resp, kernels.suppress(resp, r, passing, failing, fv)
     h = len(failing) // 2  # which failing pixels lie under a larger passing one: two halves
@@ -838,19 +809,14 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     return resp, passing[kernels.window_maxima(resp, r, passing)]
 
 
-def _side_estimate(kernels: ModuleType, gray, g100: float, idx, mid, share) -> NDArray[np.float32]:
-    """(K,) float32: ``_coverage_response`` at the in-between pixels (``mid``), 0 elsewhere."""
+def _side_estimate(gray, g100: float, idx, v0, lo3, hi3, t: float, share) -> NDArray[np.float32]:
+    """(K,) float32: ``_coverage_response`` (OpenCV's ``filter2D``) at the in-between pixels, 0 elsewhere."""
+    v16 = v0.astype(np.int16)
+    mid = (v16 - lo3 > 0.5 * t) & (hi3 - v16 > 0.5 * t)
     r_dark = np.zeros(len(idx), np.float32)
     if mid.any():
-        r_dark[mid] = _coverage_response(gray, g100, idx[mid], kernels, share)
+        r_dark[mid] = _coverage_response(gray, g100, idx[mid], share)
     return r_dark
-
-
-def _saddles(kernels: ModuleType, gray, lut, mom, idx, rv, flat, H: int, W: int) -> NDArray[np.int64]:
-    """The rows of the saddles (X-junctions) among the flat pixels: maxima of their own response
-    among the flat pixels' 3x3 and through the saddle test (as in ``_corners_numpy``)."""
-    ws = kernels.local_max3(idx, rv, np.flatnonzero(flat), H, W)
-    return ws[kernels.smooth_tests(gray, lut, mom, ws, idx, _CONTIG, _SADDLE_AREA, _FULL)[1]]
 
 
 _MDX = np.ascontiguousarray(SUSAN_MASK[:, 0])
@@ -958,7 +924,7 @@ def _mid_response(ok_m: NDArray, n_m: NDArray, dark: NDArray, lo: NDArray, hi: N
     return got, r_mid
 
 
-def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int64], kernels: ModuleType | None = None, share: NDArray[np.float32] | None = None) -> NDArray[np.float32]:
+def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int64], share: NDArray[np.float32] | None = None) -> NDArray[np.float32]:
     """The corner response (x100) of the pixels at flat indices ``idx`` judged as the dark side
     of their 7x7 neighbourhood (negative: the bright side's, of that size), from the pixels' dark shares.
 
@@ -970,16 +936,13 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     falls short (the other side then has more than its share).
 
     Whole-image OpenCV operations in float32 (``max7 - I`` saturates at 0: a share below 0 is
-    clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit (with
-    ``kernels``, ``_susan_numba``'s loop computes them: the same float32 division). ``share``:
+    clipped to 0 anyway); the same shares as NumPy's float32 arithmetic, bit for bit
+    (``_susan_numba.judge`` computes the same float32 sums and operations). ``share``:
     ``_share_image``'s, computed already.
     """
     if share is None:
-        share = _share_image(gray, kernels)
-    if kernels is not None and _COMPILED.disc_sums_match:
-        n_dark = kernels.disc_sums(share, idx)
-    else:
-        n_dark = cv2.filter2D(share, cv2.CV_32F, _DISC, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
+        share = _share_image(gray, None)
+    n_dark = cv2.filter2D(share, cv2.CV_32F, _DISC, borderType=cv2.BORDER_REPLICATE).ravel().take(idx)
     own = share.ravel().take(idx)
     return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
 

@@ -25,13 +25,15 @@ import numba as nb
 import numpy as np
 
 
-def _jit(fn):
-    """``numba.njit(nogil=True, cache=True)``; without a writable cache (a read-only install and
-    no user cache directory: numba refuses ``cache=True``) compiled again in each process."""
+def _jit(fn=None, **options):
+    """``numba.njit(nogil=True, cache=True, **options)``; without a writable cache (a read-only
+    install and no user cache directory: numba refuses ``cache=True``) compiled again in each process."""
+    if fn is None:
+        return lambda fn: _jit(fn, **options)
     try:
-        return nb.njit(nogil=True, cache=True)(fn)
+        return nb.njit(nogil=True, cache=True, **options)(fn)
     except RuntimeError:  # "cannot cache function ...: no locator available"
-        return nb.njit(nogil=True)(fn)
+        return nb.njit(nogil=True, **options)(fn)
 
 
 _FIX = 33554432.0  # 2^25: the coverage shares in fixed point (``_susan._share_table``)
@@ -284,6 +286,158 @@ def mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor, chord):
     return got, r_mid
 
 
+@_jit(inline="always")
+def _disc_sum(sf, W, p):
+    """The float32 sum over the mask of the flat image ``sf`` around pixel ``p``, adding the mask's
+    pixels in raster order from 0 (OpenCV's ``filter2D`` with the disc: ``_susan._disc_sums_match``)."""
+    s = np.float32(0.0)
+    for dy in range(-3, 4):
+        w = _HALF[dy + 3]
+        base = p + dy * W
+        for dx in range(-w, w + 1):
+            s = s + sf[np.uint64(base + dx)]
+    return s
+
+
+@_jit
+def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b, c, value, ok, flat):
+    """Judge the candidates ``a .. b - 1`` (``candidates``' rows) each on its own, as
+    ``_susan._judge`` does: ``value`` (their response after the tests, float32 x100), ``ok``
+    (passed) and ``flat`` (an in-between grey that is no corner by the side it belongs to) are
+    written in place, so calls on parts of the rows may run at once.
+
+    An in-between pixel (its grey more than t/2 from its 3x3 minimum and maximum) gets the side
+    estimate ``(g + chord (share - 1/2)) - sum of the shares over the mask`` in float32 from
+    ``share_img`` (``_susan._coverage_response``; or ``r_dark[i]``, given, when ``c[9]`` is set):
+    flat when it falls short of ``min_response`` less the slack; the others go through the
+    false-positive tests, and an in-between one that fails them through the side's coverage
+    test (``_coverage_one``, ``_mid_one``).
+
+    ``c``: float64 constants ``[t/2, g100, floor, chord x100, contig, full, g100 (as float32),
+    slack (as float32), x100 (as float32), r_dark given]``.
+    """
+    W = gray.shape[1]
+    f = gray.ravel()
+    sf = share_img.ravel()
+    half_t, g100, floor, chord, contig, full = c[0], c[1], c[2], c[3], c[4], c[5]
+    g32, slack32, scale32 = np.float32(c[6]), np.float32(c[7]), np.float32(c[8])
+    chord32, half32 = np.float32(chord), np.float32(0.5)
+    given = c[9] != 0
+    n = b - a
+    tested = np.empty(n, np.int64)  # the pixels that are not flat
+    mids = np.empty(n, np.int64)  # of those, the in-between ones
+    r_mid_side = np.empty(n, np.float32)
+    nt = nm = 0
+    for i in range(a, b):
+        p = idx[i]
+        v, lo, hi = np.int32(v0[i]), np.int32(lo3[i]), np.int32(hi3[i])
+        value[i] = rv[i]
+        ok[i] = False
+        flat[i] = False
+        if np.float64(v - lo) > half_t and np.float64(hi - v) > half_t:
+            rd = r_dark[i] if given else (g32 + chord32 * (sf[p] - half32)) - scale32 * _disc_sum(sf, W, p)
+            if abs(rd) < slack32:
+                flat[i] = True
+                continue
+            mids[nm] = i
+            r_mid_side[nm] = rd
+            nm += 1
+        tested[nt] = i
+        nt += 1
+    good = smooth_tests(gray, lut, mom, tested[:nt], idx, contig, 0.0, full)[0]
+    for j in range(nt):
+        ok[tested[j]] = good[j]
+    # the in-between pixels that fail their own tests, judged as the side they belong to
+    sel = np.empty(nm, np.int64)
+    dark = np.empty(nm, np.bool_)
+    ns = 0
+    for j in range(nm):
+        if not ok[mids[j]]:
+            sel[ns] = mids[j]
+            dark[ns] = r_mid_side[j] > 0
+            ns += 1
+    sel, dark = sel[:ns], dark[:ns]
+    lo_s, hi_s, v_s = lo3[sel], hi3[sel], v0[sel]
+    ok_m, n_m = coverage_tests(gray, table, idx, sel, lo_s, hi_s, dark, contig)
+    got, r_mid = mid_response(ok_m, n_m, dark, lo_s, hi_s, v_s, g100, floor, chord)
+    for j in range(ns):
+        if got[j]:
+            ok[sel[j]] = True
+            value[sel[j]] = np.float32(r_mid[j])
+
+
+@_jit
+def saddles(gray, lut, idx, rv, mom, flat, scratch, contig, saddle_area, full):
+    """The rows of the saddles (X-junctions) among the ``flat`` candidates: those whose ``rv`` is
+    at least that of every flat pixel in their 3x3 window (``_corners_numpy``'s 3x3 dilation of
+    the flat pixels' own response) and that pass the saddle test (``_smooth_one``).
+    ``scratch``: (H, W) float32 zeros, used for the flat pixels' map and zero again on return."""
+    W = gray.shape[1]
+    f = gray.ravel()
+    s = scratch.ravel()
+    K = len(idx)
+    for i in range(K):
+        if flat[i]:
+            s[idx[i]] = rv[i]  # >= 0: the other pixels' 0 is never above it
+    top = np.empty(K, np.int64)
+    n = 0
+    for i in range(K):
+        if not flat[i]:
+            continue
+        p = idx[i]
+        v = rv[i]
+        best = True
+        for dy in range(-1, 2):
+            for dx in range(-1, 2):
+                if s[np.uint64(p + dy * W + dx)] > v:
+                    best = False
+        if best:
+            top[n] = i
+            n += 1
+    top = top[:n]
+    out = top[smooth_tests(gray, lut, mom, top, idx, contig, saddle_area, full)[1]]
+    for i in range(K):
+        if flat[i]:
+            s[idx[i]] = 0.0
+    return out
+
+
+@_jit
+def assemble(resp, idx, value, ok, flat, ws):
+    """The response map ``resp`` (zeros, (H, W) float32, filled in place) of the saddles (rows
+    ``ws``) and the pixels that are not flat, the failing ones at 0: the passing pixels (the
+    saddles first, then raster order), the failing ones and their values."""
+    f = resp.ravel()
+    K = len(idx)
+    n_pass = len(ws)
+    n_fail = 0
+    for i in range(K):
+        if not flat[i]:
+            if ok[i]:
+                n_pass += 1
+            else:
+                n_fail += 1
+    passing = np.empty(n_pass, np.int64)
+    failing = np.empty(n_fail, np.int64)
+    fv = np.empty(n_fail, np.float32)
+    for j in range(len(ws)):
+        passing[j] = idx[ws[j]]
+        f[idx[ws[j]]] = value[ws[j]]
+    jp, jf = len(ws), 0
+    for i in range(K):
+        if flat[i]:
+            continue
+        if ok[i]:
+            passing[jp] = idx[i]
+            f[idx[i]] = value[i]
+            jp += 1
+        else:
+            failing[jf] = idx[i]
+            fv[jf] = value[i]
+            jf += 1
+    return passing, failing, fv
+
+
 @_jit
 def hidden_seeds(resp, r, failing, fv):
     """Which failing pixels (flat indices ``failing``, values ``fv``, zero in ``resp``) have a larger
@@ -396,48 +550,13 @@ def share_image(gray, lo, hi, out, y0, y1):
 
 
 @_jit
-def local_max3(idx, rv, rows, H, W):
-    """The rows (of ``rows``, ascending) whose ``rv`` is at least that of every other of those
-    rows in its 3x3 window (``idx``: flat pixel indices in raster order, at least 1 from the
-    border): ``_corners_numpy``'s 3x3 dilation of the flat pixels' own response. The
-    neighbours are found by binary search in the rows' sorted pixel indices."""
-    n = len(rows)
-    pix = np.empty(n, np.int64)
-    for j in range(n):
-        pix[j] = idx[rows[j]]
-    keep = np.zeros(n, np.bool_)
-    for j in range(n):
-        p = pix[j]
-        v = rv[rows[j]]
-        ok = True
-        for dy in range(-1, 2):
-            lo = p + dy * W - 1
-            k = np.searchsorted(pix, lo)
-            while k < n and pix[k] <= lo + 2:
-                if rv[rows[k]] > v:
-                    ok = False
-                k += 1
-        keep[j] = ok
-    return rows[keep]
-
-
-@_jit
 def disc_sums(share, idx):
-    """The sum over the mask of ``share`` (H, W) float32 around the pixels ``idx`` (flat, at least
-    3 from the border), in float32, adding the mask's pixels in raster order from 0: what
-    OpenCV's ``filter2D`` does with the disc (``_susan._disc_sums_match`` checks it once)."""
+    """``_disc_sum`` around the pixels ``idx`` (flat, at least 3 from the border) of ``share`` (H, W) float32."""
     W = share.shape[1]
     f = share.ravel()
     out = np.empty(len(idx), np.float32)
     for i in range(len(idx)):
-        p = idx[i]
-        s = np.float32(0.0)
-        for dy in range(-3, 4):
-            w = _HALF[dy + 3]
-            base = p + dy * W
-            for dx in range(-w, w + 1):
-                s = s + f[np.uint64(base + dx)]
-        out[i] = s
+        out[i] = _disc_sum(f, W, idx[i])
     return out
 
 
