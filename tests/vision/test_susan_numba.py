@@ -85,7 +85,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
-    for name in ("candidates", "smooth_tests", "coverage_tests", "suppress", "hidden_seeds", "put_back", "window_maxima", "mid_response", "share_image", "local_max3", "disc_sums"):
+    for name in ("candidates", "judge", "saddles", "assemble", "smooth_tests", "coverage_tests", "put_back", "window_maxima", "mid_response", "share_image", "disc_sums"):
         assert getattr(K, name).targetoptions.get("nogil") is True, name
     big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
     t = 25.0

@@ -766,11 +766,11 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     2. ``judge``: each of them judged on its own (the side estimate, the tests, the side's
        coverage test), writing its value, pass and flatness in place;
     3. ``saddles`` among the flat ones, ``assemble`` the response map;
-    4. the hidden failures put back (``hidden_seeds``, ``put_back``) and the window maxima.
+    4. the hidden failures put back (``put_back``, from one dilation) and the window maxima.
 
-    On two threads (``_shared``) steps 1, 2 and the seeds of 4 run on parts of their pixels
-    (bands of rows, ranges of candidates, halves) side by side: the same arithmetic on each
-    pixel, the results joined in order, so the same output.
+    On two threads (``_shared``) steps 1 and 2 run on parts of their pixels (bands of rows,
+    ranges of candidates) side by side: the same arithmetic on each pixel, the results joined
+    in order, so the same output.
     """
     H, W = gray.shape
     T, m, _ = _ramp_bound(float(t))
@@ -801,10 +801,8 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     resp = np.zeros((H, W), np.float32)
     ws = kernels.saddles(gray, lut, idx, rv, mom, flat, resp, _CONTIG, _SADDLE_AREA, _FULL)
     passing, failing, fv = kernels.assemble(resp, idx, value, ok, flat, ws)
-    if not split:
-        return resp, kernels.suppress(resp, r, passing, failing, fv)
-    h = len(failing) // 2  # which failing pixels lie under a larger passing one: two halves
-    seed = np.concatenate(_shared([functools.partial(kernels.hidden_seeds, resp, r, failing[a:b], fv[a:b]) for a, b in ((0, h), (h, len(failing)))]))
+    # the failing pixels under a larger passing one stay for certain (one dilation of the passing pixels, as in _hidden_failures)
+    seed = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8)).ravel().take(failing) > fv
     kernels.put_back(resp, r, failing, fv, seed)
     return resp, passing[kernels.window_maxima(resp, r, passing)]
 

@@ -439,24 +439,10 @@ def assemble(resp, idx, value, ok, flat, ws):
 
 
 @_jit
-def hidden_seeds(resp, r, failing, fv):
-    """Which failing pixels (flat indices ``failing``, values ``fv``, zero in ``resp``) have a larger
-    pixel of ``resp`` (H, W) float32 >= 0 in their (2r+1)^2 window: those stay for certain
-    (``put_back``). Reads ``resp`` only: two calls on two halves of ``failing`` may run at once."""
-    H, W = resp.shape
-    bits = resp.ravel().view(np.int32)  # float32 >= 0 order as their bits
-    seed = np.zeros(len(failing), np.bool_)
-    for i in range(len(failing)):
-        seed[i] = _any_above(bits, failing[i], r, H, W, fv[i:i + 1].view(np.int32)[0])
-    return seed
-
-
-@_jit
 def put_back(resp, r, failing, fv, seed):
     """Put back the failing pixels (``failing``, values ``fv``, zero in ``resp``) that are hidden
     under a larger pixel that stays (``_susan._hidden_failures``: a failing pixel stays when a
-    larger pixel that stays lies in its window): the ``seed`` ones (``hidden_seeds``: under a
-    larger passing one), then, from the windows of the pixels found to stay, the smaller failing
+    larger pixel that stays lies in its window): the ``seed`` ones (under a larger passing one), then, from the windows of the pixels found to stay, the smaller failing
     ones, which stay in turn (depth first: the least set closed under that rule, the NumPy
     path's pixels). The failing pixels not found to stay wait in ``resp`` as their negated
     value meanwhile, and are zero at the end. ``resp`` is updated in place."""
@@ -524,17 +510,6 @@ def window_maxima(resp, r, passing):
 
 
 @_jit
-def suppress(resp, r, passing, failing, fv):
-    """The corners among ``passing`` (flat indices into ``resp``, (H, W) float32): maxima of their
-    (2r+1)^2 window (on a plateau the first in raster order), after the failing pixels
-    (``failing``, values ``fv``, zero in ``resp``) hidden under a larger pixel that stays are
-    put back (``put_back``). ``resp`` is updated in place. One thread: ``hidden_seeds``,
-    ``put_back`` and ``window_maxima`` in turn (``_susan`` runs the first and last on two halves)."""
-    put_back(resp, r, failing, fv, hidden_seeds(resp, r, failing, fv))
-    return passing[window_maxima(resp, r, passing)]
-
-
-@_jit
 def share_image(gray, lo, hi, out, y0, y1):
     """``out`` (H, W) float32, rows ``y0 .. y1 - 1``: ``min((hi - I)+ / max(hi - lo, 1), 1)``, the
     dark share of each pixel, as ``_susan._coverage_response`` computes it with OpenCV (a
@@ -558,24 +533,3 @@ def disc_sums(share, idx):
     for i in range(len(idx)):
         out[i] = _disc_sum(f, W, idx[i])
     return out
-
-
-@_jit
-def _any_above(bits, p, r, H, W, v):
-    """Whether a value of the flat int32 image ``bits`` (H, W) in the (2r+1)^2 window of pixel ``p``
-    exceeds ``v`` (float32 values >= 0 as their bits: the same order)."""
-    y, x = p // W, p % W
-    if y >= r and x >= r and y + r < H and x + r < W:
-        for yy in range(-r, r + 1):
-            base = p + yy * W
-            m = bits[np.uint64(base - r)]
-            for xx in range(-r + 1, r + 1):
-                m = max(m, bits[np.uint64(base + xx)])
-            if m > v:
-                return True
-        return False
-    for yy in range(max(y - r, 0), min(y + r + 1, H)):
-        for xx in range(max(x - r, 0), min(x + r + 1, W)):
-            if bits[yy * W + xx] > v:
-                return True
-    return False
