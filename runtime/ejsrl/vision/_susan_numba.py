@@ -65,6 +65,7 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
     mom = np.empty((cap, 3), np.int32)
     K = 0
     acc = np.zeros(W - 2 * b, np.uint8)
+    xs = np.empty(W, np.int64)
     Tu, mu, sat = np.uint8(T), np.uint8(m), np.uint8(255)
     g = np.float32(g100)
     Lm = np.int64(L_max)
@@ -84,10 +85,18 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
                 e = min(np.uint8(max(Tu, d) - d), mu)
                 s = np.uint8(acc[x] + e)
                 acc[x] = s if s >= e else sat
-        for x in range(W - 2 * b):
-            if np.int64(acc[x]) > Lm:
-                continue
-            pc = y * W + x + b
+        nx = 0
+        for x in range(W - 2 * b):  # the pixels the bound leaves, without a branch per pixel
+            xs[nx] = x
+            nx += np.int64(acc[x]) <= Lm
+        if K + nx > cap:
+            while K + nx > cap:
+                cap *= 2
+            idx = _grow(idx, cap)
+            rv = _grow(rv, cap)
+            mom = _grow2(mom, cap)
+        for j in range(nx):  # their exact USAN, kept (K moves on) where there is a response
+            pc = y * W + xs[j] + b
             v = np.int32(f[pc])
             n, sx, sy = np.int32(0), np.int32(0), np.int32(0)
             for dy in range(-3, 4):
@@ -99,19 +108,12 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
                     sx += c * dx
                     sy += c * dy
             rr = g - np.float32(n)
-            if not rr > below:
-                continue
-            if K == cap:
-                cap *= 2
-                idx = _grow(idx, cap)
-                rv = _grow(rv, cap)
-                mom = _grow2(mom, cap)
             idx[K] = pc
             rv[K] = rr
             mom[K, 0] = n
             mom[K, 1] = sx
             mom[K, 2] = sy
-            K += 1
+            K += rr > below
     v0s = np.empty(K, np.uint8)
     lo3 = np.empty(K, np.uint8)
     hi3 = np.empty(K, np.uint8)
@@ -204,12 +206,11 @@ def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
             w = _HALF[dy + 3]
             base = p + dy * W
             for dx in range(-w, w + 1):
-                q = np.int32(f[np.uint64(base + dx)])
-                if q > v:
-                    u = 100 - np.int32(lut[np.uint64(q - v)])
-                    mb_ += u
-                    bx_ += u * dx
-                    by_ += u * dy
+                d = np.int32(f[np.uint64(base + dx)]) - v
+                u = (100 - np.int32(lut[np.uint64(abs(d))])) * np.int32(d > 0)  # no branch per pixel
+                mb_ += u
+                bx_ += u * dx
+                by_ += u * dy
         mb, bx, by = np.float64(mb_), np.float64(bx_), np.float64(by_)
         md = full - n - mb
         ddx = -sx - bx
