@@ -775,16 +775,17 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     H, W = gray.shape
     T, m, _ = _ramp_bound(float(t))
     gray = np.ascontiguousarray(gray)
+    buf = _buffers(H, W)
     split = H * W >= _MIN_SPLIT and susan_threads() > 1
     args = (gray, lut, _MDX, _MDY, T, m, L_max, g100, below)
     if split:  # bands of rows (their pixels in raster order, one after the other) and the side shares
         ys = [H * i // _BANDS for i in range(_BANDS + 1)]
         tasks = [functools.partial(kernels.candidates, *args, ys[i], ys[i + 1]) for i in range(_BANDS)]
-        *bands, share = _shared(tasks + [functools.partial(_share_image, gray, kernels)])
+        *bands, share = _shared(tasks + [functools.partial(_share_image, gray, kernels, buf)])
         idx, rv, v0, lo3, hi3, mom = (np.concatenate(part) for part in zip(*bands))
     else:
         idx, rv, v0, lo3, hi3, mom = kernels.candidates(*args, 0, H)
-        share = _share_image(gray, kernels)
+        share = _share_image(gray, kernels, buf)
     K = len(idx)
     if K == 0:
         return None
@@ -798,11 +799,12 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
         _shared([functools.partial(judged, cuts[i], cuts[i + 1], consts, value, ok, flat) for i in range(_BANDS)])
     else:
         judged(0, K, consts, value, ok, flat)
-    resp = np.zeros((H, W), np.float32)
+    resp = buf.resp
+    resp.fill(0.0)
     ws = kernels.saddles(gray, lut, idx, rv, mom, flat, resp, _CONTIG, _SADDLE_AREA, _FULL)
     passing, failing, fv = kernels.assemble(resp, idx, value, ok, flat, ws)
     # the failing pixels under a larger passing one stay for certain (one dilation of the passing pixels, as in _hidden_failures)
-    seed = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8)).ravel().take(failing) > fv
+    seed = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8), dst=buf.grown).ravel().take(failing) > fv
     kernels.put_back(resp, r, failing, fv, seed)
     return resp, passing[kernels.window_maxima(resp, r, passing)]
 
@@ -945,17 +947,54 @@ def _coverage_response(gray: NDArray[np.uint8], g100: float, idx: NDArray[np.int
     return (np.float32(g100) + np.float32(_CHORD * _SCALE) * (own - np.float32(0.5))) - np.float32(_SCALE) * n_dark
 
 
-def _share_image(gray: NDArray[np.uint8], kernels: ModuleType | None) -> NDArray[np.float32]:
-    """(H, W) float32: each pixel's dark share ``(max7 - I) / (max7 - min7)`` (``_coverage_response``)."""
+def _share_image(gray: NDArray[np.uint8], kernels: ModuleType | None, buf: _Buffers | None = None) -> NDArray[np.float32]:
+    """(H, W) float32: each pixel's dark share ``(max7 - I) / (max7 - min7)`` (``_coverage_response``);
+    in ``buf``'s arrays when given."""
     k7 = np.ones((7, 7), np.uint8)
-    levels = cv2.medianBlur(gray, 3)  # the two grey levels, without the noise's extremes
-    lo, hi = cv2.erode(levels, k7), cv2.dilate(levels, k7)
+    levels = cv2.medianBlur(gray, 3, dst=None if buf is None else buf.levels)  # the two grey levels, without the noise's extremes
+    lo = cv2.erode(levels, k7, dst=None if buf is None else buf.lo)
+    hi = cv2.dilate(levels, k7, dst=None if buf is None else buf.hi)
     if kernels is not None:  # the same shares: a float32 division of the same integers (OpenCV's is slow here)
-        share = kernels.share_image(gray, lo, hi, np.empty(gray.shape, np.float32), 0, gray.shape[0])
+        share = kernels.share_image(gray, lo, hi, np.empty(gray.shape, np.float32) if buf is None else buf.share, 0, gray.shape[0])
     else:
         share = cv2.divide(cv2.subtract(hi, gray), cv2.max(cv2.subtract(hi, lo), 1.0), dtype=cv2.CV_32F)
         cv2.threshold(share, 1.0, 0.0, cv2.THRESH_TRUNC, dst=share)
     return share
+
+
+class _Buffers(NamedTuple):
+    """The whole-image arrays of one ``_corners_compiled`` call (``_buffers``)."""
+
+    levels: NDArray[np.uint8]
+    lo: NDArray[np.uint8]
+    hi: NDArray[np.uint8]
+    share: NDArray[np.float32]
+    resp: NDArray[np.float32]
+    grown: NDArray[np.float32]
+
+
+_KEPT = threading.local()
+_KEEP_MAX = 1 << 21  # pixels: the buffers of larger images are not kept between calls
+
+
+def _buffers(H: int, W: int) -> _Buffers:
+    """The calling thread's whole-image arrays for an (H, W) image, kept between its calls.
+
+    Fresh arrays of this size are fresh pages from the system on every call (glibc maps
+    large blocks and returns them when freed), and the first write to each page faults: on
+    this 2-core VM that cost about 1.5 ms of a 640x480 call's 7, and more or less from one
+    call to the next as the allocator's thresholds moved. The calling thread's own (not the
+    pool thread's: two callers may share it), so concurrent calls never share one.
+    """
+    kept = getattr(_KEPT, "buffers", None)
+    if kept is not None and kept.share.shape == (H, W):
+        return kept
+    u8 = lambda: np.empty((H, W), np.uint8)  # noqa: E731
+    f32 = lambda: np.empty((H, W), np.float32)  # noqa: E731
+    buf = _Buffers(u8(), u8(), u8(), f32(), f32(), f32())
+    if H * W <= _KEEP_MAX:
+        _KEPT.buffers = buf
+    return buf
 
 
 _DISC = np.zeros((2 * _R + 1, 2 * _R + 1), np.float32)  # the mask as a filter
