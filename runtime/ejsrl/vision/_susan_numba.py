@@ -36,7 +36,7 @@ def _jit(fn=None, **options):
         return nb.njit(nogil=True, **options)(fn)
 
 
-_FIX = 33554432.0  # 2^25: the coverage shares in fixed point (``_susan._share_table``)
+_UNFIX = 2.0**-25  # the coverage shares are in fixed point, times 2^25 (``_susan._share_table``)
 _HALF = (1, 2, 3, 3, 3, 2, 1)  # the mask's half-widths on its rows dy = -3 .. 3 (37 pixels)
 
 
@@ -258,14 +258,14 @@ def coverage_tests(gray, share, idx, rows, lo, hi, dark, contig):
                 n_ += c
                 sx_ += c * dx
                 sy_ += c * dy
-        n, sx, sy = n_ / _FIX, sx_ / _FIX, sy_ / _FIX  # exact: below 2^53 / 2^25
+        n, sx, sy = n_ * _UNFIX, sx_ * _UNFIX, sy_ * _UNFIX  # exact: below 2^53, times a power of 2
         nn[i] = n
         if not sx * sx + sy * sy > 0.5 * n * n:
             continue
         s1, s2, s3 = _contiguity(sx, sy, W)
         total = 0.0
         for st in (s1, s2, s3):
-            total += tab[min(max(np.int32(f[np.uint64(p + st)]) - l8, np.int32(0)), span)] / _FIX
+            total += tab[min(max(np.int32(f[np.uint64(p + st)]) - l8, np.int32(0)), span)] * _UNFIX
         ok[i] = total > contig
     return ok, nn
 
