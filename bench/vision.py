@@ -157,16 +157,37 @@ def compile_times() -> str:
     return ", ".join(out)
 
 
+def keep_freed_memory() -> str:
+    """Make glibc keep freed memory for reuse (``mallopt``) instead of mapping large blocks anew on
+    every call and returning them when freed: a fresh block's pages fault on their first write,
+    which on this VM cost GFTT 6 ms a call instead of 2 at 640x480, depending on what earlier
+    calls had left in the allocator (its thresholds move as blocks are freed). With this both
+    detectors are timed on warm memory: their computing, not the allocator's luck."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        libc = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6")
+        M_TRIM_THRESHOLD, M_MMAP_THRESHOLD = -1, -3
+        if libc.mallopt(M_MMAP_THRESHOLD, 1 << 28) and libc.mallopt(M_TRIM_THRESHOLD, 1 << 30):
+            return "glibc keeps freed memory (mallopt): no call pays page faults for another's frees"
+    except (OSError, AttributeError):
+        pass
+    return "the allocator's defaults (not glibc): times include page faults where it returns memory"
+
+
 def bench_susan(n: int, rounds: int) -> None:
     import os
 
     from ejsrl.vision import _susan
 
+    allocator = keep_freed_memory()
     have_numba = _susan.susan_backend(wait=True) == "numba"  # compiles (or loads) numba's kernels first
     paths = ["numpy", "numba"] if have_numba else ["numpy"]
     print("== SUSAN corners (defaults) vs cv2.goodFeaturesToTrack(100, 0.01, 5), 640x480 grey, interleaved medians ==")
     print(f"load average before: {os.getloadavg()[0]:.2f} (the machine may be shared: both detectors see the same load); "
           f"OpenCV threads: {cv2.getNumThreads()} (GFTT uses them); SUSAN's threads: {_susan.susan_threads()} (numba's path outside a served class)")
+    print(f"memory: {allocator}")
     if not have_numba:
         print("numba is not installed: only the NumPy path (pip install 'ejsgen[fast]' for the compiled one)")
     print(f"{rounds} rounds, each timing every image {n} times, each SUSAN path and GFTT call for call; per image the median of the rounds' medians, and the rounds' spread of the ratio")
