@@ -10,7 +10,7 @@ bench/vision.py. Here, two guards that a shared, loaded machine cannot make flak
 - SUSAN stays within a generous multiple of GFTT in CPU time (one OpenCV thread each, best of
   several interleaved runs: load stretches wall-clock times, CPU time much less): a change
   that makes it grossly slower fails here. Measured 5.3-5.7x on this image (it was 7-8x); with
-  numba's kernels (``[fast]``) on one thread 1.3-2.8x, guarded at 4x (the NumPy path's speed fails it).
+  numba's kernels (``[fast]``) on one thread 0.9-2.5x, guarded at 4x (the NumPy path's speed fails it).
 - On two threads (outside a served class) the numba path takes clearly less wall-clock time
   than on one, and no more CPU time to speak of.
 Both SUSAN paths are checked for busy threads.
@@ -82,8 +82,8 @@ def test_susan_is_not_grossly_slower_than_goodfeaturestotrack(camera, monkeypatc
 
 
 def test_susan_compiled_with_numba_keeps_its_lead(camera, monkeypatch):
-    """The numba kernels on one thread: measured 1.3-2.8x GFTT's CPU time on this image (GFTT's own
-    time varies with what ran before it; the NumPy path 5.2-6x); 4x leaves room for a loaded machine and fails on a fall back to the NumPy path's speed."""
+    """The numba kernels on one thread: measured 0.9-2.5x GFTT's CPU time on this image (GFTT's own
+    time varies with what ran before it, 2 to 6 ms: the page faults of fresh memory; the NumPy path 5.2-6x); 4x leaves room for a loaded machine and fails on a fall back to the NumPy path's speed."""
     from ejsrl.vision import _susan
 
     monkeypatch.setattr(_susan, "BACKEND", "numba")
@@ -94,13 +94,13 @@ def test_susan_compiled_with_numba_keeps_its_lead(camera, monkeypatch):
 
 
 def test_susan_on_two_threads_hands_a_real_share_of_the_work_to_the_second(monkeypatch):
-    """Outside a served class a call runs on two threads. The bench measured them at 0.72-0.78
+    """Outside a served class a call runs on two threads. They were measured at 0.62-0.66
     of the one-thread wall-clock time on astronaut (the slowest photograph against GFTT),
     but wall time depends on a free second core, which a loaded machine (CI's two test
     workers) does not have. The work shared does not depend on that. With two threads the
     calling thread's own CPU time is at most 0.85 of the whole call's on one thread (the
     other thread did the rest: it stops if the second thread stops helping), and the two
-    threads together waste no CPU time: at most 1.35x one thread's (measured ~1.1).
+    threads together waste no CPU time: at most 1.35x one thread's (measured 1.07).
     Best of 9 interleaved runs each."""
     from ejsrl.vision import _susan
 

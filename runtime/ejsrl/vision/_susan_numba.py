@@ -7,12 +7,19 @@ pixels' coverage test too) and the suppression are loops over the image or over 
 pixels, with the same arithmetic (integer sums, float64 sums that are exact, the same
 float64 and float32 operations), so the corners, the response and the sub-pixel positions
 are the same, bit for bit (tests/vision/test_susan_numba.py). What stays in OpenCV: the
-side shares' whole-image estimate, the window maxima (``dilate``) and ``cornerSubPix``.
+side shares' grey levels (a 3x3 median, a 7x7 minimum and maximum), the dilation that finds
+the failing pixels under a larger passing one, and ``cornerSubPix``.
+
+Hot loops index with unsigned integers, or count from 0 over 1-D views (``share_image``):
+numba wraps negative indices, and a loop whose indices it cannot prove non-negative stays
+scalar (LLVM does not vectorise it); branches that depend on each pixel are written as
+arithmetic where they would be mispredicted (``candidates``' pixels left by the bound, the
+smooth test's brighter pixels).
 
 The kernels release the GIL (``nogil``: a classroom server's sessions run them side by side
 in threads) and each runs on one thread (``parallel`` is not used: numba's thread pools do not
 take calls from several threads at once, as a server's sessions make them). Outside a served
-class, ``_susan`` runs them on parts of their pixels (bands of rows, halves of a list) in two
+class, ``_susan`` runs them on parts of their pixels (bands of rows, ranges of candidates) in two
 threads, and independent ones side by side (``_susan._shared``, ``_susan.set_threads``). They are cached on disk
 (``cache``): numba writes next to this file when it can (an editable install), else to its
 user-wide cache (``~/.cache/numba``, or ``$NUMBA_CACHE_DIR``: a wheel in a read-only
