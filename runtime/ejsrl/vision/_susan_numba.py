@@ -70,6 +70,9 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
     idx = np.empty(cap, np.int64)
     rv = np.empty(cap, np.float32)
     mom = np.empty((cap, 3), np.int32)
+    v0s = np.empty(cap, np.uint8)
+    lo3 = np.empty(cap, np.uint8)
+    hi3 = np.empty(cap, np.uint8)
     K = 0
     acc = np.zeros(W - 2 * b, np.uint8)
     xs = np.empty(W, np.int64)
@@ -102,6 +105,9 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
             idx = _grow(idx, cap)
             rv = _grow(rv, cap)
             mom = _grow2(mom, cap)
+            v0s = _grow(v0s, cap)
+            lo3 = _grow(lo3, cap)
+            hi3 = _grow(hi3, cap)
         for j in range(nx):  # their exact USAN, kept (K moves on) where there is a response
             pc = y * W + xs[j] + b
             v = np.int32(f[pc])
@@ -120,22 +126,16 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1):
             mom[K, 0] = n
             mom[K, 1] = sx
             mom[K, 2] = sy
+            # the grey level and the 3x3 minimum and maximum (in cache now; straight-line code)
+            u, uw = np.uint64(pc), np.uint64(W)
+            a0, a1, a2 = f[u - uw - 1], f[u - uw], f[u - uw + 1]
+            a3, a4, a5 = f[u - 1], f[u], f[u + 1]
+            a6, a7, a8 = f[u + uw - 1], f[u + uw], f[u + uw + 1]
+            v0s[K] = a4
+            lo3[K] = min(min(min(a0, a1), min(a2, a3)), min(min(a4, a5), min(min(a6, a7), a8)))
+            hi3[K] = max(max(max(a0, a1), max(a2, a3)), max(max(a4, a5), max(max(a6, a7), a8)))
             K += rr > below
-    v0s = np.empty(K, np.uint8)
-    lo3 = np.empty(K, np.uint8)
-    hi3 = np.empty(K, np.uint8)
-    for i in range(K):
-        pc = idx[i]
-        v0s[i] = f[np.uint64(pc)]
-        lo, hi = f[np.uint64(pc)], f[np.uint64(pc)]
-        for dy in range(-1, 2):
-            for dx in range(-1, 2):
-                q = f[np.uint64(pc + dy * W + dx)]
-                lo = min(lo, q)
-                hi = max(hi, q)
-        lo3[i] = lo
-        hi3[i] = hi
-    return idx[:K], rv[:K], v0s, lo3, hi3, mom[:K]
+    return idx[:K], rv[:K], v0s[:K], lo3[:K], hi3[:K], mom[:K]
 
 
 @_jit
