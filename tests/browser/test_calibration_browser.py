@@ -42,7 +42,8 @@ def test_capture_and_tour_show_the_estimate(built, page):
         page.get_by_role("button", name="Capture", exact=True).click()
         wait_until(lambda: "Views: 1" in _panel_text(page), timeout=20, what="the first view to be counted")
         assert "view 1 added" in _panel_text(page)
-        assert re.search(r"fx = nan", _panel_text(page)), "no estimate from one view"
+        assert re.search(r"fx = \u2013 px", _panel_text(page)), "no estimate from one view: a dash, not nan"
+        assert not re.search(r"\bnan\b", _panel_text(page))
 
         page.get_by_role("button", name="Take the tour").click()
         wait_until(lambda: app.model.tour_index == 12 and not app.is_playing(), timeout=90, what="the tour to end")
