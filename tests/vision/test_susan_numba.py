@@ -79,6 +79,24 @@ def test_the_same_on_a_parameter_grid(kw, monkeypatch):
         _same_bits(rb, ra)
 
 
+def test_the_same_when_numbas_sums_over_the_mask_are_not_opencvs(monkeypatch):
+    """Where numba's float32 sums over the mask would differ from OpenCV's ``filter2D`` (checked once
+    at load, ``_disc_sums_match``), the kernels take the in-between pixels' side estimate from
+    OpenCV: the corners and responses are still the NumPy path's, bit for bit."""
+    assert _susan.susan_backend(wait=True) == "numba"  # compiled first: the compile sets the flag this test replaces
+    monkeypatch.setattr(_susan._COMPILED, "disc_sums_match", False)
+    for img in (_grey("astronaut"), polygons_image(3, 4.0)[0]):
+        (pa, ra), (pb, rb) = _both(img, monkeypatch)
+        _same_bits(pb, pa)
+        _same_bits(rb, ra)
+
+
+def test_the_kernels_sum_over_the_mask_as_opencv_does_here():
+    """On this machine numba's sums are OpenCV's (so the kernels compute the side estimate themselves)."""
+    assert _susan.susan_backend(wait=True) == "numba"
+    assert _susan._COMPILED.disc_sums_match
+
+
 def test_the_kernels_run_outside_the_gil(monkeypatch):
     """While one thread runs the candidate search on a large image, another keeps running Python."""
     monkeypatch.setattr(_susan, "BACKEND", "numba")
