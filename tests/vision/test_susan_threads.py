@@ -98,3 +98,32 @@ def test_a_served_class_keeps_susan_on_the_calling_thread(spy):
     finally:
         app.stop()
         server.stop()
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_calls_from_several_threads_at_once_each_get_their_own_images_corners(monkeypatch, threads):
+    """A served class's sessions call SUSAN from their own threads at the same time (and, outside a
+    class, several callers share the pool's second thread): each call keeps its whole-image
+    arrays to its calling thread, so each gets its own image's corners and response, bit for bit."""
+    monkeypatch.setattr(_susan, "BACKEND", "numba")
+    assert _susan.susan_backend() == "numba"
+    monkeypatch.setattr(_susan, "THREADS", threads)
+    images = [_photo(name) for name in ("astronaut", "coins", "camera", "coffee")]
+    expected = [susan_corners(img, return_response=True) for img in images]
+    got: dict[tuple[int, int], tuple] = {}
+    start = threading.Barrier(len(images))
+
+    def work(k: int) -> None:
+        start.wait()
+        for round_ in range(5):
+            got[k, round_] = susan_corners(images[(k + round_) % len(images)], return_response=True)
+
+    workers = [threading.Thread(target=work, args=(k,)) for k in range(len(images))]
+    for w in workers:
+        w.start()
+    for w in workers:
+        w.join()
+    assert len(got) == 5 * len(images)
+    for (k, round_), (pts, resp) in got.items():
+        want_pts, want_resp = expected[(k + round_) % len(images)]
+        assert _bits(pts) == _bits(want_pts) and _bits(resp) == _bits(want_resp), (k, round_)
