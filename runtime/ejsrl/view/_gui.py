@@ -94,6 +94,21 @@ def slow_text(speed: float, realtime: bool) -> str:
     return f" · *running at {speed:.0%} speed (the server is busy)*"
 
 
+def shown_digits(*values: float | None) -> int:
+    """The decimals a number box shows: enough for each of ``values`` (a control's min, max
+    and step, not its initial value) to be written exactly, at most 7 (as viser)."""
+    digits = 0
+    for v in values:
+        if v is None or not _finite(v):
+            continue
+        x = float(v)
+        d = 0
+        while d < 7 and x != round(x, d):
+            d += 1
+        digits = max(digits, d)
+    return digits
+
+
 def panel_width_for(title: str) -> int:
     """The panel width (pixels) that shows ``title`` whole, and plots and images at a readable size."""
     return int(min(640, max(PANEL_WIDTH, _HEADER_PX + _TITLE_PX_PER_CHAR * len(title))))
@@ -371,6 +386,9 @@ class Panel:
             else:
                 init = lo if shown is None else float(shown)
                 handle = gui.add_slider(label, min=lo, max=hi, step=float(step), initial_value=init, hint=hint)
+                # the box beside the slider (3 rem wide) shows the value to the step, as the
+                # track's marks do: viser's precision also covers the initial value (pi/2: 7 digits)
+                handle.precision = shown_digits(lo, hi, step)
         elif isinstance(c, Number) or (not isinstance(c, (Checkbox, Text, Dropdown)) and c.vtype in ("float", "int")):
             lo = getattr(c, "min", None)
             hi = getattr(c, "max", None)
@@ -389,6 +407,8 @@ class Panel:
                 if hi is not None and init > hi:
                     init = float(hi)
                 handle = gui.add_number(label, init, min=lo, max=hi, step=step, hint=hint)
+                if step:
+                    handle.precision = shown_digits(lo, hi, step)
         elif isinstance(c, Checkbox) or c.vtype == "bool":
             handle = gui.add_checkbox(label, bool(shown) if shown is not None else False, hint=hint)
         elif isinstance(c, Dropdown):
