@@ -266,15 +266,15 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
     _check_compiles(app_text, "app.py")
     env = _env()
     bundle_name = f"{out_dir.name}.pyz" if bundle else ""
+    fast = "susan" in app_text.lower()  # SUSAN corners (vision.susan_corners, a Pipeline's "susan"): numba compiles them
     readme = env.get_template("README.md.j2").render(title=plan.title, description=plan.description, version=__version__,
                                                      spec_name=plan.spec_name, bundle=bundle_name,
-                                                     headless=plan.independent is not None)
+                                                     headless=plan.independent is not None, fast=fast)
     urdf = ["yourdfpy>=0.0.56"] if "urdf" in app_text else []  # ejsrl.robotics.load_urdf, models.ur5_urdf
     if urdf:
         _check_urdf_parser(plan)
-    reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf)
-    if "from ejsrl.fmi import" in app_text:  # the spec's fmus: run through FMPy
-        reqs += "fmpy>=0.3.20\n"
+    fmi = ["fmpy>=0.3.20"] if "from ejsrl.fmi import" in app_text else []  # the spec's fmus: run through FMPy
+    reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf + fmi, fast=fast)
     out_dir = out_dir.resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))

@@ -35,3 +35,27 @@ def test_a_urdf_arm_builds_where_yourdfpy_is_installed(tmp_path: Path) -> None:
 
     app = build(EXAMPLES / "urdf_arm.ejs.yaml", tmp_path / "app")
     assert "yourdfpy" in (app / "requirements.txt").read_text()
+
+
+def test_a_lab_that_detects_susan_corners_tells_how_to_make_them_faster(tmp_path: Path) -> None:
+    """numba is optional (the ``[fast]`` extra): an app whose spec runs SUSAN says in its README and
+    requirements.txt how to install it, as a comment, so the install never fails for want of a
+    numba wheel; an app without SUSAN does not mention it."""
+    from ejsgen.cli import build
+
+    servo = build(EXAMPLES / "paper" / "visual_servoing_eih.ejs.yaml", tmp_path / "servo")
+    reqs = (servo / "requirements.txt").read_text()
+    assert "# numba>=0.60" in reqs.splitlines()
+    assert all("numba" not in line for line in reqs.splitlines() if not line.startswith("#"))
+    assert "`python -m pip install numba` makes them 2-3x faster" in (servo / "README.md").read_text()
+    plain = build(EXAMPLES / "pendulum.ejs.yaml", tmp_path / "plain")
+    assert "numba" not in (plain / "requirements.txt").read_text() + (plain / "README.md").read_text()
+
+
+def test_requirements_list_each_package_once_on_its_own_line(tmp_path: Path) -> None:
+    from ejsgen.cli import build
+
+    app = build(EXAMPLES / "paper" / "fmu_motor_control.ejs.yaml", tmp_path / "fmu")
+    lines = [ln for ln in (app / "requirements.txt").read_text().splitlines() if ln and not ln.startswith("#")]
+    names = [ln.split(">")[0].split("<")[0].split("=")[0] for ln in lines]
+    assert "fmpy" in names and len(names) == len(set(names))
