@@ -5,7 +5,7 @@ bool masks, uint16 (scaled to 0..255) or finite floats in [0, 1]; every image fu
 checks its input and refuses an empty, NaN, wrongly shaped or typed image, or an unknown
 option, with a ``ValueError`` that says what to do (the rules: ``ejsrl.vision._util``).
 Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV. SUSAN corners run
-compiled, about 2x faster and outside the GIL, when numba is installed: ``pip install 'ejsgen[fast]'``
+compiled, 2-3x faster and outside the GIL, when numba is installed: ``pip install 'ejsgen[fast]'``
 (the same corners either way; ``EJSRL_SUSAN=numpy`` forces the NumPy path). Everything public
 is importable from here:
 
