@@ -103,7 +103,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
-    for name in ("candidates", "judge", "saddles", "assemble", "smooth_tests", "coverage_tests", "put_back", "window_maxima", "mid_response", "share_image", "disc_sums"):
+    for name in ("candidates", "judge", "saddles", "assemble", "smooth_tests", "side_tests", "put_back", "window_maxima", "share_image", "disc_sums"):
         assert getattr(K, name).targetoptions.get("nogil") is True, name
     big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
     t = 25.0
@@ -144,26 +144,36 @@ def test_the_side_shares_are_opencvs_for_every_grey_level(monkeypatch):
         _same_bits(K.share_image(grey, lo, hi, np.empty(grey.shape, np.float32), 0, 256), ref)
 
 
-def test_the_side_response_is_the_numpy_paths(monkeypatch):
-    """The kernel's ``_mid_response`` (the in-between pixels judged as their side) against the NumPy
-    one, bit for bit, on random grey levels, USAN areas and floors (0 and above)."""
+def test_the_side_judgement_is_the_numpy_paths(monkeypatch):
+    """The kernel that judges in-between pixels as the side they belong to (``side_tests``) against
+    the NumPy path's ``_judge_mid`` (the coverage test, then ``_mid_response``), bit for bit, on
+    every inner pixel of noisy anti-aliased polygons with random 3x3-like grey ranges, sides and
+    floors (0 and above): which are corners that way, and their response."""
     monkeypatch.setattr(_susan, "BACKEND", "numba")
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
     rng = np.random.default_rng(5)
-    n = 20000
-    lo = rng.integers(0, 256, n).astype(np.uint8)
-    hi = np.maximum(lo, rng.integers(0, 256, n)).astype(np.uint8)
-    v = rng.integers(0, 256, n).astype(np.uint8)
-    dark, ok = rng.random(n) < 0.5, rng.random(n) < 0.8
-    n_m = rng.integers(0, 3700 * 2**5, n) / 2.0**5
+    gray = polygons_image(3, 2.0)[0]
+    H, W = gray.shape
+    R = _susan._R
+    ys, xs = np.mgrid[R + 1 : H - R - 1, R + 1 : W - R - 1]
+    idx = (ys * W + xs).ravel()
+    k3 = np.ones((3, 3), np.uint8)
+    lo = np.minimum(cv2.erode(gray, k3).ravel()[idx], rng.integers(0, 256, len(idx))).astype(np.uint8)
+    hi = np.maximum(cv2.dilate(gray, k3).ravel()[idx], lo).astype(np.uint8)
+    v = gray.ravel()[idx]
+    r_dark = rng.normal(0, 300, len(idx)).astype(np.float32)
+    pf, Wp = cv2.copyMakeBorder(gray, R, R, R, R, cv2.BORDER_REPLICATE).ravel(), W + 2 * R
+    base = idx + (idx // W) * (2 * R) + (R * Wp + R)
+    vals = pf.take(base[:, None] + (_susan.SUSAN_MASK[:, 1] * Wp + _susan.SUSAN_MASK[:, 0])[None, :])
+    rows = np.arange(len(idx))
     for floor in (0.0, 150.0, 300.0):
-        got_k, r_k = K.mid_response(ok, n_m, dark, lo, hi, v, 1850.0, floor, _susan._CHORD * _susan._SCALE)
-        got_n, r_n = _susan._mid_response(ok, n_m, dark, lo, hi, v, 1850.0, floor)
-        assert got_n.any() and not got_n.all()
+        got_n, r_n = _susan._judge_mid(pf, Wp, base, vals, lo, hi, v, r_dark, 1850.0, floor)
+        got_k, r_k = K.side_tests(gray, _susan._share_table(), idx, rows, lo, hi, v, r_dark > 0, _susan._CONTIG, 1850.0, floor, _susan._CHORD * _susan._SCALE)
+        assert 100 < got_n.sum() < len(idx) // 2
         _same_bits(got_k, got_n)
-        _same_bits(r_k, r_n)
+        _same_bits(r_k[got_k], r_n[got_n])
 
 
 def _child(code: str, env: dict[str, str | None] | None = None) -> subprocess.CompletedProcess:

@@ -235,62 +235,62 @@ def smooth_tests(gray, lut, mom, rows, idx, contig, saddle_area, full):
 
 
 @_jit
-def coverage_tests(gray, share, idx, rows, lo, hi, dark, contig):
-    """The centroid and contiguity tests (``_susan._coverage_test``) on the in-between pixels
-    ``idx[rows]`` judged as the dark side (where ``dark``) or the bright one, each mask pixel
-    counting by its share of that side between the grey levels ``lo`` and ``hi``: which pass,
-    and their USAN as that side (x100).
+def side_tests(gray, share, idx, rows, lo, hi, v, dark, contig, g100, floor, chord):
+    """The in-between pixels ``idx[rows]`` that failed their own tests, judged as the side they
+    belong to (``_susan._judge_mid``: ``_coverage_test``, then ``_mid_response``): which are
+    corners that way, and their response (x100, float64; meaningful where they are).
 
-    ``share[dark, span, x]``: the NumPy path's float32 share (x100) of a pixel ``x`` grey levels
-    above ``lo``, for a span ``hi - lo``, times 2^25 (an integer: the shares are multiples of
-    2^-25); integer sums, divided by 2^25, are the exact float64 sums of the NumPy path
-    (``_susan._moments``), so the result is the same bit for bit.
+    Each mask pixel counts by its share of that side (the dark one where ``dark``) between the
+    grey levels ``lo`` and ``hi``: ``share[dark, span, x]`` is the NumPy path's float32 share
+    (x100) of a pixel ``x`` grey levels above ``lo``, for a span ``hi - lo``, times 2^25 (an
+    integer: the shares are multiples of 2^-25); integer sums, times 2^-25, are the exact
+    float64 sums of the NumPy path (``_susan._moments``), so the result is the same bit for bit.
+    The side's USAN comes first: most pixels (about 9 in 10 on a photograph) fall short of the
+    floor with it, whatever the centroid and contiguity tests would say, and skip them.
     """
     W = gray.shape[1]
     f = gray.ravel()
     N = len(rows)
-    ok = np.zeros(N, np.bool_)
-    nn = np.zeros(N, np.float64)
+    got = np.zeros(N, np.bool_)
+    r_mid = np.zeros(N, np.float64)
     for i in range(N):
         p = idx[rows[i]]
         l8 = np.int32(lo[i])
         span = max(np.int32(hi[i]) - l8, np.int32(1))
         tab = share[np.int64(dark[i]), span]
-        n_, sx_, sy_ = 0, 0, 0
+        n_ = 0
+        for dy in range(-3, 4):
+            w = _HALF[dy + 3]
+            base = p + dy * W
+            for dx in range(-w, w + 1):
+                n_ += tab[np.uint64(min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))]
+        n = n_ * _UNFIX  # exact: below 2^53, times a power of 2
+        # _mid_response: what the side falls short of a straight edge through the nucleus pixel
+        h = np.float64(hi[i])
+        a_dark = (h - np.float64(v[i])) / max(h - np.float64(lo[i]), 1.0)
+        a_side = a_dark if dark[i] else 1.0 - a_dark
+        rr = (g100 + chord * (a_side - 0.5)) - n
+        if not (rr >= floor and rr > 0):
+            continue
+        # the centroid and contiguity tests of the side's USAN
+        sx_, sy_ = 0, 0
         for dy in range(-3, 4):
             w = _HALF[dy + 3]
             base = p + dy * W
             for dx in range(-w, w + 1):
                 c = tab[np.uint64(min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))]
-                n_ += c
                 sx_ += c * dx
                 sy_ += c * dy
-        n, sx, sy = n_ * _UNFIX, sx_ * _UNFIX, sy_ * _UNFIX  # exact: below 2^53, times a power of 2
-        nn[i] = n
+        sx, sy = sx_ * _UNFIX, sy_ * _UNFIX
         if not sx * sx + sy * sy > 0.5 * n * n:
             continue
         s1, s2, s3 = _contiguity(sx, sy, W)
         total = 0.0
         for st in (s1, s2, s3):
             total += tab[min(max(np.int32(f[np.uint64(p + st)]) - l8, np.int32(0)), span)] * _UNFIX
-        ok[i] = total > contig
-    return ok, nn
-
-
-@_jit
-def mid_response(ok_m, n_m, dark, lo, hi, v, g100, floor, chord):
-    """``_susan._mid_response`` (which in-between pixels are corners as their side, and their
-    response) in the same float64 operations, in the same order: the same values."""
-    N = len(ok_m)
-    got = np.zeros(N, np.bool_)
-    r_mid = np.zeros(N, np.float64)
-    for i in range(N):
-        h = np.float64(hi[i])
-        a_dark = (h - np.float64(v[i])) / max(h - np.float64(lo[i]), 1.0)
-        a_side = a_dark if dark[i] else 1.0 - a_dark
-        rr = (g100 + chord * (a_side - 0.5)) - n_m[i] if ok_m[i] else 0.0
-        r_mid[i] = rr
-        got[i] = rr >= floor and rr > 0
+        if total > contig:
+            got[i] = True
+            r_mid[i] = rr
     return got, r_mid
 
 
@@ -319,7 +319,7 @@ def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b,
     ``share_img`` (``_susan._coverage_response``; or ``r_dark[i]``, given, when ``c[9]`` is set):
     flat when it falls short of ``min_response`` less the slack; the others go through the
     false-positive tests, and an in-between one that fails them through the side's coverage
-    test (``_coverage_one``, ``_mid_one``).
+    test (``side_tests``).
 
     ``c``: float64 constants ``[t/2, g100, floor, chord x100, contig, full, g100 (as float32),
     slack (as float32), x100 (as float32), r_dark given]``.
@@ -365,9 +365,7 @@ def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b,
             dark[ns] = r_mid_side[j] > 0
             ns += 1
     sel, dark = sel[:ns], dark[:ns]
-    lo_s, hi_s, v_s = lo3[sel], hi3[sel], v0[sel]
-    ok_m, n_m = coverage_tests(gray, table, idx, sel, lo_s, hi_s, dark, contig)
-    got, r_mid = mid_response(ok_m, n_m, dark, lo_s, hi_s, v_s, g100, floor, chord)
+    got, r_mid = side_tests(gray, table, idx, sel, lo3[sel], hi3[sel], v0[sel], dark, contig, g100, floor, chord)
     for j in range(ns):
         if got[j]:
             ok[sel[j]] = True
