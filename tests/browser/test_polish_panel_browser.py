@@ -9,10 +9,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ejsgen.cli import build
-from testkit.browser import ARTIFACTS, serving
+from testkit.browser import ARTIFACTS, serving, wait_until
 
 
 def open_lab(page, url: str) -> None:
@@ -70,3 +71,64 @@ def test_number_boxes_show_their_whole_value(tmp_path: Path, page):
             bb = box.bounding_box()
             assert bb["x"] + bb["width"] <= panel_right["x"] + panel_right["width"] + 1, (bb, panel_right)
         shot(page, "numbers")
+
+
+def lorenz_points(seconds: float = 40.0, h: float = 0.002) -> np.ndarray:
+    """The Lorenz attractor (sigma 10, rho 28, beta 8/3, from (1, 1, 1)) as examples/lorenz
+    draws it: (x, y, z - 25) * 0.05, by a plain RK4 of its own (N, 3)."""
+    def f(s: np.ndarray) -> np.ndarray:
+        x, y, z = s
+        return np.array([10.0 * (y - x), x * (28.0 - z) - y, x * y - 8.0 / 3.0 * z])
+
+    s = np.array([1.0, 1.0, 1.0])
+    out = []
+    for i in range(int(seconds / h)):
+        k1 = f(s)
+        k2 = f(s + h / 2 * k1)
+        k3 = f(s + h / 2 * k2)
+        k4 = f(s + h * k3)
+        s = s + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        if i % 10 == 0:
+            out.append(s.copy())
+    return (np.array(out) - [0.0, 0.0, 25.0]) * 0.05
+
+
+def project(camera, points: np.ndarray) -> np.ndarray:
+    """Normalised device coordinates (N, 2) of world points seen by a viser client's camera."""
+    eye = np.asarray(camera.position, dtype=float)
+    target = np.asarray(camera.look_at, dtype=float)
+    up = np.asarray(camera.up_direction, dtype=float)
+    f = (target - eye) / np.linalg.norm(target - eye)
+    r = np.cross(f, up)
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    rel = points - eye
+    depth = rel @ f
+    assert np.all(depth > 0), "part of the attractor is behind the camera"
+    tan_v = np.tan(float(camera.fov) / 2.0)
+    tan_h = tan_v * float(camera.aspect)
+    return np.column_stack(((rel @ r) / depth / tan_h, (rel @ u) / depth / tan_v))
+
+
+@pytest.mark.browser
+def test_lorenz_first_view_shows_the_whole_attractor(built, page):
+    """A student's new tab (its own simulation, from t = 0) sees the whole butterfly, not a tangle up close."""
+    from ejsrl.app import load_app
+
+    app = load_app(built("lorenz"))
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True)
+    try:
+        open_lab(page, f"http://127.0.0.1:{server.get_port()}")
+        wait_until(lambda: len(server.get_clients()) == 1, what="the page to connect")
+        camera = next(iter(server.get_clients().values())).camera
+        wait_until(lambda: camera.look_at is not None and np.linalg.norm(np.asarray(camera.position) - [3.0, 3.0, 3.0]) > 1e-6,
+                   what="the framed camera to be reported back")
+        page.wait_for_timeout(500)
+        ndc = project(camera, lorenz_points())
+        assert np.all(np.abs(ndc) < 1.0), np.abs(ndc).max(axis=0)  # every loop in the picture ...
+        span = ndc.max(axis=0) - ndc.min(axis=0)
+        assert span.max() > 0.6, span  # ... and large in it
+        shot(page, "lorenz")
+    finally:
+        app.stop()
+        server.stop()
