@@ -132,3 +132,24 @@ def test_lorenz_first_view_shows_the_whole_attractor(built, page):
     finally:
         app.stop()
         server.stop()
+
+
+def time_readings(page) -> list[str]:
+    """Every 't = <number>' the page shows (the panel's own readout, labels; not the plots'
+    legends, which say which t their values are at: 'θ = 0.2 at t = 0.5')."""
+    import re
+
+    return re.findall(r"(?<![\w(])(?<!at )t = -?[0-9.]+", page.locator("body").inner_text().replace("\xa0", " "))
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("step", ["step1_pendulum", "step2_plot"])
+def test_tutorial_shows_the_time_once(step, built, page):
+    """The tutorial's pendulum shows t once (the panel's readout under Play), while it plays."""
+    with serving(built(f"tutorial/{step}")) as (app, url):
+        open_lab(page, url)
+        page.get_by_role("button", name="Play").first.click()
+        wait_until(lambda: app.model.t > 0.2, what="the pendulum to play")
+        page.get_by_text("θ = ", exact=False).first.wait_for()
+        assert len(time_readings(page)) == 1, time_readings(page)
+        shot(page, f"time_{step}")
