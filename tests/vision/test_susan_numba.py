@@ -239,6 +239,42 @@ def test_the_kernels_cache_in_numbas_user_dir_when_the_package_dir_is_read_only(
     assert r.stdout.split()[:2] == ["numba", "NullCache"], r.stdout
 
 
+def test_a_short_script_does_not_compile_and_leaves_the_kernels_for_the_next_run(tmp_path):
+    """With numba and an empty cache, a script that calls SUSAN once and ends neither compiles in
+    its own process (numba's type inference holds the GIL: its calls would crawl) nor waits: a
+    detached child compiles into numba's cache and finishes after the script has ended, so the
+    next run only loads the kernels (no compile in its process, whatever the timing: the
+    children take turns)."""
+    env = {"NUMBA_CACHE_DIR": str(tmp_path / "numba-cache"), "EJSRL_SUSAN": "auto"}
+    first = """
+        import sys, time
+        t0 = time.perf_counter()
+        import cv2
+        from skimage import data
+        from ejsrl.vision import susan_corners
+        pts = susan_corners(cv2.resize(data.camera(), (640, 480), interpolation=cv2.INTER_AREA))
+        print(len(pts), "numba" in sys.modules)
+    """
+    t0 = time.perf_counter()
+    r = _child(first, env)
+    took = time.perf_counter() - t0
+    assert r.returncode == 0 and r.stderr == "", r.stderr
+    n, numba_here = r.stdout.split()
+    assert int(n) > 100 and numba_here == "False"
+    assert took < 10, f"the script took {took:.1f} s: it waited for the compile"
+    second = """
+        from ejsrl.vision import _susan, _susan_numba as K
+        _susan.BACKEND = "numba"
+        assert _susan.susan_backend() == "numba"
+        kernels = [getattr(K, k) for k in dir(K) if hasattr(getattr(K, k), "stats")]
+        print(sum(sum(k.stats.cache_misses.values()) for k in kernels), sum(sum(k.stats.cache_hits.values()) for k in kernels))
+    """
+    r = _child(second, env)
+    assert r.returncode == 0, r.stderr
+    misses, hits = (int(x) for x in r.stdout.split())
+    assert misses == 0 and hits >= 5, r.stdout
+
+
 def test_an_unknown_backend_is_a_clear_error(monkeypatch):
     monkeypatch.setattr(_susan, "BACKEND", "numbaa")
     with pytest.raises(ValueError, match=r"EJSRL_SUSAN.*did you mean 'numba'"):

@@ -43,8 +43,10 @@ import collections
 import functools
 import importlib.util
 import os
+import sys
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
 from types import ModuleType
 from typing import NamedTuple
 
@@ -79,11 +81,20 @@ FAST_HINT = "SUSAN's compiled kernels need numba: pip install 'ejsgen[fast]' (or
 class _Compiled:
     """numba's kernels, compiled (or loaded from numba's cache) once per process in a thread.
 
-    The first process on a machine compiles them (about 6-12 s on a busy 2-core machine);
-    later ones load them from the cache (about 0.5 s, numba's import included). With
+    The first process on a machine compiles them (about 12 s on a 2-core machine); later ones
+    load them from numba's cache (about 0.7 s, numba's import included). With
     ``BACKEND = "auto"`` no SUSAN call waits for that: until the kernels are ready the NumPy
-    path runs (the same corners). LLVM's passes run outside the GIL, so a served lab's
-    threads keep running meanwhile.
+    path runs (the same corners).
+
+    The compile runs in a child process (``_warm_cache``, where the system can start one
+    detached: POSIX), which writes numba's cache; this process then loads the kernels from it.
+    numba's type inference is Python code holding the GIL: compiled in this process, it made
+    the NumPy path's calls 2-3x slower for the compile's 12 s, and a short script that ended
+    before the compile did left no cache, so every run started over. The child outlives a
+    short script, finishes the cache for the next run, and runs one at a time across
+    processes (a lock file: a served class's workers start together), the others then
+    loading what it wrote. Without a cache numba can write (no writable place), or where the
+    child fails, the kernels compile in this process as before (``EJSRL_SUSAN_CHILD=0``: always).
     """
 
     def __init__(self) -> None:
@@ -92,6 +103,7 @@ class _Compiled:
         self.module: ModuleType | None = None
         self.error: BaseException | None = None
         self.disc_sums_match = False  # the kernels' sums over the mask are OpenCV's filter2D's
+        self.child: int | None = None  # the compiling child's pid, while it runs
 
     def get(self, wait: bool) -> ModuleType | None:
         if self.module is not None:
@@ -109,6 +121,7 @@ class _Compiled:
 
     def _compile(self) -> None:
         try:
+            self._compile_in_child()
             from ejsrl.vision import _susan_numba
 
             self.disc_sums_match = _disc_sums_match(_susan_numba)
@@ -117,6 +130,47 @@ class _Compiled:
             self.error = e
             return
         self.module = _susan_numba
+
+    def _compile_in_child(self) -> bool:
+        """Have a detached child process compile the kernels into numba's cache (or find them
+        there) and wait for it: True when it did. False where no child can be started this way
+        (not POSIX), or it failed, or numba has no cache here: the caller compiles."""
+        if not hasattr(os, "posix_spawn") or os.environ.get("EJSRL_SUSAN_CHILD") == "0":
+            return False
+        import ejsrl
+
+        root = str(Path(ejsrl.__file__).resolve().parent.parent)  # the folder (or .pyz) this ejsrl is in
+        code = f"import sys; sys.path.insert(0, {root!r}); from ejsrl.vision._susan import _warm_cache; sys.exit(_warm_cache())"
+        null = os.devnull
+        actions = [(os.POSIX_SPAWN_OPEN, fd, null, os.O_RDWR, 0) for fd in (0, 1, 2)]
+        # its own session: a Ctrl+C in this terminal does not stop it half-way through the cache
+        try:
+            pid = os.posix_spawn(sys.executable, [sys.executable, "-P", "-c", code], os.environ, file_actions=actions, setsid=True)
+        except OSError:  # no interpreter to start (an embedded Python): compile here
+            return False
+        self.child = pid
+        try:
+            _, status = os.waitpid(pid, 0)  # outside the GIL
+        finally:
+            self.child = None
+        return os.waitstatus_to_exitcode(status) == 0
+
+
+def _warm_cache() -> int:
+    """A child process's work (``_Compiled._compile_in_child``): compile numba's kernels into its
+    cache, or load them from it, one process at a time; 0 when they are cached, 3 when numba
+    has no cache here (nothing to gain from a child)."""
+    import fcntl
+    import tempfile
+
+    lock = Path(tempfile.gettempdir()) / f"ejsrl-susan-numba-{os.getuid()}.lock"
+    with open(lock, "a") as f:
+        fcntl.flock(f, fcntl.LOCK_EX)  # released when this process ends
+        from ejsrl.vision import _susan_numba
+
+        _disc_sums_match(_susan_numba)
+        _warm_up(_susan_numba)
+        return 3 if type(getattr(_susan_numba.candidates, "_cache", None)).__name__ == "NullCache" else 0
 
 
 _COMPILED = _Compiled()
