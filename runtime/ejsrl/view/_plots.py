@@ -195,6 +195,11 @@ def flat_y_range(lo: float, hi: float, current: tuple[float, float] | None = Non
     return (mid - span, mid + span)
 
 
+#: after a tab connects to a chart that already holds points (a reload, a --shared lab), when
+#: the chart's scales are sent again (seconds on the view's clock): see :meth:`PlotBinding.reshow`
+RESHOW_AFTER = (0.5, 1.5, 3.0)
+
+
 class PlotBinding:
     """One ``Plot`` element shown as a viser uPlot chart, with a line of current values below.
 
@@ -223,6 +228,8 @@ class PlotBinding:
         self.clock = clock
         self._sent_rev = -1
         self._last_push = -math.inf
+        #: when the scales are to be sent again (clock times, ascending): see :meth:`reshow`
+        self._reshow_at: list[float] = []
         self.title = str(plot.title) if title is None else title
         self.labels = [str(s.label) for s in plot.series] if labels is None else list(labels)
         self.x_name = x_label or "x"
@@ -334,11 +341,28 @@ class PlotBinding:
             return
         self.buffer.append(xf, yf)
 
+    def reshow(self) -> None:
+        """Send the scales again :data:`RESHOW_AFTER` seconds from now (by :meth:`push`).
+
+        A tab that makes the chart with its points already in it (a reloaded tab, a new tab
+        on a ``--shared`` lab) may get it from viser's uPlot client without ticks or grid:
+        uPlot lays its axes out before the panel has its width and does not again until
+        its size or scales change (as when the window scrolls; a window not yet full did
+        not scroll for up to its length). New scales make the client build the chart
+        again, at its width, with the points it holds.
+        """
+        now = self.clock()
+        self._reshow_at = [now + d for d in RESHOW_AFTER]
+
     def push(self, *, force: bool = False) -> bool:
         """Send the data if it changed and the rate allows; returns True if sent."""
+        now = self.clock()
+        if self._reshow_at and now >= self._reshow_at[0]:
+            while self._reshow_at and now >= self._reshow_at[0]:
+                self._reshow_at.pop(0)
+            self.handle.scales = self._scales()  # a new dict: always sent
         if self.buffer.rev == self._sent_rev:
             return False
-        now = self.clock()
         if not force and now - self._last_push < 1.0 / self.max_rate:
             return False
         data = self.buffer.data()

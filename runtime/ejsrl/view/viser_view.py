@@ -138,6 +138,8 @@ class ViserView:
             @server.on_client_connect
             def _(client: Any) -> None:
                 self._frame(client)
+                for p in self.panel.plots:  # a new tab makes the shared charts with their points in
+                    p.reshow()
 
     def _frame(self, client: Any) -> None:
         """A first view that frames the scene's content (metres, z up)."""
@@ -181,6 +183,7 @@ class ViserView:
         for new, previous in zip(self.panel.plots, old.panel.plots):
             new.buffer = previous.buffer
             new._sent_rev = -1
+            new.reshow()  # the tab makes its charts with these points in: see PlotBinding.reshow
 
     def _record_plots(self) -> None:
         app = self.app

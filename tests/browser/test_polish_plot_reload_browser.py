@@ -1,0 +1,125 @@
+"""A windowed strip chart after the student reloads the tab (Debian's Chromium).
+
+A lab with a 10 s plot window (a small strip-chart lab; examples/pendulum, whose heavier
+page showed the fault every time) plays for 3 s; the student reloads the page (their
+simulation is kept, and goes on playing). The chart must come back with its axes within a second or two: x ticks within
+[first, first + 10] (the window not full yet) and y ticks, as uPlot draws them on its canvas
+(recorded by wrapping ``fillText``), without the chart having to move first.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+
+import pytest
+
+from ejsrl.app import App, AppMeta, SimConfig
+from ejsrl.sim.model import CodePage, ModelBase
+from ejsrl.view.elements import Dynamic, Plot, Series
+from testkit.browser import ARTIFACTS, wait_until
+
+SPEC = "strip.ejs.yaml"
+WINDOW = 10.0
+TOL = 0.05
+
+
+class Strip(ModelBase):
+    SPEC = SPEC
+    VARIABLES = {"t": "float", "dt": "float", "y": "float"}
+    INDEPENDENT = "t"
+
+    def _declare(self) -> None:
+        self.t = 0.0
+        self.dt = 0.02
+        self.y = 0.0
+
+    def _evolution(self) -> list:
+        return [CodePage("step", self._step)]
+
+    def _step(self) -> None:
+        self.t += self.dt
+
+    def _fixed_relations(self) -> None:
+        self.y = math.sin(3.0 * self.t)
+
+
+VIEW = [Plot("Signal", Dynamic(lambda m: m.t, "t"), [Series(Dynamic(lambda m: m.y, "y"), "y", "blue")], window=WINDOW)]
+
+RECORD_TEXT = """
+window.__texts = new Map();
+const C = CanvasRenderingContext2D.prototype;
+const fill = C.fillText, clear = C.clearRect;
+C.clearRect = function (...a) { window.__texts.set(this.canvas, []); return clear.apply(this, a); };
+C.fillText = function (t, x, y, ...r) {
+  const l = window.__texts.get(this.canvas) || [];
+  l.push([String(t), x, y]);
+  window.__texts.set(this.canvas, l);
+  return fill.call(this, t, x, y, ...r);
+};
+"""
+
+CHART = """
+() => Object.values((window.__viserTestpoints || {}).uplots || {}).map(({chart, createCount}) => {
+  const x = chart.data[0];
+  return {created: createCount, splits: chart.axes.map(a => a._splits), min: chart.scales.x.min, max: chart.scales.x.max, ymin: chart.scales.y.min, ymax: chart.scales.y.max, show: chart.axes.map(a => a._show), n: x.length, first: x.length ? x[0] : null, last: x.length ? x[x.length - 1] : null,
+          texts: window.__texts.get(chart.ctx.canvas) || []};
+})[0] || null
+"""
+
+
+def tick_labels(texts: list) -> tuple[list[str], list[str]]:
+    """(x tick labels, y tick labels): the x ticks share a baseline, the y ticks a left edge."""
+    by_y = Counter(round(t[2], 1) for t in texts)
+    by_x = Counter(round(t[1], 1) for t in texts)
+    row = by_y.most_common(1)[0][0] if by_y else None
+    col = by_x.most_common(1)[0][0] if by_x else None
+    xs = [t[0] for t in texts if round(t[2], 1) == row]
+    ys = [t[0] for t in texts if round(t[1], 1) == col and round(t[2], 1) != row]
+    return xs, ys
+
+
+def number(label: str) -> float:
+    return float(label.replace(",", "").replace("\u2212", "-"))
+
+
+@pytest.mark.browser
+@pytest.mark.parametrize("lab", ["strip", "pendulum"])
+def test_a_reloaded_tab_shows_its_strip_chart_with_axes(lab, built, page):
+    if lab == "strip":
+        app = App(Strip, VIEW, sim=SimConfig(fps=30.0), meta=AppMeta(title="Strip chart", description="", author="Tests", spec=SPEC))
+    else:
+        from ejsrl.app import load_app
+
+        app = load_app(built("pendulum"))  # its 'Angle' plot has a 10 s window too
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True)
+    try:
+        page.add_init_script(RECORD_TEXT)
+        page.goto(f"http://127.0.0.1:{server.get_port()}")
+        page.get_by_role("button", name="Play").first.wait_for(timeout=45_000)
+        wait_until(lambda: app.classroom is not None and len(app.classroom.sessions) == 1, what="the tab's session")
+        session = next(iter(app.classroom.sessions.values()))
+        page.get_by_role("button", name="Play").first.click()
+        wait_until(lambda: session.app.model.t > 3.0, timeout=60, what="t to pass 3 s")
+        page.reload()
+        page.get_by_role("button", name="Pause").first.wait_for(timeout=45_000)
+
+        def drawn() -> bool:
+            c = page.evaluate(CHART)
+            return bool(c) and c["n"] > 100 and bool(c["texts"])
+
+        wait_until(drawn, timeout=30, what="the reloaded chart to hold the kept data")
+        page.wait_for_timeout(1_500)  # it keeps playing: a few more points, the window not full yet
+        c = page.evaluate(CHART)
+        assert session.app.is_playing() and c["last"] < WINDOW - 2.0, c["last"]
+        ARTIFACTS.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / f"polish_plot_reload_{lab}.png"))
+        # the window is not full yet: the data from the left, the axis [first, first + window]
+        lo, hi = c["first"], c["first"] + WINDOW
+        assert c["min"] == pytest.approx(lo, abs=TOL) and c["max"] == pytest.approx(hi, abs=TOL), (c["min"], c["max"], lo)
+        x_ticks, y_ticks = tick_labels(c["texts"])
+        assert len(x_ticks) >= 2 and all(lo - TOL <= number(v) <= hi + TOL for v in x_ticks), (x_ticks, lo, hi, c)
+        assert len(y_ticks) >= 3, (y_ticks, c["texts"])
+    finally:
+        app.stop()
+        server.stop()
