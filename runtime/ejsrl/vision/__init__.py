@@ -1,9 +1,26 @@
 """ejsrl.vision: image functions over NumPy arrays, SUSAN, pipelines, the camera model and visual servoing.
 
-Images are (H, W) grey or (H, W, 3) RGB arrays (channel order R, G, B), uint8 0..255 or
-bool masks, uint16 (scaled to 0..255) or finite floats in [0, 1]; every image function
-checks its input and refuses an empty, NaN, wrongly shaped or typed image, or an unknown
-option, with a ``ValueError`` that says what to do (the rules: ``ejsrl.vision._util``).
+Images are NumPy arrays, and every image function checks its input the same way:
+
+- **Shape.** (H, W) grey, (H, W, 3) RGB or (H, W, 4) RGBA (the alpha is dropped); (H, W, 1)
+  counts as grey. Any other shape, and an empty image (H or W of 0), is a ``ValueError``.
+- **Channel order.** R, G, B (as the renderer and the browser give them; never OpenCV's BGR).
+- **Values.** uint8 0..255 is the native type; the others are read as follows, and anything
+  else (complex, strings, None) is a ``ValueError`` rather than a silent guess:
+
+  - bool: a mask, False -> 0, True -> 255;
+  - uint16: the full range 0..65535 scaled to 0..255 (``round(v / 257)``);
+  - other integers (int32, int64: what Python ints give): must already lie in 0..255;
+  - float16/32/64: must be finite (no NaN or inf) and lie in [0, 1] (scaled by 255); use
+    ``normalize(img)`` for another range, ``img / 255`` for 0..255 values, ``np.nan_to_num``
+    for NaN. Functions that compute in float (``log_filter``, ``gaussian_pyramid``,
+    ``watershed``'s relief, ``hu_moments``) take finite floats in any range.
+
+- **Options** given as strings ("mean", "orb", ...) are checked: an unknown one is a
+  ``ValueError`` that lists the known ones (``feature_methods()`` lists the feature
+  detectors this OpenCV has).
+
+A bad input is a ``ValueError`` that says what to do, never an OpenCV error or a crash.
 Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV. SUSAN corners run
 compiled, 2-3x faster and outside the GIL, when numba is installed: ``pip install 'ejsgen[fast]'``
 (the same corners either way; ``EJSRL_SUSAN=numpy`` forces the NumPy path). Everything public
@@ -25,6 +42,7 @@ from ejsrl.vision.matching import (
     Features,
     detect_features,
     epipolar_distances,
+    feature_methods,
     find_essential,
     find_fundamental,
     find_homography,
@@ -152,7 +170,7 @@ __all__ = [
     "gaussian_pyramid", "laplacian_pyramid", "collapse_laplacian_pyramid", "log_filter", "dog_filter", "log_blobs",
     "distance_transform", "watershed", "split_touching", "skeleton",
     "hu_moments", "ellipse_from_moments",
-    "Features", "detect_features", "match_features", "find_homography", "find_fundamental", "find_essential",
+    "Features", "detect_features", "feature_methods", "match_features", "find_homography", "find_fundamental", "find_essential",
     "recover_pose", "epipolar_distances",
     "StereoRectification", "stereo_rectify", "disparity", "depth_from_disparity", "triangulate",
     "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "draw_chessboard", "find_chessboard",

@@ -1,5 +1,7 @@
 """Input checks shared by the image functions: one place that says what an image is.
 
+(The rules below are stated for users in the ``ejsrl.vision`` module docstring; keep the two alike.)
+
 The conventions every image function of ``ejsrl.vision`` follows:
 
 - **Shape.** (H, W) grey, (H, W, 3) RGB or (H, W, 4) RGBA (the alpha channel is dropped);
@@ -34,7 +36,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["as_image", "as_gray", "as_rgb", "to_uint8", "as_points", "choice", "image_function", "IMAGE_CONVENTIONS"]
+__all__ = ["as_image", "as_gray", "as_rgb", "to_uint8", "as_points", "as_remap_source", "choice", "image_function", "IMAGE_CONVENTIONS"]
 
 #: one line on what the image functions accept, for error messages
 IMAGE_CONVENTIONS = (
@@ -120,6 +122,27 @@ def as_rgb(img: ArrayLike, name: str = "img") -> NDArray[np.uint8]:
     if arr.ndim == 2:
         arr = cv2.cvtColor(np.ascontiguousarray(arr), cv2.COLOR_GRAY2RGB)
     return np.ascontiguousarray(arr)
+
+
+def as_remap_source(img: ArrayLike, name: str = "img") -> NDArray:
+    """An image or depth map to be resampled (``cv2.remap``): (H, W) or (H, W, C), non-empty, real.
+
+    uint8, uint16, int16 and float32/64 keep their type and values, NaN and infinity included
+    (a depth map's ``inf`` means nothing seen); bool and other integers (0..255) become uint8,
+    float16 becomes float32; anything else is a ValueError.
+    """
+    if img is None:
+        raise ValueError(f"{name} is None; {IMAGE_CONVENTIONS}")
+    arr = np.asarray(img)
+    if arr.dtype.kind not in "biuf":
+        raise ValueError(f"{name} has dtype {arr.dtype}, not real numbers; {IMAGE_CONVENTIONS}")
+    if arr.ndim not in (2, 3) or arr.shape[0] == 0 or arr.shape[1] == 0 or (arr.ndim == 3 and arr.shape[2] == 0):
+        raise ValueError(f"{name} must be a non-empty H x W or H x W x C image, got shape {arr.shape}")
+    if arr.dtype == np.bool_ or (arr.dtype.kind in "iu" and arr.dtype not in (np.uint8, np.uint16, np.int16)):
+        return to_uint8(arr, name)
+    if arr.dtype == np.float16:
+        return arr.astype(np.float32)
+    return arr
 
 
 def as_points(pts: ArrayLike, name: str = "points", *, k: int = 2) -> NDArray[np.float64]:

@@ -27,6 +27,11 @@ __all__ = ["Calibration", "chessboard_points", "find_chessboard", "draw_chessboa
 
 Array = NDArray[np.float64]
 
+#: the smallest side (px) of an image OpenCV's chessboard detector can threshold: its adaptive
+#: threshold's block is round(0.1 * side) | 1 pixels and must be 3 or more. A board in a smaller
+#: image could not be found anyway (its squares need a few pixels each), so such an image has none.
+MIN_CHESSBOARD_SIDE = 15
+
 
 @dataclass(frozen=True)
 class Calibration(Intrinsics):
@@ -76,11 +81,16 @@ def find_chessboard(img: ArrayLike, pattern: Sequence[int], *, refine: bool = Tr
     ``refine``: sub-pixel refinement (``cornerSubPix``, 11 x 11 window clipped to the
     square size). Needs a white margin around the board, as OpenCV's detector does. Tries
     OpenCV's default flags, then without histogram normalisation, then plain thresholds.
+    An image too small to show a board (under ``MIN_CHESSBOARD_SIDE`` = 15 px on a side)
+    gives None like any image without one; an invalid image (empty, NaN, wrong dtype) is a
+    ValueError, and so is a ``pattern`` under 3 x 3 inner corners (OpenCV's detector needs 3).
     """
     cols, rows = _pattern(pattern)
+    if cols < 3 or rows < 3:
+        raise ValueError(f"find_chessboard needs a pattern of at least 3 x 3 inner corners (OpenCV's detector), got {cols} x {rows}")
     gray = as_gray(img)
-    if gray.size == 0:
-        raise ValueError("img is empty")
+    if min(gray.shape) < MIN_CHESSBOARD_SIDE:
+        return None  # too small to hold a board; OpenCV's adaptive threshold would refuse it
     ok, corners = False, None
     # OpenCV's default flags first; histogram normalisation fails on some images (dark borders)
     for flags in (cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE, cv2.CALIB_CB_ADAPTIVE_THRESH, 0):

@@ -322,9 +322,9 @@ class CameraModel(Intrinsics):
     def _remap(self, img: ArrayLike, source_of: Any, interpolation: str, K_source: ArrayLike | None = None) -> NDArray:
         import cv2
 
-        arr = np.asarray(img)
-        if arr.ndim not in (2, 3) or arr.shape[0] == 0 or arr.shape[1] == 0:
-            raise ValueError(f"img must be a non-empty H x W or H x W x C image, got shape {arr.shape}")
+        from ejsrl.vision._util import as_remap_source
+
+        arr = as_remap_source(img)
         if K_source is not None:
             Ks = np.asarray(K_source, dtype=np.float64)
             if Ks.shape != (3, 3) or not np.all(np.isfinite(Ks)):
@@ -364,7 +364,9 @@ class CameraModel(Intrinsics):
     def undistort(self, img: ArrayLike, *, interpolation: str = "linear") -> NDArray:
         """The image (H, W[, C]) a distortion-free camera with the same K would have seen (as ``cv2.undistort``).
 
-        Pixels whose source falls outside the input are black.
+        Pixels whose source falls outside the input are black. uint8, uint16, int16 and float
+        images keep their dtype; bool and other integer images (0..255) become uint8. Float
+        values are moved, not judged: a depth map's ``inf`` (nothing seen) or NaN stays so.
         """
         return self._remap(img, self.distort_points, interpolation)
 

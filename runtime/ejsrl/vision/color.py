@@ -2,7 +2,7 @@
 
 Images are NumPy arrays: (H, W) grey or (H, W, 3) RGB (channel order R, G, B, as the
 renderer and the browser give them; OpenCV's BGR never shows outside), uint8 0..255 or
-another type read as ``ejsrl.vision._util`` says (bool masks, uint16, floats in [0, 1]);
+another type read as the ``ejsrl.vision`` module docstring says (bool masks, uint16, floats in [0, 1]);
 every function returns uint8 unless it says otherwise. Bad input (empty, NaN, wrong shape
 or type, an unknown option) is a ``ValueError``.
 """

@@ -39,7 +39,10 @@ def _rgb(img: ArrayLike) -> Array:
 
 
 def _three(a: ArrayLike, name: str) -> Array:
-    arr = np.asarray(a, dtype=np.float64)
+    arr = np.asarray(a)
+    if arr.dtype.kind not in "biuf":
+        raise ValueError(f"{name} must be real numbers, got dtype {arr.dtype}")
+    arr = arr.astype(np.float64)
     if arr.ndim == 0 or arr.shape[-1] != 3:
         raise ValueError(f"{name} must have 3 channels last, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):

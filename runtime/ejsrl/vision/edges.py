@@ -3,7 +3,7 @@
 The derivative operators return float64 images (signed) so students see the sign of the
 gradient; ``normalize`` turns them into viewable uint8. ``x`` is along columns, ``y``
 along rows (down). Input: a grey or RGB image (uint8, or another type read as
-``ejsrl.vision._util`` says); bad input is a ``ValueError``.
+the ``ejsrl.vision`` module docstring says); bad input is a ``ValueError``.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Every point is ``(x, y)`` = (column, row) in pixels, as in OpenCV; point sets are (N, 2)
 float64 arrays. Images are grey or RGB (uint8, or another type read as
-``ejsrl.vision._util`` says: bool masks, uint16, floats in [0, 1]); a "binary" image counts
+the ``ejsrl.vision`` module docstring says: bool masks, uint16, floats in [0, 1]); a "binary" image counts
 every non-zero pixel. Bad input (empty, NaN, wrong shape or type, an unknown option) is a
 ``ValueError``.
 """

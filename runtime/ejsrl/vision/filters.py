@@ -1,7 +1,7 @@
 """Smoothing and sharpening filters, teaching noise, and morphology.
 
 Filters take a grey (H, W) or RGB (H, W, 3) image (uint8, or another type read as
-``ejsrl.vision._util`` says) and return uint8 of the same shape; borders are reflected
+the ``ejsrl.vision`` module docstring says) and return uint8 of the same shape; borders are reflected
 (OpenCV's default, ``BORDER_REFLECT_101``). Bad input (empty, NaN, wrong shape or type, an
 unknown option, an even kernel size where an odd one is needed) is a ``ValueError``.
 """

@@ -2,7 +2,7 @@
 
 Pixel coordinates are ``(x, y)`` = (column, row), as in OpenCV. The warps keep the
 image's dtype for uint8, uint16, float32 and float64 (floats must be finite); other types
-(bool, other integers) become uint8 as ``ejsrl.vision._util`` says. Bad input is a
+(bool, other integers) become uint8 as the ``ejsrl.vision`` module docstring says. Bad input is a
 ``ValueError``.
 """
 

@@ -16,10 +16,11 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ejsrl.vision._util import as_gray
+from ejsrl.vision._util import as_gray, choice, image_function
 
 __all__ = [
     "Features",
+    "feature_methods",
     "detect_features",
     "match_features",
     "find_homography",
@@ -31,13 +32,36 @@ __all__ = [
 
 Array = NDArray[np.float64]
 
-_METHODS = ("orb", "sift", "akaze", "brisk")
+#: every method ``detect_features`` knows, and the OpenCV class that does it. OpenCV 5 keeps
+#: ORB and SIFT in its main package and moved AKAZE, KAZE and BRISK to opencv-contrib's
+#: ``xfeatures2d``; a method works when the installed OpenCV has its class (see ``feature_methods``).
+_DETECTORS = {"orb": "ORB", "sift": "SIFT", "akaze": "AKAZE", "kaze": "KAZE", "brisk": "BRISK"}
+#: descriptor length and type of each method when an image gives no keypoint
+_EMPTY = {"orb": (32, np.uint8), "sift": (128, np.float32), "akaze": (61, np.uint8), "kaze": (64, np.float32), "brisk": (64, np.uint8)}
+
+
+def _factory(method: str):
+    """The installed OpenCV's constructor for ``method`` (``cv2.ORB.create`` and the like), or None."""
+    cls = _DETECTORS[method]
+    for module in (cv2, getattr(cv2, "xfeatures2d", None), getattr(cv2, "features2d", None)):
+        if module is None:
+            continue
+        make = getattr(getattr(module, cls, None), "create", None) or getattr(module, f"{cls}_create", None)
+        if make is not None:
+            return make
+    return None
+
+
+def feature_methods() -> tuple[str, ...]:
+    """The ``detect_features`` methods this OpenCV has: ``("orb", "sift")`` with opencv-python 5,
+    plus ``"akaze"``, ``"kaze"`` and ``"brisk"`` where opencv-contrib-python provides them."""
+    return tuple(m for m in _DETECTORS if _factory(m) is not None)
 
 
 @dataclass(frozen=True)
 class Features:
     """Keypoints and descriptors of one image: ``points`` (N, 2) (x, y), ``descriptors`` (N, D)
-    (uint8 binary for ORB/AKAZE/BRISK, float32 for SIFT), ``sizes`` (N,) diameters in px,
+    (uint8 binary for ORB/AKAZE/BRISK, float32 for SIFT/KAZE), ``sizes`` (N,) diameters in px,
     ``angles`` (N,) orientations in degrees, ``responses`` (N,), and the ``method``."""
 
     points: Array
@@ -56,33 +80,35 @@ class Features:
         return self.descriptors.dtype == np.uint8
 
 
+@image_function
 def detect_features(img: ArrayLike, method: str = "orb", *, max_features: int = 1000) -> Features:
-    """Detect keypoints and describe them: ``"orb"`` (default), ``"sift"``, ``"akaze"`` or ``"brisk"``.
+    """Detect keypoints and describe them: ``"orb"`` (default) or ``"sift"``; ``"akaze"``,
+    ``"kaze"`` and ``"brisk"`` only where the installed OpenCV has them (OpenCV 5 moved them
+    to opencv-contrib-python; ``feature_methods()`` lists what works here, and any other
+    method is a ValueError naming those).
 
-    ``max_features`` keeps the strongest (ORB and SIFT take it as their own limit).
-    AKAZE needs an OpenCV build that has it (OpenCV 5 moved it out of the main package).
+    ``max_features`` keeps the strongest (ORB and SIFT take it as their own limit). An image
+    one pixel wide or high has no features.
     """
-    if method not in _METHODS:
-        raise ValueError(f"method must be one of {_METHODS}, got {method!r}")
+    here = feature_methods()
+    if method in _DETECTORS and method not in here:
+        raise ValueError(
+            f"this OpenCV ({cv2.__version__}) has no {method.upper()} detector (OpenCV 5 moved it to "
+            f"opencv-contrib-python); use one of {', '.join(repr(m) for m in here)}"
+        )
+    method = choice(method, here, "feature method")
     if max_features < 1:
         raise ValueError(f"max_features must be positive, got {max_features}")
     gray = as_gray(img)
-    if gray.size == 0:
-        raise ValueError("img is empty")
-    if method == "orb":
-        det = cv2.ORB_create(nfeatures=int(max_features))
-    elif method == "sift":
-        det = cv2.SIFT_create(nfeatures=int(max_features))
-    elif method == "brisk":
-        det = cv2.BRISK_create()
-    else:
-        if not hasattr(cv2, "AKAZE_create"):
-            raise ValueError("this OpenCV has no AKAZE (OpenCV 5 moved it to opencv-contrib-python); use 'orb' or 'sift'")
-        det = cv2.AKAZE_create()
+    if min(gray.shape) < 2:  # OpenCV's ORB pyramid fails on a one-pixel-wide image; it has no features
+        width, dtype = _EMPTY[method]
+        return Features(np.zeros((0, 2)), np.zeros((0, width), dtype), np.zeros(0), np.zeros(0), np.zeros(0), method)
+    make = _factory(method)
+    det = make(nfeatures=int(max_features)) if method in ("orb", "sift") else make()
     kps, desc = det.detectAndCompute(gray, None)
     if desc is None or len(kps) == 0:
-        width = 128 if method == "sift" else 32
-        desc = np.zeros((0, width), np.float32 if method == "sift" else np.uint8)
+        width, dtype = _EMPTY[method]
+        desc = np.zeros((0, width), dtype)
         kps = []
     order = np.argsort([-k.response for k in kps], kind="stable")[: int(max_features)]
     kps = [kps[i] for i in order]

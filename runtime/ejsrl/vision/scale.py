@@ -14,7 +14,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ejsrl.vision._util import as_gray
+from ejsrl.vision._util import as_gray, as_image, to_uint8
 
 __all__ = ["gaussian_pyramid", "laplacian_pyramid", "collapse_laplacian_pyramid", "log_filter", "dog_filter", "log_blobs"]
 
@@ -28,27 +28,27 @@ def _levels(levels: int) -> int:
 
 
 def _float_gray(img: ArrayLike) -> Float:
-    a = np.asarray(img)
-    if a.ndim == 2 and np.issubdtype(a.dtype, np.floating):
-        if a.size == 0 or not np.all(np.isfinite(a)):
-            raise ValueError("img must be a non-empty image of finite values")
-        return a.astype(np.float64)
-    g = as_gray(a)
-    if g.size == 0:
-        raise ValueError("img is empty")
-    return g.astype(np.float64)
+    a = as_image(img)  # the shared checks: None, dtype, shape, empty, NaN
+    if a.ndim == 2 and a.dtype.kind == "f":
+        return a.astype(np.float64)  # a grey float image is filtered in its own units, any range
+    return as_gray(a).astype(np.float64)
 
 
 def gaussian_pyramid(img: ArrayLike, levels: int = 4) -> list[NDArray]:
-    """``levels`` images: the input, then each blurred and halved (``cv2.pyrDown``), same dtype."""
+    """``levels`` images: the input, then each blurred and halved (``cv2.pyrDown``).
+
+    uint8, uint16, int16, float32 and float64 images keep their dtype (floats in any range,
+    finite); bool and other integer images (values 0..255) become uint8.
+    """
     n = _levels(levels)
-    a = np.asarray(img)
-    if a.ndim not in (2, 3) or a.size == 0:
-        raise ValueError(f"img must be a non-empty (H, W) or (H, W, 3) image, got shape {a.shape}")
-    if a.dtype == np.bool_:
-        a = a.astype(np.uint8) * 255
+    a = as_image(img)  # the shared checks: None, dtype, shape, empty, NaN
+    if a.dtype == np.bool_ or (a.dtype.kind in "iu" and a.dtype not in (np.uint8, np.uint16, np.int16)):
+        a = to_uint8(a)  # bool -> 0/255; other integers must lie in 0..255, as everywhere
     if a.dtype not in (np.uint8, np.uint16, np.int16, np.float32, np.float64):
-        raise ValueError(f"img must be uint8, uint16, int16, float32 or float64, got {a.dtype}")
+        raise ValueError(
+            f"img must be uint8, uint16, int16, float32 or float64 (OpenCV's pyrDown), got {a.dtype}; "
+            "convert it, e.g. img.astype(np.float32)"
+        )
     a = np.ascontiguousarray(a)
     out = [a]
     for _ in range(n - 1):

@@ -1,7 +1,8 @@
 """Distance transform, watershed segmentation and skeletons of binary images.
 
-Conventions: a binary image is any (H, W) array whose non-zero pixels are foreground
-(bool, 0/1 or 0/255). Distances are in pixels between pixel centres. Label images are
+Conventions: a binary image is an (H, W) array of bool or real numbers (0/1, 0/255, ...)
+whose non-zero pixels are foreground; an empty, complex or non-finite (NaN, inf) one is a
+``ValueError``, as for every image function (the rules: :mod:`ejsrl.vision`). Distances are in pixels between pixel centres. Label images are
 int32: 0 background, 1..n regions, and for :func:`watershed` -1 on the lines where
 regions meet (OpenCV's convention).
 """
@@ -12,7 +13,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ejsrl.vision._util import as_rgb
+from ejsrl.vision._util import as_image, as_rgb
 
 __all__ = ["distance_transform", "watershed", "split_touching", "skeleton"]
 
@@ -20,13 +21,9 @@ _METRICS = {"euclidean": cv2.DIST_L2, "l1": cv2.DIST_L1, "chessboard": cv2.DIST_
 
 
 def _binary(img: ArrayLike, name: str = "binary") -> NDArray[np.uint8]:
-    a = np.asarray(img)
+    a = as_image(img, name)  # the shared checks: None, dtype, shape, empty, NaN
     if a.ndim != 2:
-        raise ValueError(f"{name} must be a 2-D (H, W) image, got shape {a.shape}")
-    if a.size == 0:
-        raise ValueError(f"{name} is empty")
-    if not (a.dtype == np.bool_ or np.issubdtype(a.dtype, np.number)):
-        raise ValueError(f"{name} must be numeric or bool, got {a.dtype}")
+        raise ValueError(f"{name} must be a 2-D (H, W) binary image, got {a.shape}; for an RGB image threshold it first")
     return (a != 0).astype(np.uint8)
 
 
@@ -53,16 +50,11 @@ def watershed(img: ArrayLike, markers: ArrayLike, *, lines: bool = True) -> NDAr
     step are split to within a pixel. ``lines``: mark the pixels where basins meet with
     -1 (OpenCV's convention), on the lower-right side of each meeting.
     """
-    a = np.asarray(img)
+    a = as_image(img)  # the shared checks: None, dtype, shape, empty, NaN
     if a.ndim == 3:
-        a = as_rgb(a)
-        a = cv2.cvtColor(np.ascontiguousarray(a), cv2.COLOR_RGB2GRAY)
-    if a.ndim != 2 or a.size == 0:
-        raise ValueError(f"img must be a non-empty grey or RGB image, got shape {a.shape}")
+        a = cv2.cvtColor(as_rgb(a), cv2.COLOR_RGB2GRAY)
     if a.dtype != np.uint8:
         f = a.astype(np.float64)
-        if not np.all(np.isfinite(f)):
-            raise ValueError("img must be finite")
         lo, hi = f.min(), f.max()
         a = np.zeros(f.shape, np.uint8) if hi == lo else np.rint(255 * (f - lo) / (hi - lo)).astype(np.uint8)
     m = np.asarray(markers)

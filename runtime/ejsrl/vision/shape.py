@@ -1,7 +1,8 @@
 """Shape descriptors from moments: Hu's seven invariants, and the equivalent ellipse.
 
 Conventions as :func:`ejsrl.vision.moments` (OpenCV's ``cv2.moments``): a grey image
-weighs each pixel by its value (``binary=True`` counts non-zero pixels as 1); a contour
+(bool or real numbers of any integer or float type, finite) weighs each pixel by its value
+(``binary=True`` counts non-zero pixels as 1); a NaN, complex or empty image is a ``ValueError``; a contour
 (M, 2) of float (x, y) points gives the moments of the polygon it encloses.
 """
 
@@ -13,6 +14,8 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ejsrl.vision._util import as_image
+
 __all__ = ["hu_moments", "ellipse_from_moments"]
 
 
@@ -23,13 +26,16 @@ def _moments(img_or_contour: ArrayLike, binary: bool) -> dict[str, float]:
             raise ValueError("a contour needs at least 3 finite (x, y) points")
         m = cv2.moments(a.astype(np.float32).reshape(-1, 1, 2))
     else:
-        if a.ndim != 2 or a.size == 0:
-            raise ValueError(f"expected a non-empty (H, W) image or an (M, 2) float contour, got shape {a.shape}")
+        a = as_image(img_or_contour)  # the shared checks: None, dtype, shape, empty, NaN
+        if a.ndim != 2:
+            raise ValueError(f"expected an (H, W) grey image or an (M, 2) float contour, got shape {a.shape}; use to_gray first")
         if a.dtype == np.bool_:
             a = a.astype(np.uint8)
-        if not np.issubdtype(a.dtype, np.number):
-            raise ValueError(f"image must be numeric, got {a.dtype}")
-        m = cv2.moments(np.ascontiguousarray(a.astype(np.float32) if a.dtype.kind == "f" else a), binaryImage=bool(binary))
+        elif a.dtype.kind == "f":
+            a = a.astype(np.float32)
+        elif a.dtype not in (np.uint8, np.uint16, np.int16):
+            a = a.astype(np.float64)  # cv2.moments takes no int32/int64: weigh by the same values in float
+        m = cv2.moments(np.ascontiguousarray(a), binaryImage=bool(binary))
     if m["m00"] == 0:
         raise ValueError("the shape has zero area (an empty image or a degenerate contour)")
     return m

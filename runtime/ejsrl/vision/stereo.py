@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ejsrl.vision._util import as_gray
+from ejsrl.vision._util import as_gray, as_remap_source, choice, image_function
 from ejsrl.vision.camera import CameraModel
 
 __all__ = ["StereoRectification", "stereo_rectify", "disparity", "depth_from_disparity", "triangulate"]
@@ -50,7 +50,7 @@ class StereoRectification:
         (m1x, m1y), (m2x, m2y) = self._maps[0], self._maps[1]
         out = []
         for img, (mx, my) in ((left, (m1x, m1y)), (right, (m2x, m2y))):
-            arr = np.ascontiguousarray(np.asarray(img))
+            arr = np.ascontiguousarray(as_remap_source(img, "left" if mx is m1x else "right"))
             if arr.shape[:2] != (self.image_size[1], self.image_size[0]):
                 raise ValueError(f"images must be {self.image_size[0]} x {self.image_size[1]}, got shape {arr.shape}")
             out.append(cv2.remap(arr, mx, my, cv2.INTER_LINEAR))
@@ -91,6 +91,7 @@ def stereo_rectify(left: CameraModel, right: CameraModel, T_left_right: ArrayLik
     return StereoRectification(R1, R2, P1, P2, Q, size, (m1, m2, (left, right)))
 
 
+@image_function
 def disparity(
     left: ArrayLike, right: ArrayLike, *, max_disparity: int = 64, block_size: int = 5, method: str = "sgbm"
 ) -> NDArray[np.float32]:
@@ -98,23 +99,31 @@ def disparity(
 
     ``method``: ``"sgbm"`` (semi-global block matching, default) or ``"bm"`` (block
     matching); ``max_disparity`` is rounded up to a multiple of 16; ``block_size`` odd.
-    Sub-pixel to 1/16 px.
+    Sub-pixel to 1/16 px. The images must be wider than the disparities searched plus the
+    block (``max_disparity`` rounded up + ``block_size``) and, for ``"bm"``, at least
+    ``max(5, block_size)`` px in each direction; smaller ones are a ValueError.
     """
-    L, R = as_gray(left), as_gray(right)
-    if L.shape != R.shape or L.size == 0:
-        raise ValueError(f"left and right must be non-empty images of the same size, got {L.shape} and {R.shape}")
+    L, R = as_gray(left, "left"), as_gray(right, "right")
+    if L.shape != R.shape:
+        raise ValueError(f"left and right must be images of the same size, got {L.shape} and {R.shape}")
     if block_size < 1 or block_size % 2 == 0:
         raise ValueError(f"block_size must be a positive odd number, got {block_size}")
     if max_disparity < 1:
         raise ValueError(f"max_disparity must be positive, got {max_disparity}")
+    method = choice(method, ("sgbm", "bm"), "disparity method")
     nd = 16 * int(np.ceil(max_disparity / 16))
+    h, w = L.shape
+    block = max(5, block_size) if method == "bm" else block_size
+    if w < nd + block or h < block:
+        raise ValueError(
+            f"the images ({w} x {h} px) are too small to search {nd} disparities with a {block} px block: they need "
+            f"at least {nd + block} x {block} px; lower max_disparity (and block_size) or use larger images"
+        )
     if method == "sgbm":
         m = cv2.StereoSGBM_create(minDisparity=0, numDisparities=nd, blockSize=block_size, P1=8 * block_size**2,
                                   P2=32 * block_size**2, uniquenessRatio=5, mode=cv2.STEREO_SGBM_MODE_HH)
-    elif method == "bm":
-        m = cv2.StereoBM_create(numDisparities=nd, blockSize=max(5, block_size))
     else:
-        raise ValueError(f"method must be 'sgbm' or 'bm', got {method!r}")
+        m = cv2.StereoBM_create(numDisparities=nd, blockSize=block)
     d = m.compute(L, R).astype(np.float32) / 16.0
     d[d < 0] = np.nan
     return d
