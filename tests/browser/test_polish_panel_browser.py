@@ -7,10 +7,12 @@ Screenshots go to ``test-artifacts/polish_*.png``.
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from ejsgen.cli import build
 from testkit.browser import ARTIFACTS, serving, wait_until
@@ -153,3 +155,26 @@ def test_tutorial_shows_the_time_once(step, built, page):
         page.get_by_text("θ = ", exact=False).first.wait_for()
         assert len(time_readings(page)) == 1, time_readings(page)
         shot(page, f"time_{step}")
+
+
+@pytest.mark.browser
+def test_a_lab_without_a_scene_gives_the_window_to_its_panel(built, page):
+    """Tutorial step 2 (plots, no scene): no empty 3D area; the panel, with the About text, spans the window."""
+    with serving(built("tutorial/step2_plot")) as (app, url):
+        open_lab(page, url)
+        width = page.viewport_size["width"]
+        play = page.get_by_role("button", name="Play").first
+        wait_until(lambda: play.bounding_box()["width"] > 0.8 * width, timeout=20,
+                   what="the panel to span the window")
+        about = page.get_by_text("A simple pendulum. Press", exact=False).first
+        assert about.is_visible()
+        # no 3D view shows: the strip the client keeps of it left of the panel is blank
+        # (no grid, no axes, no logo; the panel's shadow aside)
+        left = int(play.bounding_box()["x"]) - 30  # clear of the panel's shadow
+        strip = np.asarray(Image.open(io.BytesIO(page.screenshot(clip={"x": 0, "y": 0, "width": left, "height": 800}))).convert("RGB")).astype(int)
+        assert (strip.max(axis=(0, 1)) - strip.min(axis=(0, 1))).max() == 0, "something shows left of the panel"
+        # the plots use the room: as wide as the panel, and still wholly readable in height
+        chart = page.locator(".uplot").first
+        box = chart.bounding_box()
+        assert box["width"] > 0.75 * width and box["height"] < 0.5 * page.viewport_size["height"], box
+        shot(page, "no_scene")

@@ -83,6 +83,28 @@ CLIENT_TWEAKS = (
 )
 
 
+#: A lab without a ``scene`` gives the window to its panel, as EJS shows only the panels an
+#: author declares: the panel asks for more than any window (the client keeps its least
+#: 3D view, 120 px, and gives the panel the rest), holds the About text itself, and the
+#: empty 3D view (and its axes gizmo) are hidden.
+NO_SCENE_WIDTH = 100_000.0
+NO_SCENE_TWEAKS = '<style>div[style*="inset"]:has(canvas[data-engine]){visibility:hidden}</style>'
+#: the height (pixels) of a plot in a panel that has the window (else the panel's width / 1.6)
+NO_SCENE_PLOT_HEIGHT = 300
+
+
+def has_scene(elements: Any) -> bool:
+    """Whether a view (a list of elements, with folders and tabs) holds a 3D ``Scene``."""
+    for el in elements or ():
+        if isinstance(el, Scene):
+            return True
+        if isinstance(el, Folder) and has_scene(el.children):
+            return True
+        if isinstance(el, Tabs) and any(has_scene(children) for _label, children in el.tabs):
+            return True
+    return False
+
+
 #: below this measured speed (1.0: as fast as the lab asks) the readout says the server is busy
 SLOW_SPEED = 0.95
 
@@ -251,11 +273,15 @@ class Panel:
         title = getattr(meta, "title", "") or "ejsgen simulation"
         gui.set_panel_label(title)
         width = getattr(getattr(app, "sim", None), "panel_width", None) or panel_width_for(title)
+        #: False for a lab without a 3D scene: its panel takes the window (:data:`NO_SCENE_WIDTH`)
+        self.has_scene = has_scene(getattr(app, "view", None))
+        if not self.has_scene:
+            width = NO_SCENE_WIDTH
         # docked at the right edge: the panel never covers the 3D view, and it gets the
         # window's full height for plots and camera images
         gui.main_panel.dock_right()
         gui.main_panel.set_width(float(width))
-        self.client_tweaks = gui.add_html(CLIENT_TWEAKS)
+        self.client_tweaks = gui.add_html(CLIENT_TWEAKS if self.has_scene else CLIENT_TWEAKS + NO_SCENE_TWEAKS)
         self.error_box = gui.add_html("", visible=False)
         if getattr(getattr(app, "sim", None), "controls", True):
             self._build_controls_bar()
@@ -268,11 +294,16 @@ class Panel:
             text = description
             if author:
                 text += f"\n\n*Author: {author}*"
-            self.about = gui.add_panel()
-            with self.about.add_tab("About"):
-                self.about_text = gui.add_markdown(text)
-            self.about.dock_left()
-            self.about.set_width(ABOUT_WIDTH)
+            if not self.has_scene:  # in the panel, which has the window (a docked About would be squeezed)
+                self.about = gui.add_folder("About")
+                with self.about:
+                    self.about_text = gui.add_markdown(text)
+            else:
+                self.about = gui.add_panel()
+                with self.about.add_tab("About"):
+                    self.about_text = gui.add_markdown(text)
+                self.about.dock_left()
+                self.about.set_width(ABOUT_WIDTH)
         self._build_elements(list(getattr(app, "view", []) or []))
 
     def _build_controls_bar(self) -> None:
@@ -333,7 +364,8 @@ class Panel:
                 elif isinstance(el, Plot):
                     x_label = getattr(el.x, "source", "") or self._time_name or "x"
                     labels = [self._text(s.label, s.where or el.where) for s in el.series]
-                    binding = PlotBinding(gui, el, x_label=x_label, title=self._text(el.title, el.where), labels=labels, clock=self.clock)
+                    binding = PlotBinding(gui, el, x_label=x_label, title=self._text(el.title, el.where), labels=labels, clock=self.clock,
+                                          height=None if self.has_scene else NO_SCENE_PLOT_HEIGHT)
                     self.plots.append(binding)
                     if is_dynamic(el.title):
                         self.texts.append(TextBinding(el.title, el.where, binding.set_title, binding.title))

@@ -208,7 +208,8 @@ class PlotBinding:
     (``--`` otherwise), so the chart's legend is replaced by a Markdown line that shows
     each series' colour, label and latest value, and x's latest value.
     ``title`` / ``labels``: the title and series labels as shown now (they may hold
-    ``{expr}``; :meth:`set_title` and :meth:`set_label` change them).
+    ``{expr}``; :meth:`set_title` and :meth:`set_label` change them). ``height``: the
+    chart's height in pixels (default: its width / 1.6).
     """
 
     def __init__(
@@ -221,6 +222,7 @@ class PlotBinding:
         labels: list[str] | None = None,
         max_rate: float = 15.0,
         clock: Callable[[], float] = time.monotonic,
+        height: int | None = None,
     ) -> None:
         self.plot = plot
         self.buffer = PlotBuffer(len(plot.series), window=plot.window, max_points=plot.max_points)
@@ -254,6 +256,7 @@ class PlotBinding:
             legend={"show": False},
             padding=(8, 28, 0, 4),
             aspect=1.6,
+            height=height,
         )
         self.values = gui.add_markdown(self._values_text())
 
