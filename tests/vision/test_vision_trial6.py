@@ -17,7 +17,6 @@ import json
 import re
 import subprocess
 import sys
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -252,6 +251,42 @@ def test_the_trial_s_nan_and_complex_images_are_refused_with_what_to_do(fn, bad)
     img = _nan_image() if bad == "nan" else np.ones((24, 24), np.complex128)
     with pytest.raises(ValueError, match="NaN" if bad == "nan" else "dtype complex128"):
         getattr(V, fn)(img)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [lambda: V.xyz_to_lab(np.ones((2, 3), np.complex128)), lambda: V.lab_to_rgb(np.ones((2, 3), np.complex128)),
+     lambda: V.flow_magnitude(np.ones((4, 4, 2), np.complex64)), lambda: V.flow_magnitude(np.full((4, 4, 2), np.nan)),
+     lambda: V.warp_by_flow(np.zeros((4, 4), np.uint8), np.full((4, 4, 2), np.nan))],
+    ids=["xyz_to_lab complex", "lab_to_rgb complex", "flow complex", "flow nan", "warp_by_flow nan flow"],
+)  # fmt: skip
+def test_colour_and_flow_arrays_refuse_complex_and_nan_instead_of_dropping_the_imaginary_part(call):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy's ComplexWarning was all a user got before
+        with pytest.raises(ValueError, match="real numbers|NaN"):
+            call()
+
+
+def test_dis_flow_on_frames_too_small_for_it_is_a_value_error_not_a_crash():
+    # OpenCV 5's DIS killed the interpreter on 8..14 x 60 frames; run in a child so a crash fails the test
+    code = (
+        "import numpy as np, ejsrl.vision as V\n"
+        "a = np.random.default_rng(0).integers(0, 255, (10, 60)).astype(np.uint8)\n"
+        "try:\n    V.optical_flow(a, a, 'dis')\nexcept ValueError as e:\n    print('ValueError', e)\n"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and "at least 16 x 16" in r.stdout and "farneback" in r.stdout, (r.returncode, r.stdout, r.stderr[-300:])
+    big = np.random.default_rng(0).integers(0, 255, (16, 60)).astype(np.uint8)
+    assert V.optical_flow(big, big, "dis").shape == (16, 60, 2)
+
+
+def test_disparity_on_images_narrower_than_the_search_says_what_to_change():
+    img = np.zeros((40, 50), np.uint8)
+    with pytest.raises(ValueError, match="lower max_disparity"):
+        V.disparity(img, img, max_disparity=64)
+    assert V.disparity(img, img, max_disparity=16, block_size=5).shape == (40, 50)
 
 
 @pytest.mark.parametrize("dtype", [np.int32, np.int64, np.uint32, np.int8])
