@@ -92,8 +92,8 @@ class _Compiled:
     the NumPy path's calls 2-3x slower for the compile's 12 s, and a short script that ended
     before the compile did left no cache, so every run started over. The child outlives a
     short script, finishes the cache for the next run, and runs one at a time across
-    processes (a lock file: a served class's workers start together), the others then
-    loading what it wrote. Without a cache numba can write (no writable place), or where the
+    processes that would write the same cache (a lock file: a served class's workers start
+    together), the others then loading what it wrote. Without a cache numba can write (no writable place), or where the
     child fails, the kernels compile in this process as before (``EJSRL_SUSAN_CHILD=0``: always).
     """
 
@@ -137,6 +137,8 @@ class _Compiled:
         (not POSIX), or it failed, or numba has no cache here: the caller compiles."""
         if not hasattr(os, "posix_spawn") or os.environ.get("EJSRL_SUSAN_CHILD") == "0":
             return False
+        if _cache_mark("done").exists():  # a child cached these kernels already: load them here
+            return True
         import ejsrl
 
         root = str(Path(ejsrl.__file__).resolve().parent.parent)  # the folder (or .pyz) this ejsrl is in
@@ -156,21 +158,37 @@ class _Compiled:
         return os.waitstatus_to_exitcode(status) == 0
 
 
-def _warm_cache() -> int:
-    """A child process's work (``_Compiled._compile_in_child``): compile numba's kernels into its
-    cache, or load them from it, one process at a time; 0 when they are cached, 3 when numba
-    has no cache here (nothing to gain from a child)."""
-    import fcntl
+def _cache_mark(kind: str) -> Path:
+    """A file in the temporary directory for these kernels' cache ("lock": the child compiling
+    them holds it; "done": a child cached them): one per source (its file, as changed last)
+    and numba cache directory, so only processes writing the same cache take turns. (A cache
+    deleted after its "done" only costs a compile in the process, as without a child.)"""
+    import hashlib
     import tempfile
 
-    lock = Path(tempfile.gettempdir()) / f"ejsrl-susan-numba-{os.getuid()}.lock"
-    with open(lock, "a") as f:
+    src = Path(importlib.util.find_spec("ejsrl.vision._susan_numba").origin)
+    where = [os.environ.get(k, "") for k in ("NUMBA_CACHE_DIR", "XDG_CACHE_HOME", "HOME")]  # numba's user-wide cache follows them
+    key = hashlib.sha1(f"{src.resolve()}|{src.stat().st_mtime_ns}|{where}".encode()).hexdigest()[:16]
+    return Path(tempfile.gettempdir()) / f"ejsrl-susan-numba-{os.getuid()}-{key}.{kind}"
+
+
+def _warm_cache() -> int:
+    """A child process's work (``_Compiled._compile_in_child``): compile numba's kernels into its
+    cache, or load them from it, one process at a time; 0 when they are cached (and marked
+    so: later processes skip the child), 3 when numba has no cache here (nothing to gain from
+    a child)."""
+    import fcntl
+
+    with open(_cache_mark("lock"), "a") as f:
         fcntl.flock(f, fcntl.LOCK_EX)  # released when this process ends
         from ejsrl.vision import _susan_numba
 
         _disc_sums_match(_susan_numba)
         _warm_up(_susan_numba)
-        return 3 if type(getattr(_susan_numba.candidates, "_cache", None)).__name__ == "NullCache" else 0
+        if type(getattr(_susan_numba.candidates, "_cache", None)).__name__ == "NullCache":
+            return 3
+        _cache_mark("done").touch()
+        return 0
 
 
 _COMPILED = _Compiled()
