@@ -707,7 +707,7 @@ def susan_corners(
     """SUSAN corner detector (Smith and Brady 1997).
 
     ``img``: grey (H, W) or RGB (H, W, 3) image (uint8, or another type read as
-    ``ejsrl.vision._util`` says). ``t``: brightness threshold in grey levels (lower finds
+    ``help(ejsrl.vision)`` says). ``t``: brightness threshold in grey levels (lower finds
     weaker corners, higher resists noise). ``g``: geometric threshold in mask pixels
     (default half the mask, 18.5). ``nms_radius``: non-maximum suppression window radius
     (3: 7x7, as in the original code). ``min_response``: drop corners whose response
@@ -742,6 +742,12 @@ def susan_corners(
     gray = as_gray(img)
     if not float(t) > 0:
         raise ValueError(f"susan_corners: t must be positive, got {t}")
+    if not 0.0 <= float(quality) <= 1.0:
+        raise ValueError(f"susan_corners: quality is a fraction of the strongest corner's response, in [0, 1] (0: off), got {quality}")
+    if int(nms_radius) != nms_radius or nms_radius < 0:
+        raise ValueError(f"susan_corners: nms_radius must be a whole number of pixels >= 0 (3: a 7 x 7 window), got {nms_radius}")
+    if max_corners is not None and (int(max_corners) != max_corners or max_corners < 0):
+        raise ValueError(f"susan_corners: max_corners must be a whole number >= 0, or None for no limit, got {max_corners}")
     H, W = gray.shape
     gthr = 0.5 * len(SUSAN_MASK) if g is None else float(g)
     g100 = gthr * _SCALE
