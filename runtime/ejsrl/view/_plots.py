@@ -174,6 +174,8 @@ Y_MIN_ABS_SPAN = 1e-12
 
 def min_y_span(lo: float, hi: float) -> float:
     """The least y span shown for values in ``[lo, hi]``: values that vary less are drawn as flat."""
+    if lo == hi == 0.0:  # exactly zero (a servo at rest): +-1, not ticks "0 0 0 -0 -0" over +-1e-12
+        return 1.0
     return max(Y_MIN_REL_SPAN * max(abs(lo), abs(hi)), Y_MIN_ABS_SPAN)
 
 
