@@ -62,7 +62,8 @@ def test_a_half_turn_goal_makes_ibvs_retreat_and_the_warning_stays(built, turn):
     app = built(LABS["servo"])
     d = headless(app, 2.0, vars="t,found,err_px,v_norm,Z", sets={"goal_turn": str(turn)}, every=3)
     z = np.column_stack([d[f"Z[{i}]"] for i in range(4)]).mean(axis=1)
-    assert z.max() > 2 * z[0]  # the camera backed away to twice the depth ...
+    z_goal = 120 / np.tan(np.radians(25)) * 0.16 / 100  # the 16 cm square 100 px wide: 0.41 m away
+    assert z.max() > 1.3 * max(z[0], z_goal)  # the camera backed away 30 % past the start and the goal ...
     assert np.all(d["found"] == 4) and np.all(np.isfinite(d["err_px"]))  # ... the target still seen ...
     assert d["v_norm"][-1] == 0.0 and d["err_px"][-1] > 50  # ... and the servo stopped the arm far from the goal
     rows, alerts = _run(app, 2.0, f"goal_turn={turn}")
@@ -75,3 +76,14 @@ def test_pbvs_turns_the_camera_half_round_instead(built):
     z = np.column_stack([d[f"Z[{i}]"] for i in range(4)]).mean(axis=1)
     assert d["err_px"][0] > 100 and d["done"][-1] == 1 and d["err_px"][-1] < 0.5
     assert z.max() < 1.2 * z[0]  # no retreat
+
+
+def test_a_smaller_desired_square_backs_the_camera_away_with_no_retreat_warning(built):
+    """The goal farther than the start (70 px, the slider's least, for the start's ~105 px):
+    the camera backs away 1.5 times, which the monitor measures from the goal: no warning."""
+    app = built(LABS["servo"])
+    d = headless(app, 8.0, vars="t,found,err_px,done,Z", sets={"size_px": "70"}, every=15)
+    z = np.column_stack([d[f"Z[{i}]"] for i in range(4)]).mean(axis=1)
+    assert z[-1] > 1.4 * z[0] and d["done"][-1] == 1
+    rows, alerts = _run(app, 8.0, "size_px=70")
+    assert alerts == [] and "Done" in rows[-1]

@@ -263,7 +263,9 @@ class ServoMonitor:
     near 180 degrees about the optical axis).
 
     ``check(pixels, Z)`` returns the warnings that start at this step (each is given once,
-    and again only after its condition has cleared); show them with ``alert``.
+    and again only after its condition has cleared); show them with ``alert``. With
+    ``Z_goal`` (the features' depth at the goal) the retreat is measured from the larger of
+    the start's depth and the goal's, so a goal farther away than the start is no retreat.
     ``reset()`` forgets the history (call it when the loop restarts).
     """
 
@@ -279,8 +281,9 @@ class ServoMonitor:
         self._last_Z: float | None = None
         self.active: set[str] = set()
 
-    def check(self, pixels: ArrayLike, Z: ArrayLike | None = None) -> list[str]:
-        """The new warnings at this step: ``pixels`` (N, 2) the features found (x, y), ``Z`` their depths (m)."""
+    def check(self, pixels: ArrayLike, Z: ArrayLike | None = None, Z_goal: float | None = None) -> list[str]:
+        """The new warnings at this step: ``pixels`` (N, 2) the features found (x, y), ``Z`` their depths (m),
+        ``Z_goal`` their mean depth at the goal (m), if known."""
         p = np.asarray(pixels, dtype=np.float64).reshape(-1, 2)
         now: dict[str, str] = {}
         m = self.margin
@@ -299,10 +302,12 @@ class ServoMonitor:
                     self.Z0 = zm
                 growing = self._last_Z is not None and zm > self._last_Z
                 self._last_Z = zm
-                if zm > self.retreat_factor * self.Z0 and (growing or "retreat" in self.active):
+                ref = self.Z0 if Z_goal is None or not Z_goal > self.Z0 else float(Z_goal)
+                if zm > self.retreat_factor * ref and (growing or "retreat" in self.active):
+                    where = f"their {self.Z0:.2f} m at the start" if ref == self.Z0 else f"their {ref:.2f} m at the goal"
                     now["retreat"] = (
-                        f"The camera is retreating: the features are {zm:.2f} m away, {zm / self.Z0:.1f} times "
-                        f"their {self.Z0:.2f} m at the start, and still moving away. Point-feature IBVS does this "
+                        f"The camera is retreating: the features are {zm:.2f} m away, {zm / ref:.1f} times "
+                        f"{where}, and still moving away. Point-feature IBVS does this "
                         "for rotations near 180 degrees about the optical axis (without bound at 180); "
                         "try PBVS, or start closer to the goal's orientation."
                     )
