@@ -25,12 +25,15 @@ lying in opposite quadrants around the nucleus.
 
 Speed: with numba installed (``pip install 'ejsgen[fast]'``), ``susan_corners`` runs its loops
 compiled (``_susan_numba``: the same corners, response and sub-pixel positions, bit for bit,
-about 2.2x as fast on one thread, outside the GIL). Outside a served class a call runs them on
-two threads (``set_threads``; a served class sets one, its sessions already sharing the cores):
-on scikit-image's photographs at 640x480 1.6x the time of ``cv2.goodFeaturesToTrack`` (on
-OpenCV's 2 threads) at the median and 2.4-2.5x at worst (astronaut), against 5.2x and 8.3x here
-(bench/vision.py; one thread each, in CPU time: 2.3x and 3.8x); without it, this NumPy/OpenCV code. The kernels are compiled (or loaded from numba's cache)
-in a thread at the first call, this code running until they are ready (``_Compiled``).
+2-3x as fast on one thread, outside the GIL). Outside a served class a call runs them on two
+threads (``set_threads``; a served class sets one, its sessions already sharing the cores). On
+the 18 real photographs scikit-image bundles, at 640x480, it takes 1.5x the time of
+``cv2.goodFeaturesToTrack`` (on OpenCV's 2 threads) at the median and at most 3x on 14 of them;
+on textures it returns thousands of corners, each refined by ``cornerSubPix``: grass 4.6x,
+page 3.8x, gravel 3.7x (bench/vision.py; the NumPy path 5.1x at the median, 15x on grass).
+Without numba, this NumPy/OpenCV code. The kernels are compiled (a child process writes
+numba's cache, once per machine) or loaded in the background from the first call, this code
+running until they are ready (``_Compiled``).
 ``EJSRL_SUSAN=numpy`` (or ``_susan.BACKEND = "numpy"``) forces the NumPy path, ``numba`` the
 compiled one (waiting for it; an ``ImportError`` with the install hint without numba).
 
