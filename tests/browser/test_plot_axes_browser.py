@@ -11,12 +11,12 @@ tutorial's RK4 energy): its y tick labels must not all read the same.
 from __future__ import annotations
 
 import math
-from collections import Counter
 from collections.abc import Iterator
 from contextlib import contextmanager
 
 import pytest
 
+from testkit.charts import RECORD_TEXT, tick_labels, tick_number
 from testkit.browser import wait_until
 from ejsrl.app import App, AppMeta, SimConfig
 from ejsrl.sim.model import CodePage, ModelBase
@@ -58,20 +58,6 @@ VIEW = [
     ]),
 ]
 
-#: record, per canvas, the text uPlot draws since its last clear (its axis labels)
-RECORD_TEXT = """
-window.__texts = new Map();
-const C = CanvasRenderingContext2D.prototype;
-const fill = C.fillText, clear = C.clearRect;
-C.clearRect = function (...a) { window.__texts.set(this.canvas, []); return clear.apply(this, a); };
-C.fillText = function (t, x, y, ...r) {
-  const l = window.__texts.get(this.canvas) || [];
-  l.push([String(t), x, y]);
-  window.__texts.set(this.canvas, l);
-  return fill.call(this, t, x, y, ...r);
-};
-"""
-
 #: each chart: title, x scale, its x data's ends, the text last drawn on its canvas
 CHARTS = """
 () => Object.values((window.__viserTestpoints || {}).uplots || {}).map(({chart}) => {
@@ -102,21 +88,6 @@ def _chart(page, title: str) -> dict:
     return charts[0] if charts else {}
 
 
-def _tick_labels(texts: list) -> tuple[list[str], list[str]]:
-    """(x tick labels, y tick labels): the x ticks share a baseline, the y ticks a left edge."""
-    by_y = Counter(round(t[2], 1) for t in texts)
-    by_x = Counter(round(t[1], 1) for t in texts)
-    row = by_y.most_common(1)[0][0] if by_y else None
-    col = by_x.most_common(1)[0][0] if by_x else None
-    xs = [t[0] for t in texts if round(t[2], 1) == row]
-    ys = [t[0] for t in texts if round(t[1], 1) == col and round(t[2], 1) != row]
-    return xs, ys
-
-
-def _number(label: str) -> float:
-    return float(label.replace(",", "").replace("\u2212", "-"))
-
-
 @pytest.mark.browser
 def test_a_strip_chart_shows_its_last_window_and_a_flat_line_looks_flat(page):
     app = App(Strip, VIEW, sim=SimConfig(fps=30.0), meta=AppMeta(title="Strip chart", description="", author="Tests", spec=SPEC))
@@ -135,7 +106,7 @@ def test_a_strip_chart_shows_its_last_window_and_a_flat_line_looks_flat(page):
 
         def settled() -> bool:
             c = _chart(page, "Signal")
-            return bool(c) and c["last"] is not None and c["last"] > WINDOW + 1.0 and len(_tick_labels(c["texts"])[0]) >= 2
+            return bool(c) and c["last"] is not None and c["last"] > WINDOW + 1.0 and len(tick_labels(c["texts"])[0]) >= 2
 
         wait_until(settled, timeout=20, what="the signal chart to hold data past its window")
         page.get_by_role("button", name="Pause").first.click()
@@ -149,8 +120,8 @@ def test_a_strip_chart_shows_its_last_window_and_a_flat_line_looks_flat(page):
         # within a few frames: the page may hold the scale of the frame after its data
         assert signal["min"] == pytest.approx(t - WINDOW, abs=TOL) and signal["max"] == pytest.approx(t, abs=TOL), (
             f"x axis [{signal['min']}, {signal['max']}] for data ending at t = {t} with a {WINDOW} s window")
-        x_ticks, _ = _tick_labels(signal["texts"])
-        values = [_number(v) for v in x_ticks]
+        x_ticks, _ = tick_labels(signal["texts"])
+        values = [tick_number(v) for v in x_ticks]
         assert len(values) >= 2 and all(t - WINDOW - TOL <= v <= t + TOL for v in values), (
             f"x tick labels {x_ticks} outside [{t - WINDOW:.2f}, {t:.2f}]")
 
@@ -159,9 +130,9 @@ def test_a_strip_chart_shows_its_last_window_and_a_flat_line_looks_flat(page):
         first = energy["first"]
         assert energy["min"] == pytest.approx(first, abs=TOL) and energy["max"] == pytest.approx(first + 10.0, abs=TOL), (
             f"x axis [{energy['min']}, {energy['max']}] for data from t = {first} with a 10 s window")
-        x_ticks, y_ticks = _tick_labels(energy["texts"])
-        assert x_ticks and all(first - TOL <= _number(v) <= first + 10.0 + TOL for v in x_ticks), x_ticks
+        x_ticks, y_ticks = tick_labels(energy["texts"])
+        assert x_ticks and all(first - TOL <= tick_number(v) <= first + 10.0 + TOL for v in x_ticks), x_ticks
         assert len(y_ticks) >= 3, f"y tick labels of the flat chart: {y_ticks} (all text: {energy['texts']})"
         assert len(set(y_ticks)) == len(y_ticks), f"y tick labels of a flat line repeat: {y_ticks}"
-        values = sorted(_number(v) for v in y_ticks)
+        values = sorted(tick_number(v) for v in y_ticks)
         assert values[-1] - values[0] >= 1e-4, f"the flat line's y axis spans only {values[-1] - values[0]:g}: {y_ticks}"

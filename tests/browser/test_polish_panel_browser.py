@@ -15,7 +15,7 @@ import pytest
 from PIL import Image
 
 from ejsgen.cli import build
-from testkit.browser import ARTIFACTS, serving, wait_until
+from testkit.browser import ARTIFACTS, serving, wait_until, project
 
 
 def open_lab(page, url: str) -> None:
@@ -93,23 +93,6 @@ def lorenz_points(seconds: float = 40.0, h: float = 0.002) -> np.ndarray:
         if i % 10 == 0:
             out.append(s.copy())
     return (np.array(out) - [0.0, 0.0, 25.0]) * 0.05
-
-
-def project(camera, points: np.ndarray) -> np.ndarray:
-    """Normalised device coordinates (N, 2) of world points seen by a viser client's camera."""
-    eye = np.asarray(camera.position, dtype=float)
-    target = np.asarray(camera.look_at, dtype=float)
-    up = np.asarray(camera.up_direction, dtype=float)
-    f = (target - eye) / np.linalg.norm(target - eye)
-    r = np.cross(f, up)
-    r /= np.linalg.norm(r)
-    u = np.cross(r, f)
-    rel = points - eye
-    depth = rel @ f
-    assert np.all(depth > 0), "part of the attractor is behind the camera"
-    tan_v = np.tan(float(camera.fov) / 2.0)
-    tan_h = tan_v * float(camera.aspect)
-    return np.column_stack(((rel @ r) / depth / tan_h, (rel @ u) / depth / tan_v))
 
 
 @pytest.mark.browser

@@ -10,13 +10,13 @@ simulation is kept, and goes on playing). The chart must come back with its axes
 from __future__ import annotations
 
 import math
-from collections import Counter
 
 import pytest
 
 from ejsrl.app import App, AppMeta, SimConfig
 from ejsrl.sim.model import CodePage, ModelBase
 from ejsrl.view.elements import Dynamic, Plot, Series
+from testkit.charts import RECORD_TEXT, tick_labels, tick_number
 from testkit.browser import ARTIFACTS, wait_until
 
 SPEC = "strip.ejs.yaml"
@@ -46,19 +46,6 @@ class Strip(ModelBase):
 
 VIEW = [Plot("Signal", Dynamic(lambda m: m.t, "t"), [Series(Dynamic(lambda m: m.y, "y"), "y", "blue")], window=WINDOW)]
 
-RECORD_TEXT = """
-window.__texts = new Map();
-const C = CanvasRenderingContext2D.prototype;
-const fill = C.fillText, clear = C.clearRect;
-C.clearRect = function (...a) { window.__texts.set(this.canvas, []); return clear.apply(this, a); };
-C.fillText = function (t, x, y, ...r) {
-  const l = window.__texts.get(this.canvas) || [];
-  l.push([String(t), x, y]);
-  window.__texts.set(this.canvas, l);
-  return fill.call(this, t, x, y, ...r);
-};
-"""
-
 CHART = """
 () => Object.values((window.__viserTestpoints || {}).uplots || {}).map(({chart, createCount}) => {
   const x = chart.data[0];
@@ -66,21 +53,6 @@ CHART = """
           texts: window.__texts.get(chart.ctx.canvas) || []};
 })[0] || null
 """
-
-
-def tick_labels(texts: list) -> tuple[list[str], list[str]]:
-    """(x tick labels, y tick labels): the x ticks share a baseline, the y ticks a left edge."""
-    by_y = Counter(round(t[2], 1) for t in texts)
-    by_x = Counter(round(t[1], 1) for t in texts)
-    row = by_y.most_common(1)[0][0] if by_y else None
-    col = by_x.most_common(1)[0][0] if by_x else None
-    xs = [t[0] for t in texts if round(t[2], 1) == row]
-    ys = [t[0] for t in texts if round(t[1], 1) == col and round(t[2], 1) != row]
-    return xs, ys
-
-
-def number(label: str) -> float:
-    return float(label.replace(",", "").replace("\u2212", "-"))
 
 
 @pytest.mark.browser
@@ -118,7 +90,7 @@ def test_a_reloaded_tab_shows_its_strip_chart_with_axes(lab, built, page):
         lo, hi = c["first"], c["first"] + WINDOW
         assert c["min"] == pytest.approx(lo, abs=TOL) and c["max"] == pytest.approx(hi, abs=TOL), (c["min"], c["max"], lo)
         x_ticks, y_ticks = tick_labels(c["texts"])
-        assert len(x_ticks) >= 2 and all(lo - TOL <= number(v) <= hi + TOL for v in x_ticks), (x_ticks, lo, hi, c)
+        assert len(x_ticks) >= 2 and all(lo - TOL <= tick_number(v) <= hi + TOL for v in x_ticks), (x_ticks, lo, hi, c)
         assert len(y_ticks) >= 3, (y_ticks, c["texts"])
     finally:
         app.stop()

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from testkit.browser import ARTIFACTS, serving, wait_until
+from testkit.browser import ARTIFACTS, serving, wait_until, project
 from ejsgen.cli import build
 
 TITLE = "A rather long title for a lab, which the panel shows whole"
@@ -193,23 +193,6 @@ def content_points(name: str, world) -> np.ndarray:
     if name == "mass_spring_chain":
         return np.vstack([np.asarray(world["masses"].props["points"]), np.asarray(world["springs"].props["points"])])
     raise KeyError(name)
-
-
-def project(camera, points: np.ndarray) -> np.ndarray:
-    """Normalised device coordinates (N, 2) of world points seen by a viser client's camera."""
-    eye = np.asarray(camera.position, dtype=float)
-    target = np.asarray(camera.look_at, dtype=float)
-    up = np.asarray(camera.up_direction, dtype=float)
-    f = (target - eye) / np.linalg.norm(target - eye)
-    r = np.cross(f, up)
-    r /= np.linalg.norm(r)
-    u = np.cross(r, f)
-    rel = points - eye
-    depth = rel @ f
-    assert np.all(depth > 0), "content behind the camera"
-    tan_v = np.tan(float(camera.fov) / 2.0)
-    tan_h = tan_v * float(camera.aspect)
-    return np.column_stack(((rel @ r) / depth / tan_h, (rel @ u) / depth / tan_v))
 
 
 @pytest.mark.browser

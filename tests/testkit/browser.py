@@ -83,3 +83,21 @@ def save_shot(page: Any, name: str) -> bytes:
         GALLERY.mkdir(parents=True, exist_ok=True)
         Image.open(io.BytesIO(png)).convert("RGB").resize((640, 400), Image.LANCZOS).save(GALLERY / f"{name}.png", optimize=True)
     return png
+
+
+def project(camera, points: np.ndarray) -> np.ndarray:
+    """Normalised device coordinates (N, 2) of world points seen by a viser client's camera
+    (``client.camera``: its position, look-at point, up direction, vertical field of view and aspect)."""
+    eye = np.asarray(camera.position, dtype=float)
+    target = np.asarray(camera.look_at, dtype=float)
+    up = np.asarray(camera.up_direction, dtype=float)
+    f = (target - eye) / np.linalg.norm(target - eye)
+    r = np.cross(f, up)
+    r /= np.linalg.norm(r)
+    u = np.cross(r, f)
+    rel = points - eye
+    depth = rel @ f
+    assert np.all(depth > 0), "part of the content is behind the camera"
+    tan_v = np.tan(float(camera.fov) / 2.0)
+    tan_h = tan_v * float(camera.aspect)
+    return np.column_stack(((rel @ r) / depth / tan_h, (rel @ u) / depth / tan_v))

@@ -21,6 +21,7 @@ import sys
 import cv2
 import numpy as np
 import pytest
+from testkit.isolated import run_surviving_crashes
 
 import ejsrl.vision as V
 from testkit import ROOT
@@ -198,28 +199,8 @@ for name, call in calls.items():
 def sweep() -> dict[tuple[str, str], dict]:
     """Every (function, input) run in child interpreters; a crash is recorded and the rest go on."""
     calls, inputs = sweep_calls(), {**BAD, **ODD}
-    pending = {(n, c) for n in calls for c in inputs}
-    out: dict[tuple[str, str], dict] = {}
-    while pending:
-        names = sorted({n for n, _ in pending})
-        r = subprocess.run(
-            [sys.executable, "-c", _CHILD, json.dumps({n: calls[n] for n in names}), json.dumps(inputs)],
-            capture_output=True, text=True, timeout=600,
-        )
-        started = None
-        for line in r.stdout.splitlines():
-            rec = json.loads(line)
-            key = tuple(rec["item"])
-            if rec.get("started"):
-                started = key
-            else:
-                out[key], started = rec, None
-        if started is not None:
-            out[started] = {"crashed": r.returncode, "stderr": r.stderr[-400:]}
-        elif r.returncode != 0:
-            raise AssertionError(f"the sweep's child failed outside a call: {r.stderr[-2000:]}")
-        pending = {k for k in pending if k not in out}
-    return out
+    return run_surviving_crashes({(n, c) for n in calls for c in inputs},
+                                 lambda pending: [sys.executable, "-c", _CHILD, json.dumps({n: calls[n] for n in sorted({n for n, _ in pending})}), json.dumps(inputs)])
 
 
 def test_the_sweep_covers_every_public_vision_function():

@@ -11,7 +11,6 @@ reference: brightness that saturates instead of folding, float/uint16/NaN coerci
 from __future__ import annotations
 
 import json
-import subprocess
 import sys
 from pathlib import Path
 
@@ -94,29 +93,9 @@ for item in json.loads(sys.argv[2]):
 @pytest.fixture(scope="module")
 def outcomes() -> dict[tuple[str, str], dict]:
     """Run every (function, bad input) in child interpreters; a crash is recorded and the rest go on."""
-    pending = [list(c) for c in CASES]
-    out: dict[tuple[str, str], dict] = {}
-    while pending:
-        r = subprocess.run(
-            [sys.executable, "-c", _WORKER, str(Path(__file__)), json.dumps(pending)],
-            capture_output=True, text=True, timeout=600,
-        )
-        started = None
-        for line in r.stdout.splitlines():
-            rec = json.loads(line)
-            key = tuple(rec["item"])
-            if rec.get("started"):
-                started = key
-            else:
-                out[key] = rec
-                started = None
-        if started is not None:  # the child died inside this call
-            out[started] = {"crashed": r.returncode, "stderr": r.stderr[-400:]}
-        done = set(out)
-        if r.returncode != 0 and started is None:
-            raise AssertionError(f"the worker failed outside a call: {r.stderr[-2000:]}")
-        pending = [c for c in pending if tuple(c) not in done]
-    return out
+    from testkit.isolated import run_surviving_crashes  # here: the child imports this file, without testkit on its path
+
+    return run_surviving_crashes(set(CASES), lambda pending: [sys.executable, "-c", _WORKER, str(Path(__file__)), json.dumps([list(c) for c in CASES if c in pending])])
 
 
 @pytest.mark.parametrize(("name", "case"), CASES, ids=[f"{n}-{c}" for n, c in CASES])
