@@ -170,7 +170,7 @@ def test_the_side_judgement_is_the_numpy_paths(monkeypatch):
     rows = np.arange(len(idx))
     for floor in (0.0, 150.0, 300.0):
         got_n, r_n = _susan._judge_mid(pf, Wp, base, vals, lo, hi, v, r_dark, 1850.0, floor)
-        got_k, r_k = K.side_tests(gray, _susan._share_table(), idx, rows, lo, hi, v, r_dark > 0, _susan._CONTIG, 1850.0, floor, _susan._CHORD * _susan._SCALE)
+        got_k, r_k = K.side_tests(gray, _susan._share_table(), idx, rows, lo, hi, v, r_dark > 0, _susan._SIDE_CONTIG, 1850.0, floor, _susan._CHORD * _susan._SCALE)
         assert 100 < got_n.sum() < len(idx) // 2
         _same_bits(got_k, got_n)
         _same_bits(r_k[got_k], r_n[got_n])

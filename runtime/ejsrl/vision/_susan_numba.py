@@ -322,7 +322,7 @@ def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b,
     test (``side_tests``).
 
     ``c``: float64 constants ``[t/2, g100, floor, chord x100, contig, full, g100 (as float32),
-    slack (as float32), x100 (as float32), r_dark given]``.
+    slack (as float32), x100 (as float32), r_dark given, the side test's contiguity]``.
     """
     W = gray.shape[1]
     f = gray.ravel()
@@ -365,7 +365,7 @@ def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b,
             dark[ns] = r_mid_side[j] > 0
             ns += 1
     sel, dark = sel[:ns], dark[:ns]
-    got, r_mid = side_tests(gray, table, idx, sel, lo3[sel], hi3[sel], v0[sel], dark, contig, g100, floor, chord)
+    got, r_mid = side_tests(gray, table, idx, sel, lo3[sel], hi3[sel], v0[sel], dark, c[10], g100, floor, chord)
     for j in range(ns):
         if got[j]:
             ok[sel[j]] = True
