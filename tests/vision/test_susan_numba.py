@@ -275,6 +275,28 @@ def test_a_short_script_does_not_compile_and_leaves_the_kernels_for_the_next_run
     assert misses == 0 and hits >= 5, r.stdout
 
 
+def test_a_bundled_app_runs_susan_compiled_though_numba_cannot_cache_it(tmp_path):
+    """In a .pyz bundle the kernels' source is inside a zip: numba can write no cache for it and a
+    compiling child would have nothing to leave, so the kernels compile in the process (the
+    child's cache key once failed on the zip's path and turned the compiled path off)."""
+    from ejsgen.cli import build
+    from testkit import EXAMPLES
+
+    app = build(EXAMPLES / "paper" / "visual_servoing_eih.ejs.yaml", tmp_path / "servo", bundle=True)
+    pyz = next(app.glob("*.pyz"))
+    code = f"""
+        import sys
+        sys.path.insert(0, {str(pyz)!r})
+        from ejsrl.vision import _susan
+        assert ".pyz" in _susan.__file__, _susan.__file__
+        _susan.BACKEND = "numba"
+        print(_susan.susan_backend(), _susan._COMPILED.error)
+    """
+    r = _child(code)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["numba", "None"], r.stdout
+
+
 def test_an_unknown_backend_is_a_clear_error(monkeypatch):
     monkeypatch.setattr(_susan, "BACKEND", "numbaa")
     with pytest.raises(ValueError, match=r"EJSRL_SUSAN.*did you mean 'numba'"):

@@ -140,8 +140,11 @@ class _Compiled:
         (not POSIX), or it failed, or numba has no cache here: the caller compiles."""
         if not hasattr(os, "posix_spawn") or os.environ.get("EJSRL_SUSAN_CHILD") == "0":
             return False
-        if _cache_mark("done").exists():  # a child cached these kernels already: load them here
-            return True
+        try:
+            if _cache_mark("done").exists():  # a child cached these kernels already: load them here
+                return True
+        except OSError:  # the source is no file (a .pyz): numba cannot cache it, nothing for a child to do
+            return False
         import ejsrl
 
         root = str(Path(ejsrl.__file__).resolve().parent.parent)  # the folder (or .pyz) this ejsrl is in
