@@ -28,9 +28,9 @@ compiled (``_susan_numba``: the same corners, response and sub-pixel positions, 
 2-3x as fast on one thread, outside the GIL). Outside a served class a call runs them on two
 threads (``set_threads``; a served class sets one, its sessions already sharing the cores). On
 the 18 real photographs scikit-image bundles, at 640x480, it takes 1.5x the time of
-``cv2.goodFeaturesToTrack`` (on OpenCV's 2 threads) at the median and at most 3x on 14 of them;
+``cv2.goodFeaturesToTrack`` (on OpenCV's 2 threads) at the median and at most 3x on 15 of them;
 on textures it returns thousands of corners, each refined by ``cornerSubPix``: grass 4.6x,
-page 3.8x, gravel 3.7x (bench/vision.py; the NumPy path 5.1x at the median, 15x on grass).
+page 3.7x, gravel 3.6x (bench/vision.py; the NumPy path 5.0x at the median, 15x on grass).
 Without numba, this NumPy/OpenCV code. The kernels are compiled (a child process writes
 numba's cache, once per machine) or loaded in the background from the first call, this code
 running until they are ready (``_Compiled``).
