@@ -10,43 +10,19 @@ tutorial's RK4 energy): its y tick labels must not all read the same.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator
 from contextlib import contextmanager
 
 import pytest
 
-from testkit.charts import RECORD_TEXT, tick_labels, tick_number
+from testkit.charts import RECORD_TEXT, Strip, tick_labels, tick_number
 from testkit.browser import wait_until
 from ejsrl.app import App, AppMeta, SimConfig
-from ejsrl.sim.model import CodePage, ModelBase
 from ejsrl.view.elements import Dynamic, Node3D, Plot, Scene, Series
 
-SPEC = "strip.ejs.yaml"
+SPEC = Strip.SPEC
 WINDOW = 1.0
 TOL = 0.05  # s: 2.5 frames of the lab
-
-
-class Strip(ModelBase):
-    SPEC = SPEC
-    VARIABLES = {"t": "float", "dt": "float", "y": "float", "E": "float"}
-    INDEPENDENT = "t"
-
-    def _declare(self) -> None:
-        self.t = 0.0
-        self.dt = 0.02
-        self.y = 0.0
-        self.E = 0.196
-
-    def _evolution(self) -> list:
-        return [CodePage("step", self._step)]
-
-    def _step(self) -> None:
-        self.t += self.dt
-
-    def _fixed_relations(self) -> None:
-        self.y = math.sin(3.0 * self.t)
-        self.E = 0.196 + 1e-10 * self.t
 
 
 VIEW = [

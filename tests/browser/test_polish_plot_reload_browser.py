@@ -9,39 +9,17 @@ simulation is kept, and goes on playing). The chart must come back with its axes
 
 from __future__ import annotations
 
-import math
 
 import pytest
 
 from ejsrl.app import App, AppMeta, SimConfig
-from ejsrl.sim.model import CodePage, ModelBase
 from ejsrl.view.elements import Dynamic, Plot, Series
-from testkit.charts import RECORD_TEXT, tick_labels, tick_number
+from testkit.charts import RECORD_TEXT, Strip, tick_labels, tick_number
 from testkit.browser import ARTIFACTS, wait_until
 
-SPEC = "strip.ejs.yaml"
+SPEC = Strip.SPEC
 WINDOW = 10.0
 TOL = 0.05
-
-
-class Strip(ModelBase):
-    SPEC = SPEC
-    VARIABLES = {"t": "float", "dt": "float", "y": "float"}
-    INDEPENDENT = "t"
-
-    def _declare(self) -> None:
-        self.t = 0.0
-        self.dt = 0.02
-        self.y = 0.0
-
-    def _evolution(self) -> list:
-        return [CodePage("step", self._step)]
-
-    def _step(self) -> None:
-        self.t += self.dt
-
-    def _fixed_relations(self) -> None:
-        self.y = math.sin(3.0 * self.t)
 
 
 VIEW = [Plot("Signal", Dynamic(lambda m: m.t, "t"), [Series(Dynamic(lambda m: m.y, "y"), "y", "blue")], window=WINDOW)]

@@ -3,7 +3,10 @@ labels), recorded by an init script, and split into x and y tick labels."""
 
 from __future__ import annotations
 
+import math
 from collections import Counter
+
+from ejsrl.sim.model import CodePage, ModelBase
 
 #: add with ``page.add_init_script``: records, per canvas, the text drawn since its last clear
 RECORD_TEXT = """
@@ -35,3 +38,27 @@ def tick_labels(texts: list) -> tuple[list[str], list[str]]:
 def tick_number(label: str) -> float:
     """A tick label's value ("1,000" and a minus sign as uPlot writes them)."""
     return float(label.replace(",", "").replace("\u2212", "-"))
+
+
+class Strip(ModelBase):
+    """A strip chart's lab: ``y = sin(3 t)`` and a near-constant ``E`` (a flat line), 50 steps a second."""
+
+    SPEC = "strip.ejs.yaml"
+    VARIABLES = {"t": "float", "dt": "float", "y": "float", "E": "float"}
+    INDEPENDENT = "t"
+
+    def _declare(self) -> None:
+        self.t = 0.0
+        self.dt = 0.02
+        self.y = 0.0
+        self.E = 0.196
+
+    def _evolution(self) -> list:
+        return [CodePage("step", self._step)]
+
+    def _step(self) -> None:
+        self.t += self.dt
+
+    def _fixed_relations(self) -> None:
+        self.y = math.sin(3.0 * self.t)
+        self.E = 0.196 + 1e-10 * self.t

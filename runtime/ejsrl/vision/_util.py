@@ -36,7 +36,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["as_image", "as_gray", "as_rgb", "to_uint8", "as_points", "as_remap_source", "choice", "image_function", "IMAGE_CONVENTIONS"]
+__all__ = ["as_image", "as_gray", "as_rgb", "to_uint8", "as_points", "as_remap_source", "resampled_dtype", "choice", "image_function", "IMAGE_CONVENTIONS"]
 
 #: one line on what the image functions accept, for error messages
 IMAGE_CONVENTIONS = (
@@ -138,6 +138,12 @@ def as_remap_source(img: ArrayLike, name: str = "img") -> NDArray:
         raise ValueError(f"{name} has dtype {arr.dtype}, not real numbers; {IMAGE_CONVENTIONS}")
     if arr.ndim not in (2, 3) or arr.shape[0] == 0 or arr.shape[1] == 0 or (arr.ndim == 3 and arr.shape[2] == 0):
         raise ValueError(f"{name} must be a non-empty H x W or H x W x C image, got shape {arr.shape}")
+    return resampled_dtype(arr, name)
+
+
+def resampled_dtype(arr: NDArray, name: str = "img") -> NDArray:
+    """An image in a type that resampling (``cv2.remap``) keeps: uint8, uint16, int16 and
+    float32/64 as they are; bool and other integers (0..255) as uint8; float16 as float32."""
     if arr.dtype == np.bool_ or (arr.dtype.kind in "iu" and arr.dtype not in (np.uint8, np.uint16, np.int16)):
         return to_uint8(arr, name)
     if arr.dtype == np.float16:

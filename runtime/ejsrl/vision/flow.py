@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from ejsrl.vision._util import as_gray, as_image, image_function, to_uint8
+from ejsrl.vision._util import as_gray, as_image, image_function, resampled_dtype
 
 __all__ = ["optical_flow", "flow_magnitude", "warp_by_flow"]
 
@@ -72,10 +72,7 @@ def warp_by_flow(next: ArrayLike, flow: ArrayLike) -> NDArray:
     The image keeps its dtype (uint8, uint16, int16, float32/64); bool and other integer
     images (0..255) come back as uint8.
     """
-    img = as_image(next, "next")  # the shared checks: None, dtype, shape, empty, NaN
-    if img.dtype == np.bool_ or (img.dtype.kind in "iu" and img.dtype not in (np.uint8, np.uint16, np.int16)):
-        img = to_uint8(img, "next")
-    img = np.ascontiguousarray(img)
+    img = np.ascontiguousarray(resampled_dtype(as_image(next, "next"), "next"))  # the shared checks: None, dtype, shape, empty, NaN
     f = _flow(flow)
     if f.shape[:2] != img.shape[:2]:
         raise ValueError(f"flow must have shape (H, W, 2) matching the image, got {f.shape} and {img.shape}")

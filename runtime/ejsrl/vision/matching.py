@@ -10,6 +10,7 @@ for homogeneous pixels, the essential matrix ``x2^T E x1 = 0`` for normalised co
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import cv2
@@ -52,6 +53,7 @@ def _factory(method: str):
     return None
 
 
+@functools.cache  # the installed OpenCV does not change
 def feature_methods() -> tuple[str, ...]:
     """The ``detect_features`` methods this OpenCV has: ``("orb", "sift")`` with opencv-python 5,
     plus ``"akaze"``, ``"kaze"`` and ``"brisk"`` where opencv-contrib-python provides them."""
