@@ -108,8 +108,17 @@ def test_lorenz_first_view_shows_the_whole_attractor(built, page):
         camera = next(iter(server.get_clients().values())).camera
         wait_until(lambda: camera.look_at is not None and np.linalg.norm(np.asarray(camera.position) - [3.0, 3.0, 3.0]) > 1e-6,
                    what="the framed camera to be reported back")
-        page.wait_for_timeout(500)
-        ndc = project(camera, lorenz_points())
+        points = lorenz_points()
+
+        def framed() -> bool:  # the client reports its camera as it moves: wait for where it settles
+            ndc = project(camera, points)
+            return bool(np.all(np.abs(ndc) < 1.0) and (ndc.max(axis=0) - ndc.min(axis=0)).max() > 0.6)
+
+        try:
+            wait_until(framed, timeout=20, what="the first view to frame the attractor")
+        except AssertionError:
+            pass  # the assertions below say what is wrong
+        ndc = project(camera, points)
         assert np.all(np.abs(ndc) < 1.0), np.abs(ndc).max(axis=0)  # every loop in the picture ...
         span = ndc.max(axis=0) - ndc.min(axis=0)
         assert span.max() > 0.6, span  # ... and large in it
