@@ -1,5 +1,5 @@
 """SUSAN's threads: outside a served class a call on a photograph runs its candidate search (numba's
-kernels) and ``cornerSubPix`` on two threads; a served class (many sessions in a pool of
+kernels) and the sub-pixel refinement on two threads; a served class (many sessions in a pool of
 threads) keeps every SUSAN call on its calling thread. The corners, responses and sub-pixel
 positions are the same either way, bit for bit."""
 
@@ -23,28 +23,25 @@ def _photo(name: str) -> np.ndarray:
 
 
 @pytest.fixture
-def spy(monkeypatch: pytest.MonkeyPatch) -> set[int]:
+def spy(monkeypatch: pytest.MonkeyPatch) -> dict[str, set[int]]:
     """The numba path, its kernels wrapped to record the threads that run the candidate search and
-    ``cornerSubPix``; the thread switch restored afterwards."""
+    the sub-pixel refinement; the thread switch restored afterwards."""
     monkeypatch.setattr(_susan, "BACKEND", "numba")
     kernels = _susan._COMPILED.get(wait=True)
     assert kernels is not None
-    seen: set[int] = set()
+    seen: dict[str, set[int]] = {"search": set(), "refine": set()}  # the candidate search (with the side shares), the refinement
 
-    def candidates(*args):
-        seen.add(threading.get_ident())
-        return kernels.candidates(*args)
+    def recorded(part, name):
+        def run(*args):
+            seen[part].add(threading.get_ident())
+            return getattr(kernels, name)(*args)
 
-    sub_pixel = _susan._sub_pixel
-
-    def recorded_sub_pixel(*args):
-        seen.add(threading.get_ident())
-        return sub_pixel(*args)
+        return run
 
     proxy = types.SimpleNamespace(**{k: getattr(kernels, k) for k in dir(kernels) if not k.startswith("__")})
-    proxy.candidates = candidates
+    for part, name in (("search", "candidates"), ("search", "share_image"), ("refine", "refine")):
+        setattr(proxy, name, recorded(part, name))
     monkeypatch.setattr(_susan._COMPILED, "module", proxy)
-    monkeypatch.setattr(_susan, "_sub_pixel", recorded_sub_pixel)
     monkeypatch.setattr(_susan, "THREADS", None)
     monkeypatch.delenv("EJSRL_SUSAN_THREADS", raising=False)
     return seen
@@ -59,19 +56,22 @@ def test_two_threads_outside_a_served_class_give_the_same_corners(spy, name):
     img = _photo(name)
     assert _susan.susan_threads() == 2  # the default on this (>= 2 core) machine
     p2, r2 = susan_corners(img, return_response=True)
-    assert len(spy) == 2, "the candidate search and cornerSubPix should run on two threads"
-    spy.clear()
+    assert len(spy["search"]) == 2, "the candidate search should run on two threads"
+    # the refinement too, where there are enough corners to share (coins: 701)
+    assert len(spy["refine"]) == (2 if len(p2) >= 512 else 1)
+    for threads in spy.values():
+        threads.clear()
     _susan.set_threads(1)
     p1, r1 = susan_corners(img, return_response=True)
-    assert spy == {threading.get_ident()}
+    assert spy["search"] == spy["refine"] == {threading.get_ident()}
     assert len(p1) > 100 and _bits(p1) == _bits(p2) and _bits(r1) == _bits(r2)
 
 
 def test_the_environment_variable_sets_one_thread(spy, monkeypatch):
     monkeypatch.setenv("EJSRL_SUSAN_THREADS", "1")
     assert _susan.susan_threads() == 1
-    susan_corners(_photo("astronaut"))
-    assert spy == {threading.get_ident()}
+    susan_corners(_photo("coins"))
+    assert spy["search"] == spy["refine"] == {threading.get_ident()}
 
 
 def test_a_bad_thread_count_in_the_environment_is_a_clear_error(monkeypatch):
@@ -94,7 +94,7 @@ def test_a_served_class_keeps_susan_on_the_calling_thread(spy):
         worker = threading.Thread(target=lambda: out.append(susan_corners(img)))  # as a session's thread would
         worker.start()
         worker.join()
-        assert spy == {worker.ident} and len(out[0]) > 100
+        assert spy["search"] == spy["refine"] == {worker.ident} and len(out[0]) > 100
     finally:
         app.stop()
         server.stop()

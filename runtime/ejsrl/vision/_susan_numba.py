@@ -539,3 +539,46 @@ def disc_sums(share, idx):
     for i in range(len(idx)):
         out[i] = _disc_sum(f, W, idx[i])
     return out
+
+
+@_jit
+def refine(gray, pts, wq, moves, out):
+    """``_susan._refine_numpy`` for the corners ``pts`` (N, 2) float64 (whole pixels), into
+    ``out`` (N, 2) float64: the same integer sums (exact in any order) and float64 steps."""
+    H, W = gray.shape
+    w = (wq.shape[0] - 1) // 2
+    for i in range(len(pts)):
+        x0, y0 = np.int64(pts[i, 0]), np.int64(pts[i, 1])
+        cx, cy = x0, y0
+        ex, ey = pts[i, 0], pts[i, 1]
+        for _ in range(moves + 1):
+            if cx < w + 1 or cy < w + 1 or cx > W - w - 2 or cy > H - w - 2:
+                break
+            a = b = c = bx = by = np.int64(0)
+            for dy in range(-w, w + 1):
+                y = np.uint64(cy + dy)
+                for dx in range(-w, w + 1):
+                    x = np.uint64(cx + dx)
+                    gx = np.int64(gray[y, x + np.uint64(1)]) - np.int64(gray[y, x - np.uint64(1)])
+                    gy = np.int64(gray[y + np.uint64(1), x]) - np.int64(gray[y - np.uint64(1), x])
+                    m = wq[dy + w, dx + w]
+                    xx, xy, yy = m * gx * gx, m * gx * gy, m * gy * gy
+                    a += xx
+                    b += xy
+                    c += yy
+                    bx += xx * dx + xy * dy
+                    by += xy * dx + yy * dy
+            det = a * c - b * b
+            if det <= 0:
+                break
+            ex = cx + np.float64(c * bx - b * by) / np.float64(det)
+            ey = cy + np.float64(a * by - b * bx) / np.float64(det)
+            nx, ny = np.int64(np.floor(ex + 0.5)), np.int64(np.floor(ey + 0.5))
+            if nx == cx and ny == cy:
+                break
+            cx, cy = nx, ny
+        if (ex - x0) ** 2 + (ey - y0) ** 2 <= 9.0:
+            out[i, 0], out[i, 1] = ex, ey
+        else:
+            out[i, 0], out[i, 1] = pts[i, 0], pts[i, 1]
+    return out
