@@ -29,11 +29,14 @@ def _grey(name: str) -> np.ndarray:
 
 
 def _both(img: np.ndarray, monkeypatch: pytest.MonkeyPatch, **kw):
+    """Each path's corners and response; the numba path's corners also as found without the
+    response map (``lazy_maxima``, which decides only the failing pixels that could hide one)."""
     out = {}
     for be in ("numpy", "numba"):
         monkeypatch.setattr(_susan, "BACKEND", be)
         assert _susan.susan_backend() == be
         out[be] = susan_corners(img, return_response=True, **kw)
+        _same_bits(susan_corners(img, **kw), out[be][0])
     return out["numpy"], out["numba"]
 
 
@@ -47,6 +50,8 @@ SCENES = {
     "polygons noise 4": lambda: polygons_image(3, 4.0)[0],
     "polygons clean": lambda: polygons_image(4, 0.0)[0],
     "checkerboard": lambda: data.checkerboard(),
+    # every pixel a candidate, long chains of failing pixels hidden under larger ones
+    "blurred noise": lambda: cv2.GaussianBlur(np.random.default_rng(7).integers(0, 256, (240, 320), dtype=np.uint8), (0, 0), 1.0),
 }
 
 
@@ -55,7 +60,7 @@ def test_the_numba_kernels_give_the_numpy_paths_corners_bit_for_bit(scene, monke
     img = SCENES[scene]()
     (pa, ra), (pb, rb) = _both(img, monkeypatch)
     assert len(pa) > 10
-    _same_bits(pb, pa)  # sub-pixel positions too: the same pixels into cornerSubPix
+    _same_bits(pb, pa)  # sub-pixel positions too
     _same_bits(rb, ra)  # every response value, float32 bit for bit
 
 
@@ -103,7 +108,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
     assert _susan.susan_backend() == "numba"
     from ejsrl.vision import _susan_numba as K
 
-    for name in ("candidates", "judge", "saddles", "assemble", "smooth_tests", "side_tests", "put_back", "window_maxima", "share_image", "disc_sums"):
+    for name in ("candidates", "judge", "saddles", "assemble", "smooth_tests", "side_tests", "put_back", "window_maxima", "share_image", "disc_sums", "refine", "lazy_maxima"):
         assert getattr(K, name).targetoptions.get("nogil") is True, name
     big = np.random.default_rng(0).integers(0, 256, (3000, 4000)).astype(np.uint8)
     t = 25.0
@@ -301,3 +306,36 @@ def test_an_unknown_backend_is_a_clear_error(monkeypatch):
     monkeypatch.setattr(_susan, "BACKEND", "numbaa")
     with pytest.raises(ValueError, match=r"EJSRL_SUSAN.*did you mean 'numba'"):
         susan_corners(_grey("camera"))
+
+
+def test_the_lazy_maxima_go_on_when_their_room_runs_out(monkeypatch):
+    """``lazy_maxima`` given too little room for its chains says so, and called again with more
+    (as ``_corners_compiled`` does) finds the maxima ``put_back`` and ``window_maxima`` find."""
+    monkeypatch.setattr(_susan, "BACKEND", "numba")
+    kernels = _susan._COMPILED.get(wait=True)
+    img = SCENES["blurred noise"]()
+    H, W = img.shape
+    t, g100, floor = 25.0, 1850.0, 150.0
+    below = np.nextafter(np.float32(floor), np.float32(-np.inf))
+    args = (kernels, img, t, g100, floor, below, floor - 100.0, _susan._lut(t), _susan._bound_limit(t, g100 - floor + 1.0), 3)
+    resp, whole = _susan._corners_compiled(*args, whole=True)
+    assert len(whole) > 100
+    # the map before the failing pixels are decided, and the pixels themselves, from the same steps
+    seen = {}
+    real = kernels.lazy_maxima
+
+    def record(resp, r, passing, failing, fv, *room):
+        seen.update(resp=resp.copy(), passing=passing, failing=failing, fv=fv)
+        return real(resp, r, passing, failing, fv, *room)
+
+    proxy = type("K", (), {k: staticmethod(getattr(kernels, k)) for k in dir(kernels) if not k.startswith("__")})
+    proxy.lazy_maxima = staticmethod(record)
+    _, lazy = _susan._corners_compiled(proxy, *args[1:], whole=False)
+    np.testing.assert_array_equal(lazy, whole)
+    resp0 = seen["resp"]
+    keep = np.empty(len(seen["passing"]), bool)
+    calls, room = 0, 1
+    while not real(resp0, 3, seen["passing"], seen["failing"], seen["fv"], np.empty((4, room), np.int64), np.empty(room, np.int64), keep):
+        calls, room = calls + 1, room * 2
+    assert calls >= 3  # it ran out, and went on from what it had decided
+    np.testing.assert_array_equal(seen["passing"][keep], whole)

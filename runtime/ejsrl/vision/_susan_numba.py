@@ -582,3 +582,123 @@ def refine(gray, pts, wq, moves, out):
         else:
             out[i, 0], out[i, 1] = pts[i, 0], pts[i, 1]
     return out
+
+
+@_jit(inline="always")
+def _window_range(f, H, W, r, p):
+    """The largest and the smallest value of ``f`` (an (H, W) image, flat) in the (2r+1)^2 window of ``p``
+    (without branches: LLVM makes it SIMD)."""
+    y, x = p // W, p % W
+    hi, lo = np.float32(-np.inf), np.float32(np.inf)
+    for yy in range(max(y - r, 0), min(y + r + 1, H)):
+        row = yy * W
+        for xx in range(max(x - r, 0), min(x + r + 1, W)):
+            u = f[np.uint64(row + xx)]
+            hi = max(hi, u)
+            lo = min(lo, u)
+    return hi, lo
+
+
+@_jit
+def lazy_maxima(resp, r, passing, failing, fv, frames, larger, keep):
+    """``window_maxima`` of the passing pixels after ``put_back``, deciding only the failing pixels
+    that could hide a corner: those at least as large as a passing pixel that is the largest in
+    its window of the pixels that stay for certain.
+
+    ``resp``: the response map of ``assemble`` (the passing pixels' values, zeros elsewhere), in
+    which the failing pixels are written negated (undecided), then, once asked, as their value
+    (it stays: a larger pixel that stays lies in its window) or 0 (it does not). A failing pixel
+    stays when a chain of ever larger failing pixels, each in the window of the one before,
+    reaches a larger passing pixel: searched depth first up such chains, each pixel decided
+    once, its window read once. The same maxima as ``put_back`` then ``window_maxima``, which
+    decide every failing pixel (the response map is left half-decided).
+
+    ``frames`` (4, D) int64 and ``larger`` (L,) int64: room for a chain of D pixels and the L
+    larger ones in their windows; ``keep`` (len(passing),) bool: the result. False when the room
+    ran out: call again with more (what was decided stays so). (numba counts the references of
+    an array variable assigned again in a loop, on every pass: growing them here cost 3x.)"""
+    H, W = resp.shape
+    f = resp.ravel()
+    for i in range(len(failing)):
+        f[failing[i]] = -fv[i]
+    # the chain searched, smallest first; each one's next larger pixel to try in `larger` (-1: its
+    # window not read yet), and where its larger pixels are there
+    chain, nxt, begin, end = frames[0], frames[1], frames[2], frames[3]
+    keep[:] = False
+    for i in range(len(passing)):
+        p = passing[i]
+        v = f[p]
+        if not v > 0:
+            continue
+        f[p] = 0.0  # the others in its window
+        hi, lo = _window_range(f, H, W, r, p)
+        f[p] = v
+        if hi > v:  # a larger pixel stays
+            continue
+        if hi < v and -lo < v:  # nor could an undecided one be as large
+            keep[i] = True
+            continue
+        # a pixel as large (ties: the first in raster order, the flat index's), or a failing one that could stay
+        y, x = p // W, p % W
+        y0, y1, x0, x1 = max(y - r, 0), min(y + r + 1, H), max(x - r, 0), min(x + r + 1, W)
+        good, threat = True, False
+        for yy in range(y0, y1):
+            row = yy * W
+            for xx in range(x0, x1):
+                q = row + xx
+                u = f[q]
+                e = q < p
+                good &= (u < v) | ((u == v) & ~e)
+                threat |= (-u > v) | ((-u == v) & e)
+        if good and threat:
+            for yy in range(y0, y1):
+                row = yy * W
+                for xx in range(x0, x1):
+                    q = row + xx
+                    if not (-f[q] > v or (-f[q] == v and q < p)):
+                        continue
+                    # does it stay? up the chains of larger undecided failing pixels from it
+                    chain[0], nxt[0] = q, -1
+                    top, m, stays = 1, 0, False
+                    while top > 0:
+                        j = top - 1
+                        s = chain[j]
+                        if nxt[j] < 0:  # first visit: a larger pixel that stays in its window, or the larger undecided ones
+                            sv = -f[s]
+                            top_v, low_v = _window_range(f, H, W, r, s)
+                            if top_v > sv:
+                                stays = True
+                                break
+                            begin[j] = m
+                            if -low_v > sv:
+                                sy, sx = s // W, s % W
+                                for ty in range(max(sy - r, 0), min(sy + r + 1, H)):
+                                    trow = ty * W
+                                    for tx in range(max(sx - r, 0), min(sx + r + 1, W)):
+                                        if -f[trow + tx] > sv:
+                                            if m == len(larger):
+                                                return False
+                                            larger[m] = trow + tx
+                                            m += 1
+                            nxt[j], end[j] = begin[j], m
+                        if nxt[j] == end[j]:  # none of the larger ones stays: neither does this one
+                            f[s] = 0.0
+                            m = begin[j]
+                            top -= 1
+                            continue
+                        t = larger[nxt[j]]
+                        nxt[j] += 1
+                        if f[t] < 0:  # still undecided (0: found not to stay meanwhile)
+                            if top == len(chain):
+                                return False
+                            chain[top], nxt[top] = t, -1
+                            top += 1
+                    if stays:  # and so does every pixel of the chain below it, each in the next one's window
+                        for j in range(top):
+                            f[chain[j]] = -f[chain[j]]
+                        good = False
+                        break
+                if not good:
+                    break
+        keep[i] = good
+    return True
