@@ -320,22 +320,23 @@ def test_the_lazy_maxima_go_on_when_their_room_runs_out(monkeypatch):
     args = (kernels, img, t, g100, floor, below, floor - 100.0, _susan._lut(t), _susan._bound_limit(t, g100 - floor + 1.0), 3)
     resp, whole = _susan._corners_compiled(*args, whole=True)
     assert len(whole) > 100
-    # the map before the failing pixels are decided, and the pixels themselves, from the same steps
+    # the map before the failing pixels are decided, and the passing pixels, from the same steps
     seen = {}
     real = kernels.lazy_maxima
 
-    def record(resp, r, passing, failing, fv, *room):
-        seen.update(resp=resp.copy(), passing=passing, failing=failing, fv=fv)
-        return real(resp, r, passing, failing, fv, *room)
+    def record(resp, r, passing, a, b, *room):
+        seen.setdefault("resp", resp.copy())
+        seen["passing"] = passing
+        return real(resp, r, passing, a, b, *room)
 
     proxy = type("K", (), {k: staticmethod(getattr(kernels, k)) for k in dir(kernels) if not k.startswith("__")})
     proxy.lazy_maxima = staticmethod(record)
     _, lazy = _susan._corners_compiled(proxy, *args[1:], whole=False)
     np.testing.assert_array_equal(lazy, whole)
-    resp0 = seen["resp"]
-    keep = np.empty(len(seen["passing"]), bool)
+    passing = seen["passing"]
+    keep = np.empty(len(passing), bool)
     calls, room = 0, 1
-    while not real(resp0, 3, seen["passing"], seen["failing"], seen["fv"], np.empty((4, room), np.int64), np.empty(room, np.int64), keep):
+    while not real(seen["resp"], 3, passing, 0, len(passing), np.empty((4, room), np.int64), np.empty(room, np.int64), keep):
         calls, room = calls + 1, room * 2
     assert calls >= 3  # it ran out, and went on from what it had decided
-    np.testing.assert_array_equal(seen["passing"][keep], whole)
+    np.testing.assert_array_equal(passing[keep], whole)

@@ -29,7 +29,7 @@ def spy(monkeypatch: pytest.MonkeyPatch) -> dict[str, set[int]]:
     monkeypatch.setattr(_susan, "BACKEND", "numba")
     kernels = _susan._COMPILED.get(wait=True)
     assert kernels is not None
-    seen: dict[str, set[int]] = {"search": set(), "refine": set()}  # the candidate search (with the side shares), the refinement
+    seen: dict[str, set[int]] = {"search": set(), "refine": set(), "maxima": set()}  # the candidate search (with the side shares), the refinement, the maxima
 
     def recorded(part, name):
         def run(*args):
@@ -39,7 +39,7 @@ def spy(monkeypatch: pytest.MonkeyPatch) -> dict[str, set[int]]:
         return run
 
     proxy = types.SimpleNamespace(**{k: getattr(kernels, k) for k in dir(kernels) if not k.startswith("__")})
-    for part, name in (("search", "candidates"), ("search", "share_image"), ("refine", "refine")):
+    for part, name in (("search", "candidates"), ("search", "share_image"), ("refine", "refine"), ("maxima", "lazy_maxima")):
         setattr(proxy, name, recorded(part, name))
     monkeypatch.setattr(_susan._COMPILED, "module", proxy)
     monkeypatch.setattr(_susan, "THREADS", None)
@@ -65,6 +65,22 @@ def test_two_threads_outside_a_served_class_give_the_same_corners(spy, name):
     p1, r1 = susan_corners(img, return_response=True)
     assert spy["search"] == spy["refine"] == {threading.get_ident()}
     assert len(p1) > 100 and _bits(p1) == _bits(p2) and _bits(r1) == _bits(r2)
+
+
+def test_the_maxima_on_two_threads_are_those_on_one(spy):
+    """Without the response map, the maxima of a texture (14 thousand passing pixels, chains of
+    hidden failing ones across the two halves) are found on two threads at once: the same corners
+    as on one thread, and as with the response map, every time."""
+    img = _photo("grass")
+    whole = susan_corners(img, return_response=True)[0]
+    for _ in range(20):
+        assert _bits(susan_corners(img)) == _bits(whole)
+    assert len(spy["maxima"]) == 2
+    for threads in spy.values():
+        threads.clear()
+    _susan.set_threads(1)
+    assert _bits(susan_corners(img)) == _bits(whole)
+    assert spy["maxima"] == {threading.get_ident()}
 
 
 def test_the_environment_variable_sets_one_thread(spy, monkeypatch):

@@ -893,9 +893,14 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     passing, failing, fv = kernels.assemble(resp, idx, value, ok, flat, ws)
     if not whole:  # only the failing pixels that could hide a corner are decided (the response map is left half-done)
         keep = np.empty(len(passing), bool)
-        depth = 256
-        while not kernels.lazy_maxima(resp, r, passing, failing, fv, np.empty((4, depth), np.int64), np.empty(depth * 16, np.int64), keep):
-            depth *= 4  # (chains this long are rare: the first call's decisions hold, the next one goes on from them)
+
+        def maxima(a: int, b: int) -> None:
+            depth = 256
+            while not kernels.lazy_maxima(resp, r, passing, a, b, np.empty((4, depth), np.int64), np.empty(depth * 16, np.int64), keep):
+                depth *= 4  # (chains this long are rare: the first call's decisions hold, the next one goes on from them)
+
+        h = len(passing) // 2  # two halves (about the top and bottom of the image) side by side: the same maxima
+        _two(split and h >= 1024, maxima, (0, h), (h, len(passing)))
         return resp, passing[keep]
     # the failing pixels under a larger passing one stay for certain (one dilation of the passing pixels, as in _hidden_failures)
     seed = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8), dst=buf.grown).ravel().take(failing) > fv

@@ -411,8 +411,9 @@ def saddles(gray, lut, idx, rv, mom, flat, scratch, contig, saddle_area, full):
 @_jit
 def assemble(resp, idx, value, ok, flat, ws):
     """The response map ``resp`` (zeros, (H, W) float32, filled in place) of the saddles (rows
-    ``ws``) and the pixels that are not flat, the failing ones at 0: the passing pixels (the
-    saddles first, then raster order), the failing ones and their values."""
+    ``ws``) and the pixels that are not flat, the failing ones negated (undecided: ``put_back``,
+    ``lazy_maxima``): the passing pixels (the saddles first, then raster order), the failing
+    ones and their values."""
     f = resp.ravel()
     K = len(idx)
     n_pass = len(ws)
@@ -440,6 +441,7 @@ def assemble(resp, idx, value, ok, flat, ws):
         else:
             failing[jf] = idx[i]
             fv[jf] = value[i]
+            f[idx[i]] = -value[i]
             jf += 1
     return passing, failing, fv
 
@@ -585,14 +587,20 @@ def refine(gray, pts, wq, moves, out):
 
 
 @_jit(inline="always")
-def _window_range(f, H, W, r, p):
-    """The largest and the smallest value of ``f`` (an (H, W) image, flat) in the (2r+1)^2 window of ``p``
-    (without branches: LLVM makes it SIMD)."""
+def _window_range(f, H, W, r, p, others):
+    """The largest and the smallest value of ``f`` (an (H, W) image, flat) in the (2r+1)^2 window of
+    ``p`` (with ``others``, leaving ``p`` out), without branches per pixel (LLVM makes it SIMD)."""
     y, x = p // W, p % W
+    x0, x1 = max(x - r, 0), min(x + r + 1, W)
     hi, lo = np.float32(-np.inf), np.float32(np.inf)
     for yy in range(max(y - r, 0), min(y + r + 1, H)):
         row = yy * W
-        for xx in range(max(x - r, 0), min(x + r + 1, W)):
+        cut = x if others and yy == y else x1  # the centre row in two parts, around p
+        for xx in range(x0, cut):
+            u = f[np.uint64(row + xx)]
+            hi = max(hi, u)
+            lo = min(lo, u)
+        for xx in range(min(cut + 1, x1), x1):
             u = f[np.uint64(row + xx)]
             hi = max(hi, u)
             lo = min(lo, u)
@@ -600,39 +608,42 @@ def _window_range(f, H, W, r, p):
 
 
 @_jit
-def lazy_maxima(resp, r, passing, failing, fv, frames, larger, keep):
+def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
     """``window_maxima`` of the passing pixels after ``put_back``, deciding only the failing pixels
     that could hide a corner: those at least as large as a passing pixel that is the largest in
     its window of the pixels that stay for certain.
 
-    ``resp``: the response map of ``assemble`` (the passing pixels' values, zeros elsewhere), in
-    which the failing pixels are written negated (undecided), then, once asked, as their value
-    (it stays: a larger pixel that stays lies in its window) or 0 (it does not). A failing pixel
+    ``resp``: the response map of ``assemble`` (the passing pixels' values, the failing ones'
+    negated: undecided, zeros elsewhere), in which a failing pixel, once asked, is written as its
+    value (it stays: a larger pixel that stays lies in its window) or 0 (it does not). A failing pixel
     stays when a chain of ever larger failing pixels, each in the window of the one before,
     reaches a larger passing pixel: searched depth first up such chains, each pixel decided
     once, its window read once. The same maxima as ``put_back`` then ``window_maxima``, which
     decide every failing pixel (the response map is left half-decided).
 
+    The passing pixels ``passing[a:b]``, into ``keep[a:b]``: two calls on two parts may run at
+    once on the same ``resp``. Every value either reads is the truth about its pixel (passing,
+    failing and undecided, or decided), each decision is written whole (one float32) and is the
+    same whichever call makes it (one may decide a pixel the other is deciding: work done twice,
+    the same result), and a larger pixel found decided to stay since it was listed makes the
+    pixel listing it stay. So the maxima are the same, on one thread or two.
+
     ``frames`` (4, D) int64 and ``larger`` (L,) int64: room for a chain of D pixels and the L
-    larger ones in their windows; ``keep`` (len(passing),) bool: the result. False when the room
-    ran out: call again with more (what was decided stays so). (numba counts the references of
-    an array variable assigned again in a loop, on every pass: growing them here cost 3x.)"""
+    larger ones in their windows. False when the room ran out: call again with more (what was
+    decided stays so). (numba counts the references of an array variable assigned again in a
+    loop, on every pass: growing them here cost 3x.)"""
     H, W = resp.shape
     f = resp.ravel()
-    for i in range(len(failing)):
-        f[failing[i]] = -fv[i]
     # the chain searched, smallest first; each one's next larger pixel to try in `larger` (-1: its
     # window not read yet), and where its larger pixels are there
     chain, nxt, begin, end = frames[0], frames[1], frames[2], frames[3]
-    keep[:] = False
-    for i in range(len(passing)):
+    keep[a:b] = False
+    for i in range(a, b):
         p = passing[i]
         v = f[p]
         if not v > 0:
             continue
-        f[p] = 0.0  # the others in its window
-        hi, lo = _window_range(f, H, W, r, p)
-        f[p] = v
+        hi, lo = _window_range(f, H, W, r, p, True)
         if hi > v:  # a larger pixel stays
             continue
         if hi < v and -lo < v:  # nor could an undecided one be as large
@@ -665,7 +676,7 @@ def lazy_maxima(resp, r, passing, failing, fv, frames, larger, keep):
                         s = chain[j]
                         if nxt[j] < 0:  # first visit: a larger pixel that stays in its window, or the larger undecided ones
                             sv = -f[s]
-                            top_v, low_v = _window_range(f, H, W, r, s)
+                            top_v, low_v = _window_range(f, H, W, r, s, False)
                             if top_v > sv:
                                 stays = True
                                 break
@@ -688,14 +699,17 @@ def lazy_maxima(resp, r, passing, failing, fv, frames, larger, keep):
                             continue
                         t = larger[nxt[j]]
                         nxt[j] += 1
-                        if f[t] < 0:  # still undecided (0: found not to stay meanwhile)
+                        if f[t] > 0:  # found to stay since (by the other call)
+                            stays = True
+                            break
+                        if f[t] < 0:  # still undecided (0: found not to stay since)
                             if top == len(chain):
                                 return False
                             chain[top], nxt[top] = t, -1
                             top += 1
                     if stays:  # and so does every pixel of the chain below it, each in the next one's window
                         for j in range(top):
-                            f[chain[j]] = -f[chain[j]]
+                            f[chain[j]] = abs(f[chain[j]])
                         good = False
                         break
                 if not good:
