@@ -881,27 +881,31 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     r_dark = _side_estimate(gray, g100, idx, v0, lo3, hi3, t, share) if given else np.zeros(0, np.float32)
     consts = np.array([0.5 * t, g100, floor, _CHORD * _SCALE, _CONTIG, _FULL, g100, mid_slack, _SCALE, given, _SIDE_CONTIG], np.float64)
     value, ok, flat = np.empty(K, np.float32), np.empty(K, bool), np.empty(K, bool)
+    resp = buf.resp
+    resp.fill(0.0)
     judged = functools.partial(kernels.judge, gray, share, lut, _share_table(), idx, rv, v0, lo3, hi3, mom, r_dark)
     if split:
         cuts = [K * i // _BANDS for i in range(_BANDS + 1)]
-        _shared([functools.partial(judged, cuts[i], cuts[i + 1], consts, value, ok, flat) for i in range(_BANDS)])
+        _shared([functools.partial(judged, cuts[i], cuts[i + 1], consts, value, ok, flat, resp) for i in range(_BANDS)])
     else:
-        judged(0, K, consts, value, ok, flat)
-    resp = buf.resp
-    resp.fill(0.0)
-    ws = kernels.saddles(gray, lut, idx, rv, mom, flat, resp, _CONTIG, _SADDLE_AREA, _FULL)
-    passing, failing, fv = kernels.assemble(resp, idx, value, ok, flat, ws)
+        judged(0, K, consts, value, ok, flat, resp)
+    # the saddles among the flat pixels, then the map of every candidate's value: on two halves of the rows
+    half, two = K // 2, split and K >= 4096
+    ws = np.concatenate(_two(two, kernels.saddles, *[(gray, lut, idx, rv, mom, flat, resp, a, b, _CONTIG, _SADDLE_AREA, _FULL) for a, b in ((0, half), (half, K))]))
+    _two(two, kernels.settle, (resp, idx, value, ok, flat, 0, half), (resp, idx, value, ok, flat, half, K))
+    resp.ravel()[idx[ws]] = rv[ws]
     if not whole:  # only the failing pixels that could hide a corner are decided (the response map is left half-done)
-        keep = np.empty(len(passing), bool)
+        keep = np.empty(K, bool)
 
         def maxima(a: int, b: int) -> None:
             depth = 256
-            while not kernels.lazy_maxima(resp, r, passing, a, b, np.empty((4, depth), np.int64), np.empty(depth * 16, np.int64), keep):
+            while not kernels.lazy_maxima(resp, r, idx, a, b, np.empty((4, depth), np.int64), np.empty(depth * 16, np.int64), keep):
                 depth *= 4  # (chains this long are rare: the first call's decisions hold, the next one goes on from them)
 
-        h = len(passing) // 2  # two halves (about the top and bottom of the image) side by side: the same maxima
-        _two(split and h >= 1024, maxima, (0, h), (h, len(passing)))
-        return resp, passing[keep]
+        # the candidates (the passing pixels among them) in two halves, about the top and bottom of the image, side by side: the same maxima
+        _two(two, maxima, (0, half), (half, K))
+        return resp, idx[keep]
+    passing, failing, fv = kernels.assemble(idx, value, ok, flat, ws)
     # the failing pixels under a larger passing one stay for certain (one dilation of the passing pixels, as in _hidden_failures)
     seed = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8), dst=buf.grown).ravel().take(failing) > fv
     kernels.put_back(resp, r, failing, fv, seed)

@@ -308,7 +308,7 @@ def _disc_sum(sf, W, p):
 
 
 @_jit
-def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b, c, value, ok, flat):
+def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b, c, value, ok, flat, resp):
     """Judge the candidates ``a .. b - 1`` (``candidates``' rows) each on its own, as
     ``_susan._judge`` does: ``value`` (their response after the tests, float32 x100), ``ok``
     (passed) and ``flat`` (an in-between grey that is no corner by the side it belongs to) are
@@ -323,10 +323,14 @@ def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b,
 
     ``c``: float64 constants ``[t/2, g100, floor, chord x100, contig, full, g100 (as float32),
     slack (as float32), x100 (as float32), r_dark given, the side test's contiguity]``.
+
+    ``resp`` (H, W) float32, zeros: the flat pixels' own response ``rv`` is written there (for
+    ``saddles``, until ``settle``).
     """
     W = gray.shape[1]
     f = gray.ravel()
     sf = share_img.ravel()
+    rf = resp.ravel()
     half_t, g100, floor, chord, contig, full = c[0], c[1], c[2], c[3], c[4], c[5]
     g32, slack32, scale32 = np.float32(c[6]), np.float32(c[7]), np.float32(c[8])
     chord32, half32 = np.float32(chord), np.float32(0.5)
@@ -346,6 +350,7 @@ def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b,
             rd = r_dark[i] if given else (g32 + chord32 * (sf[p] - half32)) - scale32 * _disc_sum(sf, W, p)
             if abs(rd) < slack32:
                 flat[i] = True
+                rf[p] = rv[i]  # >= 0: the other pixels' 0 is never above it
                 continue
             mids[nm] = i
             r_mid_side[nm] = rd
@@ -373,21 +378,17 @@ def judge(gray, share_img, lut, table, idx, rv, v0, lo3, hi3, mom, r_dark, a, b,
 
 
 @_jit
-def saddles(gray, lut, idx, rv, mom, flat, scratch, contig, saddle_area, full):
-    """The rows of the saddles (X-junctions) among the ``flat`` candidates: those whose ``rv`` is
-    at least that of every flat pixel in their 3x3 window (``_corners_numpy``'s 3x3 dilation of
-    the flat pixels' own response) and that pass the saddle test (``_smooth_one``).
-    ``scratch``: (H, W) float32 zeros, used for the flat pixels' map and zero again on return."""
+def saddles(gray, lut, idx, rv, mom, flat, resp, a, b, contig, saddle_area, full):
+    """The rows of the saddles (X-junctions) among the ``flat`` candidates ``a .. b - 1``: those
+    whose ``rv`` is at least that of every flat pixel in their 3x3 window (``_corners_numpy``'s 3x3
+    dilation of the flat pixels' own response) and that pass the saddle test (``_smooth_one``).
+    ``resp``: ``judge``'s map of the flat pixels' ``rv`` (zeros elsewhere), read only: calls on
+    parts of the rows may run at once."""
     W = gray.shape[1]
-    f = gray.ravel()
-    s = scratch.ravel()
-    K = len(idx)
-    for i in range(K):
-        if flat[i]:
-            s[idx[i]] = rv[i]  # >= 0: the other pixels' 0 is never above it
-    top = np.empty(K, np.int64)
+    s = resp.ravel()
+    top = np.empty(b - a, np.int64)
     n = 0
-    for i in range(K):
+    for i in range(a, b):
         if not flat[i]:
             continue
         p = idx[i]
@@ -395,26 +396,28 @@ def saddles(gray, lut, idx, rv, mom, flat, scratch, contig, saddle_area, full):
         best = True
         for dy in range(-1, 2):
             for dx in range(-1, 2):
-                if s[np.uint64(p + dy * W + dx)] > v:
-                    best = False
+                best &= s[np.uint64(p + dy * W + dx)] <= v
         if best:
             top[n] = i
             n += 1
     top = top[:n]
-    out = top[smooth_tests(gray, lut, mom, top, idx, contig, saddle_area, full)[1]]
-    for i in range(K):
-        if flat[i]:
-            s[idx[i]] = 0.0
-    return out
+    return top[smooth_tests(gray, lut, mom, top, idx, contig, saddle_area, full)[1]]
 
 
 @_jit
-def assemble(resp, idx, value, ok, flat, ws):
-    """The response map ``resp`` (zeros, (H, W) float32, filled in place) of the saddles (rows
-    ``ws``) and the pixels that are not flat, the failing ones negated (undecided: ``put_back``,
-    ``lazy_maxima``): the passing pixels (the saddles first, then raster order), the failing
-    ones and their values."""
+def settle(resp, idx, value, ok, flat, a, b):
+    """The response map of the candidates ``a .. b - 1`` (after ``saddles``): their value, negated
+    where they failed (undecided: ``put_back``, ``lazy_maxima``), 0 where flat (the saddles'
+    values follow: ``_susan._corners_compiled``). Calls on parts of the rows may run at once."""
     f = resp.ravel()
+    for i in range(a, b):
+        f[idx[i]] = np.float32(0.0) if flat[i] else (value[i] if ok[i] else -value[i])
+
+
+@_jit
+def assemble(idx, value, ok, flat, ws):
+    """The passing pixels (the saddles, rows ``ws``, first, then the others in raster order), the
+    failing ones and their values (``put_back``)."""
     K = len(idx)
     n_pass = len(ws)
     n_fail = 0
@@ -429,19 +432,16 @@ def assemble(resp, idx, value, ok, flat, ws):
     fv = np.empty(n_fail, np.float32)
     for j in range(len(ws)):
         passing[j] = idx[ws[j]]
-        f[idx[ws[j]]] = value[ws[j]]
     jp, jf = len(ws), 0
     for i in range(K):
         if flat[i]:
             continue
         if ok[i]:
             passing[jp] = idx[i]
-            f[idx[i]] = value[i]
             jp += 1
         else:
             failing[jf] = idx[i]
             fv[jf] = value[i]
-            f[idx[i]] = -value[i]
             jf += 1
     return passing, failing, fv
 
