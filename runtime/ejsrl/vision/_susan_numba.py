@@ -7,8 +7,8 @@ pixels' coverage test too) and the suppression are loops over the image or over 
 pixels, with the same arithmetic (integer sums, float64 sums that are exact, the same
 float64 and float32 operations), so the corners, the response and the sub-pixel positions
 are the same, bit for bit (tests/vision/test_susan_numba.py). What stays in OpenCV: the
-side shares' grey levels (a 3x3 median, a 7x7 minimum and maximum), the dilation that finds
-the failing pixels under a larger passing one, and ``cornerSubPix``.
+side shares' grey levels (a 3x3 median, a 7x7 minimum and maximum), and, when the response
+map is asked for, the dilation that finds the failing pixels under a larger passing one.
 
 Hot loops index with unsigned integers, or count from 0 over 1-D views (``share_image``):
 numba wraps negative indices, and a loop whose indices it cannot prove non-negative stays
