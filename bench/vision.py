@@ -10,7 +10,7 @@
    ``[fast]`` extra; same corners; on two threads, as outside a served class:
    ``_susan.susan_threads()``); and numba's asked for the 100 strongest corners, as GFTT is
    (``numba@100``): at its defaults SUSAN returns every corner, thousands on a texture, and
-   refines each with ``cornerSubPix``.
+   refines each to sub-pixel.
    They are timed interleaved, call for call, and medians reported, so a shared machine's
    load hits all alike; the whole measurement is repeated in rounds and the rounds' spread of
    each ratio printed; then CPU time with one thread each (SUSAN as a served class runs it), and numba's compile time (first
