@@ -117,7 +117,7 @@ def test_the_kernels_run_outside_the_gil(monkeypatch):
 
     def work():
         started.set()
-        K.candidates(*args, 0, big.shape[0])
+        _susan._search(K, args, 0, big.shape[0])
         done.set()
 
     th = threading.Thread(target=work)

@@ -872,11 +872,11 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     args = (gray, lut, _MDX, _MDY, T, m, L_max, g100, below)
     if split:  # bands of rows (their pixels in raster order, one after the other) and the side shares
         ys = [H * i // _BANDS for i in range(_BANDS + 1)]
-        tasks = [functools.partial(kernels.candidates, *args, ys[i], ys[i + 1]) for i in range(_BANDS)]
+        tasks = [functools.partial(_search, kernels, args, ys[i], ys[i + 1]) for i in range(_BANDS)]
         *bands, share = _shared(tasks + [functools.partial(_share_image, gray, kernels, buf)])
         idx, rv, v0, lo3, hi3, mom = (np.concatenate(part) for part in zip(*bands))
     else:
-        idx, rv, v0, lo3, hi3, mom = kernels.candidates(*args, 0, H)
+        idx, rv, v0, lo3, hi3, mom = _search(kernels, args, 0, H)
         share = _share_image(gray, kernels, buf)
     K = len(idx)
     if K == 0:
@@ -914,6 +914,16 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
     seed = cv2.dilate(resp, np.ones((2 * r + 1, 2 * r + 1), np.uint8), dst=buf.grown).ravel().take(failing) > fv
     kernels.put_back(resp, r, failing, fv, seed)
     return resp, passing[kernels.window_maxima(resp, r, passing)]
+
+
+def _search(kernels: ModuleType, args: tuple, y0: int, y1: int) -> tuple[NDArray, ...]:
+    """``kernels.candidates`` on the rows ``y0 .. y1 - 1``, with room for every pixel of them: the
+    candidates' flat indices, responses, grey levels, 3x3 minima and maxima, and moments."""
+    W = args[0].shape[1]
+    n = max(min(y1, args[0].shape[0] - _R - 1) - max(y0, _R + 1), 0) * (W - 2 * _R - 2)
+    out = (np.empty(n, np.int64), np.empty(n, np.float32), np.empty(n, np.uint8), np.empty(n, np.uint8), np.empty(n, np.uint8), np.empty((n, 3), np.int32))
+    K = kernels.candidates(*args, y0, y1, *out)
+    return tuple(a[:K] for a in out)
 
 
 def _side_estimate(gray, g100: float, idx, v0, lo3, hi3, t: float, share) -> NDArray[np.float32]:
