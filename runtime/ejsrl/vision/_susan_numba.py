@@ -597,8 +597,10 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
     once on the same ``resp``. Every value either reads is the truth about its pixel (passing,
     failing and undecided, or decided), each decision is written whole (one float32) and is the
     same whichever call makes it (one may decide a pixel the other is deciding: work done twice,
-    the same result), and a larger pixel found decided to stay since it was listed makes the
-    pixel listing it stay. So the maxima are the same, on one thread or two.
+    the same result), and a value is only ever taken as read last: a larger pixel found decided
+    to stay since it was listed, or since its window's range was read, makes the pixel listing
+    it stay (or, near a passing pixel, that pixel no corner), and a listed pixel found decided
+    either way is taken as decided. So the maxima are the same, on one thread or two.
 
     ``frames`` (4, D) int64 and ``larger`` (L,) int64: room for a chain of D pixels and the L
     larger ones in their windows. False when the room ran out: call again with more (what was
@@ -638,7 +640,11 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
                 row = yy * W
                 for xx in range(x0, x1):
                     q = row + xx
-                    if not (-f[q] > v or (-f[q] == v and q < p)):
+                    u = f[q]
+                    if u > v or (u == v and q < p):  # found to stay by the other call since the scan above
+                        good = False
+                        break
+                    if not (-u > v or (-u == v and q < p)):
                         continue
                     # does it stay? up the chains of larger undecided failing pixels from it
                     chain[0], nxt[0] = q, -1
@@ -647,7 +653,14 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
                         j = top - 1
                         s = chain[j]
                         if nxt[j] < 0:  # first visit: a larger pixel that stays in its window, or the larger undecided ones
-                            sv = -f[s]
+                            u = f[s]
+                            if u > 0:  # decided by the other call since it was listed: it stays
+                                stays = True
+                                break
+                            if u == 0:  # or it does not
+                                top -= 1
+                                continue
+                            sv = -u
                             top_v, low_v = _window_range(f, H, W, r, s, False)
                             if top_v > sv:
                                 stays = True
@@ -658,11 +671,15 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
                                 for ty in range(max(sy - r, 0), min(sy + r + 1, H)):
                                     trow = ty * W
                                     for tx in range(max(sx - r, 0), min(sx + r + 1, W)):
-                                        if -f[trow + tx] > sv:
+                                        u = f[trow + tx]
+                                        stays |= u > sv  # found to stay by the other call since the range was read
+                                        if -u > sv:
                                             if m == len(larger):
                                                 return False
                                             larger[m] = trow + tx
                                             m += 1
+                                if stays:
+                                    break
                             nxt[j], end[j] = begin[j], m
                         if nxt[j] == end[j]:  # none of the larger ones stays: neither does this one
                             f[s] = 0.0
