@@ -593,14 +593,15 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
     once, its window read once. The same maxima as ``put_back`` then ``window_maxima``, which
     decide every failing pixel (the response map is left half-decided).
 
-    The passing pixels ``passing[a:b]``, into ``keep[a:b]``: two calls on two parts may run at
-    once on the same ``resp``. Every value either reads is the truth about its pixel (passing,
-    failing and undecided, or decided), each decision is written whole (one float32) and is the
-    same whichever call makes it (one may decide a pixel the other is deciding: work done twice,
-    the same result), and a value is only ever taken as read last: a larger pixel found decided
-    to stay since it was listed, or since its window's range was read, makes the pixel listing
-    it stay (or, near a passing pixel, that pixel no corner), and a listed pixel found decided
-    either way is taken as decided. So the maxima are the same, on one thread or two.
+    The passing pixels ``passing[a:b]``, into ``keep[a:b]``: two calls on two parts run at once,
+    each on its own copy of the map (``_susan._corners_compiled``), so neither reads what the
+    other writes. (Were they to share one, the answer would still hold: every value either reads
+    is the truth about its pixel, passing, undecided or decided, each decision is the same
+    whichever call makes it, and a value is only ever taken as read last: a larger pixel found
+    decided to stay since it was listed, or since its window's range was read, makes the pixel
+    listing it stay, or, near a passing pixel, that pixel no corner; and a listed pixel found
+    decided either way is taken as decided. The new-user trial of session 7 found the races
+    these checks close, when the two calls shared a map.)
 
     ``frames`` (4, D) int64 and ``larger`` (L,) int64: room for a chain of D pixels and the L
     larger ones in their windows. False when the room ran out: call again with more (what was
