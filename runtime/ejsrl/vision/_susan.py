@@ -29,8 +29,8 @@ Speed: with numba installed (``pip install 'ejsgen[fast]'``), ``susan_corners`` 
 compiled (``_susan_numba``: the same corners, response and sub-pixel positions, bit for bit,
 3x as fast on one thread, 5x on two, outside the GIL). Outside a served class a call runs them on two
 threads (``set_threads``; a served class sets one, its sessions already sharing the cores). On
-the 18 real photographs scikit-image bundles, at 640x480, it takes 1.1x the time of
-``cv2.goodFeaturesToTrack`` (on OpenCV's 2 threads) at the median and at most 2.8x (grass, a
+the 18 real photographs scikit-image bundles, at 640x480, it takes 1.1-1.2x the time of
+``cv2.goodFeaturesToTrack`` (on OpenCV's 2 threads) at the median and at most 2.9x (grass, a
 texture: 2569 corners, each refined; page 2.6x, gravel 2.4x). The NumPy path: 5.3x at the
 median, 15x on grass (bench/vision.py).
 Without numba, this NumPy/OpenCV code. The kernels are compiled (a child process writes
