@@ -31,7 +31,7 @@ compiled (``_susan_numba``: the same corners, response and sub-pixel positions, 
 threads (``set_threads``; a served class sets one, its sessions already sharing the cores). On
 the 18 real photographs scikit-image bundles, at 640x480, it takes 1.1-1.2x the time of
 ``cv2.goodFeaturesToTrack`` (on OpenCV's 2 threads) at the median and at most 2.9x (grass, a
-texture: 2569 corners, each refined; page 2.6x, gravel 2.4x). The NumPy path: 5.3x at the
+texture: 2569 corners, each refined; page 2.6-2.7x, gravel 2.4x). The NumPy path: 5.3x at the
 median, 15x on grass (bench/vision.py).
 Without numba, this NumPy/OpenCV code. The kernels are compiled (a child process writes
 numba's cache, once per machine) or loaded in the background from the first call, this code
