@@ -208,7 +208,7 @@ def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
             if args.output:
                 out = build(args.spec, args.output)
                 return runner.run([sys.executable, str(out / "app.py"), *app_args])
-            with tempfile.TemporaryDirectory(prefix="ejsgen-run-") as tmp:
+            with _temporary_folder("ejsgen-run-") as tmp:
                 out = build(args.spec, Path(tmp) / "app")
                 return runner.run([sys.executable, str(out / "app.py"), *app_args])
         except Exception:
@@ -218,6 +218,20 @@ def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
                 raise
             print(f"ejsgen run: stopped by {signal.Signals(runner.signum).name}", file=sys.stderr)
             return 128 + int(runner.signum)
+
+
+def _temporary_folder(prefix: str) -> tempfile.TemporaryDirectory[str]:
+    """``tempfile.TemporaryDirectory(prefix=prefix)``, made with SIGINT and SIGTERM held back.
+
+    Python's first look for the temporary folder writes a file there and removes it again; a
+    stop signal between the two (its handler raises) left that file behind. Held back, a
+    signal arrives once the folder exists, and the folder is removed on the way out."""
+    stops = {signal.SIGINT, signal.SIGTERM}
+    held = signal.pthread_sigmask(signal.SIG_BLOCK, stops)
+    try:
+        return tempfile.TemporaryDirectory(prefix=prefix)
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
 
 def _cmd_schema(args: argparse.Namespace) -> int:

@@ -233,3 +233,31 @@ def test_a_stop_that_lands_in_an_import_in_c_is_still_a_clean_stop(tmp_path, mon
     err = capsys.readouterr().err
     assert status == 143 and "ejsgen run: stopped by SIGTERM" in err
     assert made and not made[0].exists()
+
+
+def test_ejsgen_run_stopped_while_python_probes_the_temporary_folder_leaves_nothing_behind(tmp_path) -> None:
+    """Python's first look for the temporary folder writes a file there and removes it; a SIGTERM
+    landing between the two (as CI once saw: a file ``lbvaqhsp`` left) is held back until the
+    run's folder exists, and everything is removed on the way out. The stop is made to land there:
+    the probe's removal sends it first."""
+    tmp = tmp_path / "tmp"
+    tmp.mkdir()
+    script = (
+        "import os, signal, sys\n"
+        "real = os.unlink\n"
+        "def unlink(path, *a, **k):\n"
+        "    if os.path.dirname(str(path)) == os.environ['TMPDIR'] and not os.path.basename(str(path)).startswith('ejsgen'):\n"
+        "        os.kill(os.getpid(), signal.SIGTERM)  # the probe's file exists: stop now\n"
+        "    return real(path, *a, **k)\n"
+        "os.unlink = unlink\n"
+        "from ejsgen.cli import main\n"
+        f"sys.exit(main(['run', {str(EXAMPLES / 'paper' / 'six_axis_kinematics.ejs.yaml')!r}, '--port', '{free_port()}']))\n"
+    )
+    proc = start([sys.executable, "-P", "-c", script], tmp_path / "o", tmp_path / "e", env={"TMPDIR": str(tmp)})
+    try:
+        status = proc.wait(timeout=60)
+    finally:
+        proc.kill()
+    err = (tmp_path / "e").read_text()
+    assert status == 143 and "Traceback" not in err and "ejsgen run: stopped by SIGTERM" in err, err
+    assert list(tmp.iterdir()) == []
