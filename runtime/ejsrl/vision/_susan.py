@@ -214,7 +214,7 @@ def _warm_up(kernels: ModuleType) -> None:
         t, g100, floor = 25.0, 1850.0, 150.0
         below = np.nextafter(np.float32(floor), np.float32(-np.inf))
         for whole in (True, False):
-            resp, ci = _corners_compiled(kernels, g, t, g100, floor, below, floor - _MID_SLACK * _SCALE, _lut(t), _bound_limit(t, g100 - floor + 1.0), 3, whole)
+            _, ci = _corners_compiled(kernels, g, t, g100, floor, below, floor - _MID_SLACK * _SCALE, _lut(t), _bound_limit(t, g100 - floor + 1.0), 3, whole)
         _refine(g, np.column_stack([ci % g.shape[1], ci // g.shape[1]]).astype(np.float64), kernels)
 
 
@@ -750,7 +750,7 @@ def susan_corners(
     (ties in raster order); with ``return_response`` also the response map (H, W) float32
     (after the tests: 0 where a maximum was rejected).
     """
-    gray = as_gray(img)
+    gray = np.ascontiguousarray(as_gray(img))  # (numba's kernels are compiled for C order)
     if not float(t) > 0:
         raise ValueError(f"susan_corners: t must be positive, got {t}")
     if not 0.0 <= float(quality) <= 1.0:
@@ -863,8 +863,8 @@ def _corners_compiled(kernels: ModuleType, gray, t: float, g100: float, floor: f
 
     On two threads (``_shared``, ``_two``) each step runs on parts of its pixels (bands of
     rows, ranges of candidates) side by side: the same arithmetic on each pixel, the results
-    joined in order, so the same output (``lazy_maxima`` says why its two halves may share
-    one map).
+    joined in order, so the same output (``lazy_maxima``'s two halves each in their own copy
+    of the map).
     """
     H, W = gray.shape
     T, m, _ = _ramp_bound(float(t))
@@ -1172,7 +1172,6 @@ def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64], kernels: ModuleTy
     out = np.empty_like(pts)
     if kernels is not None:
         h = len(pts) // 2
-        gray = np.ascontiguousarray(gray)
         halves = [(gray, part, _REFINE_WQ, _REFINE_MOVES, into) for part, into in ((pts[:h], out[:h]), (pts[h:], out[h:]))]
         _two(h >= 256 and susan_threads() > 1, kernels.refine, *halves)  # each corner on its own: the same either way
         return out

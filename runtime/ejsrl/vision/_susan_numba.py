@@ -517,7 +517,7 @@ def disc_sums(share, idx):
 
 @_jit
 def refine(gray, pts, wq, moves, out):
-    """``_susan._refine_numpy`` for the corners ``pts`` (N, 2) float64 (whole pixels), into
+    """``_susan._refine``'s NumPy code for the corners ``pts`` (N, 2) float64 (whole pixels), into
     ``out`` (N, 2) float64: the same integer sums (exact in any order) and float64 steps."""
     H, W = gray.shape
     w = (wq.shape[0] - 1) // 2
@@ -593,15 +593,9 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
     once, its window read once. The same maxima as ``put_back`` then ``window_maxima``, which
     decide every failing pixel (the response map is left half-decided).
 
-    The passing pixels ``passing[a:b]``, into ``keep[a:b]``: two calls on two parts run at once,
-    each on its own copy of the map (``_susan._corners_compiled``), so neither reads what the
-    other writes. (Were they to share one, the answer would still hold: every value either reads
-    is the truth about its pixel, passing, undecided or decided, each decision is the same
-    whichever call makes it, and a value is only ever taken as read last: a larger pixel found
-    decided to stay since it was listed, or since its window's range was read, makes the pixel
-    listing it stay, or, near a passing pixel, that pixel no corner; and a listed pixel found
-    decided either way is taken as decided. The new-user trial of session 7 found the races
-    these checks close, when the two calls shared a map.)
+    The passing pixels ``passing[a:b]``, into ``keep[a:b]``: two calls on two parts may run at
+    once, each on its own copy of the map (``_susan._corners_compiled``): this kernel assumes no
+    one else writes the map while it runs (two calls sharing one gave other corners now and then).
 
     ``frames`` (4, D) int64 and ``larger`` (L,) int64: room for a chain of D pixels and the L
     larger ones in their windows. False when the room ran out: call again with more (what was
@@ -642,9 +636,6 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
                 for xx in range(x0, x1):
                     q = row + xx
                     u = f[q]
-                    if u > v or (u == v and q < p):  # found to stay by the other call since the scan above
-                        good = False
-                        break
                     if not (-u > v or (-u == v and q < p)):
                         continue
                     # does it stay? up the chains of larger undecided failing pixels from it
@@ -654,14 +645,7 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
                         j = top - 1
                         s = chain[j]
                         if nxt[j] < 0:  # first visit: a larger pixel that stays in its window, or the larger undecided ones
-                            u = f[s]
-                            if u > 0:  # decided by the other call since it was listed: it stays
-                                stays = True
-                                break
-                            if u == 0:  # or it does not
-                                top -= 1
-                                continue
-                            sv = -u
+                            sv = -f[s]
                             top_v, low_v = _window_range(f, H, W, r, s, False)
                             if top_v > sv:
                                 stays = True
@@ -672,15 +656,11 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
                                 for ty in range(max(sy - r, 0), min(sy + r + 1, H)):
                                     trow = ty * W
                                     for tx in range(max(sx - r, 0), min(sx + r + 1, W)):
-                                        u = f[trow + tx]
-                                        stays |= u > sv  # found to stay by the other call since the range was read
-                                        if -u > sv:
+                                        if -f[trow + tx] > sv:
                                             if m == len(larger):
                                                 return False
                                             larger[m] = trow + tx
                                             m += 1
-                                if stays:
-                                    break
                             nxt[j], end[j] = begin[j], m
                         if nxt[j] == end[j]:  # none of the larger ones stays: neither does this one
                             f[s] = 0.0
@@ -689,17 +669,14 @@ def lazy_maxima(resp, r, passing, a, b, frames, larger, keep):
                             continue
                         t = larger[nxt[j]]
                         nxt[j] += 1
-                        if f[t] > 0:  # found to stay since (by the other call)
-                            stays = True
-                            break
-                        if f[t] < 0:  # still undecided (0: found not to stay since)
+                        if f[t] < 0:  # still undecided (0: found not to stay since, up another chain)
                             if top == len(chain):
                                 return False
                             chain[top], nxt[top] = t, -1
                             top += 1
                     if stays:  # and so does every pixel of the chain below it, each in the next one's window
                         for j in range(top):
-                            f[chain[j]] = abs(f[chain[j]])
+                            f[chain[j]] = -f[chain[j]]
                         good = False
                         break
                 if not good:
