@@ -49,7 +49,7 @@ def run_headless(
         print("error: this model has no independent variable (no ODE page and no variable 't')", file=log)
         return 2
     columns = csv_columns(model, variables)
-    writer = csv.writer(csv_file) if csv_file is not None else None
+    writer = csv.writer(csv_file, lineterminator="\n") if csv_file is not None else None
     if writer is not None:
         writer.writerow([name for name, _ in columns])
         writer.writerow(_row(model, columns))

@@ -210,7 +210,7 @@ def write_table(table: Table, path: str | Path) -> None:
 def _write_csv(table: Table, path: Path) -> None:
     cols = list(table.columns.values())
     with open(path, "w", newline="", encoding="utf-8") as fh:
-        w = csv.writer(fh)
+        w = csv.writer(fh, lineterminator="\n")
         w.writerow(list(table.columns))
         for i in range(table.rows):
             w.writerow([_csv_cell(c.cell(i)) for c in cols])

@@ -172,6 +172,14 @@ class OdePage:
         self.event_where = dict(event_where or {})
         self.integrator = OdeIntegrator(rates, method, tolerance=tolerance, max_step=max_step, events=events)
         self.fired: list[tuple[str, float]] = []
+        # The step count that keeps the independent variable on t0 + n*h (exact multiples of
+        # the step, no round-off accumulated by adding h again and again): the count restarts
+        # from the current time whenever the step changes, the time was changed from outside
+        # (not the value this page wrote last), or an event stopped the simulation mid-step.
+        self._t0 = 0.0
+        self._h = math.nan
+        self._n = 0
+        self._t_last = math.nan
 
     @classmethod
     def of(
@@ -299,8 +307,12 @@ class OdePage:
             return False
         h = float(self.step_fn())
         t, y = self.state()
+        if t == self._t_last and h == self._h:
+            n = self._n + 1
+        else:
+            self._t0, self._h, n = t, h, 1
         try:
-            result = self.integrator.step(t, y, h)
+            result = self.integrator.step(t, y, h, self._t0 + n * h)
         except self._zeno_error as exc:
             where = next((w for name, w in self.event_where.items() if f"'{name}'" in str(exc)), self.where)
             raise UserCodeError(str(exc), where) from None
@@ -314,6 +326,9 @@ class OdePage:
             )
         self.load(result.t, y_new.copy())
         self.fired = result.fired
+        self._n, self._t_last = n, result.t
+        if result.stop:  # the next step counts from the event's time
+            self._h = math.nan
         return bool(result.stop)
 
     def restart(self) -> None:
@@ -423,11 +438,18 @@ class ModelBase:
 
     # -- lifecycle ------------------------------------------------------------------------
     def _ejs_reset(self, keep: Callable[[], None] | None = None) -> None:
-        """Initial values, ``--set`` overrides, fresh solvers, ``init``, fixed relations.
+        """Programs stopped, initial values, ``--set`` overrides, fresh solvers, ``init``,
+        fixed relations, then the ``autostart`` programs that ``init`` did not start.
+
+        ``init`` (and the custom functions it calls) may start programs with
+        ``start_program(name)``: they run from then on.
 
         ``keep()``, if given, runs right after the variables take their initial values
         (before ``init``), to put back values that a restart keeps.
         """
+        programs = self._ejs_programs
+        if programs is not None:  # stopped first, so that ``init`` may start some
+            programs.stop_all()
         self._ejs_declare()
         if keep is not None:
             keep()
@@ -435,8 +457,8 @@ class ModelBase:
         self._init()
         self._ejs_start_fmus()
         self._fixed_relations()
-        if self._ejs_programs is not None:
-            self._ejs_programs.reset()
+        if programs is not None:
+            programs.autostart()
 
     def _ejs_declare(self) -> None:
         """``_declare`` with the ``--set`` overrides taking each variable's place as it is declared.

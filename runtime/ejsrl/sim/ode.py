@@ -134,12 +134,16 @@ class OdeIntegrator:
 
     # -- public -------------------------------------------------------------------------
 
-    def step(self, t: float, y: np.ndarray, h: float) -> StepResult:
+    def step(self, t: float, y: np.ndarray, h: float, t_end: float | None = None) -> StepResult:
         """Advance from (t, y) by exactly h (or to the time of a ``stop`` event).
 
-        Raises :class:`ZenoError` if an event fires more than 100 times in this step.
+        ``t_end``: the time the step reaches, if the caller knows it better than ``t + h``
+        (a page counting its steps gives ``t0 + n * h``, free of the round-off that adding
+        h step after step accumulates); it must be ``t + h`` up to round-off. Fixed-step
+        methods still take a step of exactly h. Raises :class:`ZenoError` if an event fires
+        more than 100 times in this step.
         """
-        return self._impl(t, y, h)
+        return self._impl(t, y, h, t + h if t_end is None else t_end)
 
     def reset(self) -> None:
         """Forget all memory (step size, FSAL stage, implicit solver, event state).
@@ -185,10 +189,10 @@ class OdeIntegrator:
 
     # -- fixed step ---------------------------------------------------------------------
 
-    def _step_fixed(self, t: float, y: np.ndarray, h: float) -> StepResult:
-        return StepResult(t + h, self._fixed(self.rates, t, y, h, None), [], False)
+    def _step_fixed(self, t: float, y: np.ndarray, h: float, t_end: float) -> StepResult:
+        return StepResult(t_end, self._fixed(self.rates, t, y, h, None), [], False)
 
-    def _step_fixed_events(self, t: float, y: np.ndarray, h: float) -> StepResult:
+    def _step_fixed_events(self, t: float, y: np.ndarray, h: float, t_end: float) -> StepResult:
         self._check_h(h)
         y = np.asarray(y, dtype=float)
         tr = self._tracker
@@ -197,11 +201,11 @@ class OdeIntegrator:
         tr.new_call()
         f = self.rates
         step = self._fixed
-        t_end = t + h
+        t_start = t
         fired: list[tuple[str, float]] = []
         while t < t_end:
             k0 = f(t, y)
-            y1 = step(f, t, y, t_end - t, k0)
+            y1 = step(f, t, y, h if t == t_start else t_end - t, k0)
 
             def state_at(x: float, t0: float = t, y0: np.ndarray = y, k0: np.ndarray = k0) -> np.ndarray:
                 return step(f, t0, y0, x - t0, k0)
@@ -218,7 +222,7 @@ class OdeIntegrator:
 
     # -- adaptive explicit --------------------------------------------------------------
 
-    def _step_adaptive(self, t: float, y: np.ndarray, h: float) -> StepResult:
+    def _step_adaptive(self, t: float, y: np.ndarray, h: float, t_end: float) -> StepResult:
         self._check_h(h)
         y = np.asarray(y, dtype=float)
         cont = self._continues(t, y)
@@ -231,7 +235,6 @@ class OdeIntegrator:
         f = self.rates
         rk = self._rk
         tab = self._tableau
-        t_end = t + h
         fired: list[tuple[str, float]] = []
         if h == 0:
             return self._finish(t, y.copy(), fired, False, k)
@@ -258,7 +261,7 @@ class OdeIntegrator:
 
     # -- implicit -----------------------------------------------------------------------
 
-    def _step_implicit(self, t: float, y: np.ndarray, h: float) -> StepResult:
+    def _step_implicit(self, t: float, y: np.ndarray, h: float, t_end: float) -> StepResult:
         self._check_h(h)
         y = np.asarray(y, dtype=float)
         imp = self._imp
@@ -270,7 +273,6 @@ class OdeIntegrator:
         if tr is not None:
             tr.new_call()
         f = self.rates
-        t_end = t + h
         fired: list[tuple[str, float]] = []
         if h == 0:
             return self._finish(t, y.copy(), fired, False)

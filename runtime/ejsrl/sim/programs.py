@@ -293,13 +293,22 @@ class Programs:
         self._get(name).stop()
 
     def reset(self) -> None:
-        """Stop every program (on reset), then start those marked ``autostart``."""
+        """Stop every program, then start those marked ``autostart``."""
+        self.stop_all()
+        self.autostart()
+
+    def stop_all(self) -> None:
+        """Stop every program and forget what it held: each is ``idle`` again (a reset, before ``init``)."""
         for p in self.programs.values():
             p.stop()
             p.state = "idle"
             p.grasped = None
+
+    def autostart(self) -> None:
+        """Start the programs marked ``autostart`` that are still ``idle`` (``init`` may have
+        started one already: it is not started a second time)."""
         for p in self.programs.values():
-            if p.spec.autostart:
+            if p.spec.autostart and p.state == "idle":
                 p.start()
 
     def advance(self) -> None:
