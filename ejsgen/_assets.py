@@ -5,17 +5,24 @@ spec's folder, so a link such as ``link.obj -> /etc/passwd`` is never copied int
 or its ``.pyz``. Every mesh file, and every asset with a mesh extension, is read with the
 runtime's own loader (``ejsrl.world.mesh.load_mesh``), so a file the app could not show
 is refused at build time, at the spec location that names it.
+
+Spec code names an asset by its path (``np.loadtxt('measured.csv')``): the rewriter
+(``ejsgen._resolve``) turns every string that is exactly a listed asset's path into
+``asset('measured.csv')`` (:func:`asset_call`), the app's function that gives the file's
+real path wherever the app runs (``ejsrl.app._assets``), and lets ``open`` read an asset
+(:func:`opens_an_asset`), as it lets it read nothing else.
 """
 
 from __future__ import annotations
 
+import ast
 import functools
 import warnings
 from pathlib import Path, PurePosixPath
 
 from ejsgen.errors import Location, SpecError
 
-__all__ = ["checked_asset", "MESH_EXTENSIONS"]
+__all__ = ["checked_asset", "MESH_EXTENSIONS", "ASSET_FUNCTION", "asset_names", "asset_call", "opens_an_asset"]
 
 #: extensions read as meshes by the runtime (``ejsrl.world.mesh``)
 MESH_EXTENSIONS = ("obj", "stl", "ply", "glb", "gltf", "off", "dae", "3mf", "wrl", "wrz", "vrml")
@@ -101,3 +108,40 @@ def _reason(message: str, real: Path) -> str:
     if sep and len(parts) == 2 and all(x.isdigit() for x in parts):
         return f"line {parts[0]}, column {parts[1]}: {tail}"
     return rest.strip()
+
+
+# -- asset names in spec code ------------------------------------------------------------------------
+#: the function of a generated app that gives an asset's path (``asset = app_assets(__file__)``)
+ASSET_FUNCTION = "asset"
+_READ_MODES = frozenset("rbt")
+
+
+def asset_names(listed: list[str]) -> frozenset[str]:
+    """The strings that name the listed assets in code: each as listed and normalised (``./a.csv`` -> ``a.csv``)."""
+    out: set[str] = set()
+    for rel in listed:
+        out.add(rel)
+        out.add(PurePosixPath(rel.replace("\\", "/")).as_posix())
+    return frozenset(out)
+
+
+def asset_call(node: ast.Constant) -> ast.Call:
+    """``asset('name')`` in place of the string constant ``node``; marked so that the author's
+    text keeps its layout (``ejsgen._resolve.rewrite_source`` puts the call around the string)."""
+    call = ast.Call(func=ast.Name(id=ASSET_FUNCTION, ctx=ast.Load()), args=[node], keywords=[])
+    call._ejs_wrap = (f"{ASSET_FUNCTION}(", ")")  # type: ignore[attr-defined]
+    return ast.copy_location(call, node)
+
+
+def opens_an_asset(call: ast.Call, assets: frozenset[str]) -> bool:
+    """Whether ``call`` is ``open(<asset>)`` for reading: its file a listed asset's path (or
+    ``asset(...)``), its mode, if any, a constant made of ``r``, ``b`` and ``t``."""
+    if not call.args:
+        return False
+    first = call.args[0]
+    named = isinstance(first, ast.Constant) and first.value in assets
+    computed = isinstance(first, ast.Call) and isinstance(first.func, ast.Name) and first.func.id == ASSET_FUNCTION
+    if not (named or computed):
+        return False
+    modes = [a for a in call.args[1:2]] + [k.value for k in call.keywords if k.arg == "mode"]
+    return all(isinstance(m, ast.Constant) and isinstance(m.value, str) and m.value and set(m.value) <= _READ_MODES for m in modes)

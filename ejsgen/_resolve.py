@@ -18,6 +18,7 @@ import builtins
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
+from ejsgen._assets import ASSET_FUNCTION, asset_call, opens_an_asset
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import CodeSyntaxError, Location, SpecError, UnknownNameError
 from ejsgen.validate import MATH_NAMES
@@ -61,6 +62,8 @@ class Names:
     controls: set[str]
     globals: set[str]
     extra: set[str] = field(default_factory=set)
+    #: the strings that name a listed asset (``ejsgen._assets.asset_names``): each becomes ``asset('...')``
+    assets: frozenset[str] = frozenset()
 
     def known(self) -> set[str]:
         return self.variables | self.functions | self.controls | self.globals | self.extra | set(BUILTIN_NAMES)
@@ -242,6 +245,7 @@ class _Rewriter(ast.NodeTransformer):
         self.scopes: list[set[str]] = [block_locals]
         self.errors: list[SpecError] = []
         self._called: set[int] = set()
+        self._asset_open: set[int] = set()  # ``open`` names that read an asset, strings already in asset(...)
 
     # scope helpers
     def _is_local(self, name: str) -> bool:
@@ -286,7 +290,12 @@ class _Rewriter(ast.NodeTransformer):
         if name == "self":
             self._err(node, "'self' is not a name in spec code", "use the variables' names directly")
             return node
+        if name == "open" and id(node) in self._asset_open:
+            return node
         if name in ("eval", "exec", "compile", "__import__", "globals", "locals", "vars", "open", "input", "breakpoint"):
+            if name == "open":
+                self._err(node, "'open' is not available in spec code, except to read a file listed under 'assets:'", "list the file under assets: and open it by its path, e.g. open('notes.txt')")
+                return node
             self._err(node, f"'{name}' is not available in spec code")
             return node
         self._err(node, f"unknown name '{name}'", self._suggest(name, called=id(node) in self._called), kind=UnknownNameError)
@@ -323,6 +332,10 @@ class _Rewriter(ast.NodeTransformer):
     def visit_Call(self, node: ast.Call) -> ast.AST:
         if isinstance(node.func, ast.Name):
             self._called.add(id(node.func))
+            if node.func.id == "open" and opens_an_asset(node, self.names.assets):
+                self._asset_open.add(id(node.func))
+            if node.func.id == ASSET_FUNCTION:  # asset('data.csv') written out: already the path
+                self._asset_open.update(id(a) for a in node.args)
         return self.generic_visit(node)
 
     def _shadowing(self, name: str) -> bool:
@@ -402,6 +415,20 @@ class _Rewriter(ast.NodeTransformer):
 
     visit_ImportFrom = visit_Import  # type: ignore[assignment]
 
+    # an asset named by its path: the app's real path of the file, wherever the app runs
+    def visit_Constant(self, node: ast.Constant) -> ast.AST:
+        if not (isinstance(node.value, str) and node.value in self.names.assets) or id(node) in self._asset_open:
+            return node
+        if self._is_local(ASSET_FUNCTION):
+            self._err(node, f"'{node.value}' names an asset, but '{ASSET_FUNCTION}' is a local name here", f"rename the local '{ASSET_FUNCTION}': the app reads its assets through the function {ASSET_FUNCTION}()")
+            return node
+        return asset_call(node)
+
+    def visit_JoinedStr(self, node: ast.JoinedStr) -> ast.AST:
+        # the literal parts of an f-string stay text; only its {values} are code
+        node.values = [self.visit(v) if isinstance(v, ast.FormattedValue) else v for v in node.values]
+        return node
+
     def visit_ClassDef(self, node: ast.ClassDef) -> ast.AST:
         self._err(node, "class definitions are not supported in spec code")
         return node
@@ -432,6 +459,15 @@ def rewrite_source(snippet: Snippet, tree: ast.AST, lines: tuple[int, int] | Non
     lines = snippet.text.split("\n")
     edits: list[tuple[int, int, str]] = []
     for node in ast.walk(tree):
+        wrap = getattr(node, "_ejs_wrap", None)
+        if wrap is not None:  # asset('...') put around a string: (row, col, text) at its start and end
+            arg = node.args[0]  # type: ignore[attr-defined]
+            spots = ((arg.lineno - 1, arg.col_offset, wrap[0]), (arg.end_lineno - 1, arg.end_col_offset, wrap[1]))
+            if any(row >= len(lines) for row, _, _ in spots):
+                return None
+            for row, offset, text in spots:
+                edits.append((row, len(lines[row].encode("utf-8")[:offset].decode("utf-8", errors="replace")), text))
+            continue
         prefix = getattr(node, "_ejs_prefix", None)
         if prefix is None:
             continue

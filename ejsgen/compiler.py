@@ -12,6 +12,7 @@ import importlib.util
 from pathlib import Path
 from typing import Any
 
+from ejsgen._assets import ASSET_FUNCTION, asset_names
 from ejsgen._resolve import Names, Snippet, parse_snippet, rewrite, rewrite_source, source_lines
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
@@ -50,6 +51,9 @@ class Compiler:
         self.var_plans: list[Variable] = []
         self.pages: list[OdePlan | Call] = []
         self.names = Names(variables=set(self.var_decls), functions=set(), controls=set(CONTROL_NAMES), globals={"np", *MATH_NAMES})
+        # assets named by their path in code become asset('...'); asset(name) finds any of them
+        self.names.assets = asset_names(self.spec.assets)
+        self.names.globals.add(ASSET_FUNCTION)
 
     # -- helpers ----------------------------------------------------------------------------------
     def loc(self, path: Path_) -> Location:

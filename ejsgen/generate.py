@@ -23,6 +23,7 @@ from ejsrl.sim.model import ModelBase
 from ejsrl.sim.names import MATH_NAMES
 
 from ejsgen import __version__
+from ejsgen._assets import ASSET_FUNCTION
 from ejsgen.errors import EjsError, SpecError
 from ejsgen.emit import WIDTH, call_lines, flat, meta_call, method_lines, program_call, runtime_defaults, sim_call, used_names, view_lines
 from ejsgen.plan import AppPlan, Line
@@ -61,7 +62,7 @@ def _env() -> jinja2.Environment:
 
 #: where the runtime names a generated app may use come from (imported only when used)
 _RUNTIME_FROM = {
-    "ejsrl.app": ("AppMeta", "SimConfig", "main"),
+    "ejsrl.app": ("AppMeta", "SimConfig", "app_assets", "main"),
     "ejsrl.sim": ("CodePage", "EventDef", "ModelBase", "OdePage"),
     "ejsrl.sim.programs": ("ProgramDef",),
 }
@@ -181,6 +182,9 @@ def render_app(plan: AppPlan) -> str:
     if plan.after_class:
         blocks.append(list(plan.after_class))
     blocks.append(_marked(view_lines(plan.view), locs))
+    assets = _asset_block([ln for m in methods for ln in m] + [ln for b in blocks for ln in b])
+    if assets:
+        blocks.insert(0, assets)
     all_default = _default_sim(plan)
     sim = [] if all_default else [ln.text for ln in call_lines(sim_call(plan), 0, "SIMULATION = ", "")]
     blocks.append(sim + [ln.text for ln in call_lines(meta_call(plan), 0, "META = ", "")])
@@ -199,6 +203,17 @@ def render_app(plan: AppPlan) -> str:
         headless=plan.independent is not None,
     )
     return _with_line_table(text, locs)
+
+
+def _asset_block(texts: list[str]) -> list[str]:
+    """``asset = app_assets(__file__)`` when the app's code calls ``asset(...)`` (an asset
+    named by its path in spec code, or ``asset(name)`` written there), else nothing."""
+    if ASSET_FUNCTION not in _code_names(texts):
+        return []
+    return [
+        "# asset('data.csv'): the path of a file the spec lists under assets, wherever the app runs",
+        f"{ASSET_FUNCTION} = app_assets(__file__)",
+    ]
 
 
 def _default_sim(plan: AppPlan) -> bool:
@@ -319,7 +334,9 @@ def _asset_dest(folder: Path, src: Path, rel: str) -> Path:
 
 
 def _write_bundle(plan: AppPlan, folder: Path, target: Path) -> None:
-    main_text = _env().get_template("bundle_main.py.j2").render(title=plan.title, version=__version__, assets=repr([rel for _, rel in plan.assets]))
+    from ejsrl.app._assets import MANIFEST, manifest_of
+
+    main_text = _env().get_template("bundle_main.py.j2").render(title=plan.title, version=__version__)
     _check_compiles(main_text, "__main__.py")
     with tempfile.TemporaryDirectory() as staging:
         stage = Path(staging)
@@ -329,6 +346,8 @@ def _write_bundle(plan: AppPlan, folder: Path, target: Path) -> None:
         for _, rel in plan.assets:
             (stage / rel).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(folder / rel, stage / rel)
+        # each asset's SHA-256 and size: the archive extracts them once, checked, into a per-user cache
+        (stage / MANIFEST).write_bytes(manifest_of({rel: folder / rel for _, rel in plan.assets}))
         buf = io.BytesIO()
         zipapp.create_archive(stage, buf, interpreter="/usr/bin/env python3", compressed=True)
         target.write_bytes(buf.getvalue())

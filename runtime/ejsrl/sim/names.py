@@ -78,6 +78,8 @@ APP_GLOBALS: frozenset[str] = frozenset(
         "SIMULATION",
         "META",
         "ProgramDef",  # apps with robot programs
+        "asset",  # apps whose code reads an asset: asset = app_assets(__file__)
+        "app_assets",
     }
 )
 
