@@ -203,6 +203,10 @@ def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
 
     The status is the app's, or 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
     """
+    if args.watch:
+        from ejsgen._watch import cmd_watch
+
+        return cmd_watch(args.spec, app_args, output=args.output, temporary=_temporary_folder)
     with _AppRunner() as runner:
         try:
             if args.output:
@@ -266,6 +270,13 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
     )
     r.add_argument("spec", metavar="SPEC")
     r.add_argument("-o", "--output", metavar="DIR", help="keep the built app in this folder")
+    r.add_argument(
+        "--watch", action="store_true",
+        help="live editing: every save of SPEC (or of a file it names) rebuilds the lab in this one process and "
+        "reloads every open tab, keeping the variable values you did not change; a build error shows in the "
+        "page until the spec is fixed (serves on 127.0.0.1 unless --host says otherwise; not with --headless, "
+        "--shared or --processes)",
+    )
     sub.add_parser("schema", help="print the JSON Schema of the spec language")
     from ejsgen._docs import add_parser as _add_docs_parser
 
@@ -285,7 +296,7 @@ _APP_OPTIONS_WITH_VALUE = (
 
 
 def _split_run_args(argv: list[str]) -> tuple[list[str], list[str]]:
-    """``run``'s own arguments (the spec, ``-o DIR``, ``-h``) and the app's (all the others,
+    """``run``'s own arguments (the spec, ``-o DIR``, ``--watch``, ``-h``) and the app's (all the others,
     before or after the spec): ``ejsgen run --port 8090 lab.ejs.yaml`` works as
     ``ejsgen run lab.ejs.yaml --port 8090``."""
     own, app, rest = [argv[0]], [], argv[1:]
@@ -296,7 +307,7 @@ def _split_run_args(argv: list[str]) -> tuple[list[str], list[str]]:
             own += [arg, rest.pop(0)]
         elif arg.startswith(("-o", "--output=")) and arg not in ("-o", "--output"):
             own.append(arg)
-        elif arg in ("-h", "--help") and not spec_seen:
+        elif arg in ("-h", "--help") and not spec_seen or arg == "--watch":
             own.append(arg)
         elif not spec_seen and not arg.startswith("-"):
             own.append(arg)

@@ -179,6 +179,9 @@ class Classroom:
         self.dropped_clients = 0
         self._lock = threading.Lock()
         self._stopped = threading.Event()
+        #: asked first about every tab that connects: False leaves the tab to the caller (a lab
+        #: served with ``ejsgen run --watch`` shows a build error instead, :mod:`ejsrl.app._reload`)
+        self.admit: Callable[[Any], bool] | None = None
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
         self._reaper = threading.Thread(target=self._reap_loop, name="ejsrl-sessions", daemon=True)
@@ -207,6 +210,8 @@ class Classroom:
     def _connect(self, client: Any) -> None:
         from ejsrl.view._guard import session_token
 
+        if self.admit is not None and not self.admit(client):
+            return
         token = session_token(self.server, client.client_id)
         with self._lock:
             old = self.sessions.get(token) if token else None

@@ -1,0 +1,154 @@
+"""``ejsgen run --watch``: which values a reload keeps, how saves are seen (a half-written
+file is not read), and what a failed build reports."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ejsgen._watch import FileWatch, Rebuilder, error_report, kept_variables
+from ejsgen.cli import load_plan
+
+SPEC = """\
+ejs: 1
+title: Watched spring
+model:
+  variables:
+    t: 0.0
+    dt: 0.01
+    N: 3
+    x: {{value: 1.0, unit: m}}
+    v: 0.0
+    k: {{value: {k}, unit: N/m, doc: {doc}}}
+    xs: {{expr: np.zeros(N)}}
+    twice_k: {{expr: 2*k}}
+    s: {s}
+  evolution:
+    - ode:
+        equations:
+          x: v
+          v: -k*x
+view:
+  - slider: {{bind: k, min: 0.5, max: {kmax}, label: "{label}"}}
+  - label: {{text: "x = {{x:.3f}}"}}
+"""
+
+
+def plan_of(tmp_path: Path, name: str = "lab", **fields: object):
+    values = dict(k=4.0, doc="stiffness", s=0.5, kmax=20, label="Stiffness")
+    values.update(fields)
+    spec = tmp_path / f"{name}.ejs.yaml"
+    spec.write_text(SPEC.format(**values))
+    return load_plan(spec)
+
+
+def test_a_view_only_edit_keeps_every_value(tmp_path: Path) -> None:
+    old = plan_of(tmp_path, "a")
+    new = plan_of(tmp_path, "b", label="Spring constant", kmax=50, doc="the spring's stiffness")
+    assert kept_variables(old, new) == {"t", "dt", "N", "x", "v", "k", "xs", "twice_k", "s"}
+
+
+def test_a_changed_initial_value_takes_the_new_one_and_so_does_what_reads_it(tmp_path: Path) -> None:
+    old = plan_of(tmp_path, "a")
+    kept = kept_variables(old, plan_of(tmp_path, "b", k=9.0, s=2.5))
+    assert "k" not in kept and "s" not in kept
+    assert "twice_k" not in kept  # expr: 2*k reads k
+    assert {"t", "x", "v", "N", "xs"} <= kept
+
+
+def test_a_changed_type_or_a_new_variable_is_not_kept_and_the_independent_variable_always_is(tmp_path: Path) -> None:
+    old = plan_of(tmp_path, "a")
+    new = plan_of(tmp_path, "b", s="1")  # float 0.5 -> int 1
+    assert "s" not in kept_variables(old, new)
+    spec = tmp_path / "c.ejs.yaml"
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="K").replace("t: 0.0", "t: 5.0")
+                    .replace("    s: 0.5\n", "    s: 0.5\n    fresh: 1.0\n"))
+    new = load_plan(spec)
+    kept = kept_variables(old, new)
+    assert "t" in kept and "fresh" not in kept
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="K").replace("N: 3", "N: 5"))
+    kept = kept_variables(old, load_plan(spec))
+    assert "N" not in kept and "xs" not in kept  # np.zeros(N): its size changes with N
+
+
+def test_the_runtime_keeps_a_value_only_where_its_shape_still_fits(tmp_path: Path) -> None:
+    """``carry_over`` is the runtime's half of the rule: a kept name whose value no longer
+    has the shape of the new initial value takes the new one."""
+    from ejsrl.app._reload import carry_over
+
+    rb = Rebuilder(tmp_path / "a.ejs.yaml", tmp_path / "builds", [])
+    plan_of(tmp_path, "a")
+    old = rb.rebuild().build.make_app()
+    old.model.x, old.model.k, old.model.xs = 0.25, 6.0, np.array([1.0, 2.0, 3.0])
+    (tmp_path / "a.ejs.yaml").write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="K").replace("N: 3", "N: 4"))
+    new = rb.rebuild().build.make_app()
+    carried = carry_over(old, new, {"x", "k", "xs", "N"})
+    assert new.model.x == 0.25 and new.model.k == 6.0
+    assert "xs" not in carried and new.model.xs.shape == (4,)
+    assert new.model.twice_k == 8.0  # not kept: its declaration read the old k, the new model's runs again
+
+
+def test_a_file_written_in_two_steps_is_read_once_whole(tmp_path: Path) -> None:
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text("first version\n")
+    writes = iter(["second ver", "second version, whole\n"])
+
+    def sleep(_seconds: float) -> None:  # the editor's second write lands during the settle wait
+        text = next(writes, None)
+        if text is not None:
+            spec.write_text(text)
+            os.utime(spec, ns=(spec.stat().st_mtime_ns + 1_000_000,) * 2)
+
+    watch = FileWatch([spec], sleep=sleep)
+    assert not watch.changed()
+    spec.write_text("second")
+    os.utime(spec, ns=(spec.stat().st_mtime_ns + 1_000_000,) * 2)
+    assert watch.changed()
+    assert spec.read_text() == "second version, whole\n"
+    assert not watch.changed()  # seen whole: no second build
+    os.utime(spec, ns=(spec.stat().st_mtime_ns + 5_000_000,) * 2)  # saved again unchanged
+    assert not watch.changed()
+
+
+def test_a_file_gone_for_a_moment_and_back_counts_once(tmp_path: Path) -> None:
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text("one\n")
+    watch = FileWatch([spec], sleep=lambda s: None)
+    spec.unlink()
+    assert watch.changed()  # gone: a change (the build then says the file cannot be read)
+    spec.write_text("two\n")
+    assert watch.changed()
+
+
+def test_a_failed_build_reports_what_validate_prints_with_the_line(tmp_path: Path) -> None:
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="<b>K</b>").replace("v: -k*x", "v: -k*xx"))
+    with pytest.raises(Exception) as info:
+        load_plan(spec)
+    report = error_report(info.value)
+    validate_text = str(info.value)
+    for line in validate_text.splitlines():
+        assert line in report
+    lines = report.splitlines()
+    i = next(i for i, line in enumerate(lines) if "unknown name 'xx'" in line)
+    assert ":18:" in lines[i] and "did you mean 'x'" in lines[i]
+    assert lines[i + 1].strip() == "v: -k*xx"
+    col = int(lines[i].split(":")[2])  # FILE:LINE:COL, 1-based
+    assert lines[i + 2] == " " * (4 + col - 1) + "^"  # the caret under that column of the line shown
+    assert spec.read_text().splitlines()[17][col - 1:].startswith("xx")
+
+
+def test_rebuilder_gives_an_error_instead_of_raising_for_a_half_written_spec(tmp_path: Path) -> None:
+    spec = tmp_path / "lab.ejs.yaml"
+    text = SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="K")
+    spec.write_text(text[: len(text) // 2 + 7])  # cut mid-line
+    rb = Rebuilder(spec, tmp_path / "builds", [])
+    out = rb.rebuild()
+    assert out.build is None and out.error and str(spec) in out.error
+    spec.write_text(text)
+    out = rb.rebuild()
+    assert out.build is not None and out.error is None
+    assert out.build.model_cls.VARIABLES["k"] == "float"
