@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from ejsgen._interpolate import BraceError, split_fields
 from ejsgen._shapes import infer_shape, literal_shape
+from ejsgen._view_compile_plot import compile_plot
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError
 from ejsgen.plan import Call, Expr, Ref, Src
@@ -357,37 +358,6 @@ class ViewCompiler:
             action = Src("lambda self: None")
         return Call("E.Button", [], {"label": label, "action": action, "where": self.c.where(path)})
 
-    def _plot(self, item: ViewItem, n: int) -> Call:
-        p, path = item.props, item.path
-        c = self.c
-        x = self.number(p.x, path + ("x",), "", "the plot's x")
-        series = []
-        for i, s in enumerate(p.series):
-            spath = path + ("series", i)
-            y = self.number(s.y, spath + ("y",), "", f"series {i + 1} of the plot")
-            if s.label is not None:
-                label = self.interpolated(spath + ("label",), s.label, "", f"the label of series {i + 1}")
-            else:
-                label = str(s.y)
-            if s.color is not None:
-                self.color(s.color, spath + ("color",), "")
-            kw = {"y": y, "label": label} | ({"color": s.color} if s.color is not None else {})
-            series.append(Call("E.Series", [], kw | {"where": c.where(spath)}))
-        if p.y_range is not None and (len(p.y_range) != 2 or p.y_range[0] >= p.y_range[1]):
-            c.errors.append(SpecError(c.loc(path + ("y_range",)), "y_range is [ymin, ymax] with ymin < ymax"))
-        y_range = tuple(float(v) for v in p.y_range) if p.y_range else None
-        title = self.interpolated(path + ("title",), p.title, "", "the plot's title")
-        x_label = p.x_label if p.x_label is not None else self._axis_title(p.x)
-        y_units = {self._unit_of(s.y) for s in p.series}
-        y_label = p.y_label if p.y_label is not None else (y_units.pop() or "" if len(y_units) == 1 else "")
-        kw = {"title": title, "x": x, "series": series, "window": p.window, "max_points": p.max_points, "y_range": y_range}
-        if x_label:
-            kw["x_label"] = x_label
-        if y_label:
-            kw["y_label"] = y_label
-        kw["where"] = c.where(path)
-        return Call("E.Plot", [], kw)
-
     def _image(self, item: ViewItem, n: int) -> Call:
         p, path = item.props, item.path
         src = self.dynamic(path + ("source",), "", "an image source", p.source)
@@ -527,7 +497,7 @@ _ELEMENT_COMPILERS: dict[str, Callable[[ViewCompiler, ViewItem, int], Call | Non
     "text": ViewCompiler.control,
     "dropdown": ViewCompiler.control,
     "button": ViewCompiler._button,
-    "plot": ViewCompiler._plot,
+    "plot": compile_plot,
     "image": ViewCompiler._image,
     "scene": ViewCompiler._scene,
 }

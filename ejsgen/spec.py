@@ -302,31 +302,59 @@ class ButtonEl(Strict):
 
 
 class SeriesEl(Strict):
-    """One curve of a plot."""
+    """One series of a plot: a history (one point per frame), a curve of arrays redrawn every frame, or a histogram."""
 
-    y: NumOrExpr
-    """Expression giving the y value."""
+    y: NumOrExpr | None = None
+    """Expression giving the y value: a number (a point per frame) or a 1-D array (a curve, with x an array as long)."""
+    x: NumOrExpr | None = None
+    """The series' own x (default: the plot's x). Numbers: an x-y history (a phase orbit, kept whole, max_points long); 1-D arrays as long as y: a curve redrawn every frame. A histogram counts the values of x: a number (its history) or an array."""
     label: str | None = None
     """Legend text (default: the expression); {expr} and {expr:fmt} are interpolated."""
     color: str | None = None
-    """CSS colour of the line."""
+    """CSS colour of the line, markers or bars."""
+    type: Literal["line", "scatter", "histogram"] = "line"
+    """line (points joined), scatter (markers only) or histogram (bars counting the values of x in bins)."""
+    marker: Literal["circle", "square", "cross", "triangle"] | None = None
+    """Marker shape: of a scatter series (default circle), or drawn on every point of a line."""
+    size: float = Field(default=6.0, gt=0, le=100)
+    """Marker size in pixels."""
+    width: float = Field(default=2.0, gt=0, le=50)
+    """Line width in pixels."""
+    max_points: int | None = Field(default=None, ge=2, le=100000)
+    """Points kept by a series with its own x, or values kept by a histogram of a number (default: the plot's max_points)."""
+    bins: int | None = Field(default=None, ge=1, le=10000)
+    """A histogram's number of bins (default 20)."""
+    bin_range: list[Number] | None = None
+    """A histogram's [lo, hi] (default: the values' extent); values outside are not counted."""
 
 
 class PlotEl(Strict):
-    """A line plot against a numeric x, one point per frame."""
+    """A plot (EjsS's plotting panel): histories against time, x-y orbits, curves of arrays, scatter and histograms."""
 
     title: str = ""
     """The plot's title; {expr} and {expr:fmt} are interpolated."""
     x: NumOrExpr = "t"
-    """Expression giving the x value (default t)."""
+    """Expression giving the x value of the series that have no x of their own (default t)."""
     series: list[SeriesEl]
-    """The curves."""
+    """The series, drawn in order."""
     window: float | None = Field(default=None, gt=0)
     """The x-span kept (older points scroll out)."""
     max_points: int = Field(default=2000, ge=2, le=100000)
     """Most points kept per curve."""
     y_range: list[Number] | None = None
     """Fixed [ymin, ymax] (default: automatic)."""
+    x_range: list[Number] | None = None
+    """Fixed [xmin, xmax] (default: automatic: the window, or the data's extent)."""
+    x_log: bool = False
+    """A logarithmic x axis (values <= 0 are not drawn)."""
+    y_log: bool = False
+    """A logarithmic y axis (values <= 0 are not drawn)."""
+    legend: bool | None = None
+    """Show the series' labels in the plot (default: when it has two series or more)."""
+    grid: bool = True
+    """Grid lines at the ticks."""
+    height: int | None = Field(default=None, ge=80, le=2000)
+    """The plot's height in pixels (default 240; 300 in a lab without a 3D scene)."""
     x_label: str | None = None
     """Title of the x axis (default: the x expression and its variable's unit, 't (s)')."""
     y_label: str | None = None

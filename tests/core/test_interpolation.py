@@ -84,8 +84,8 @@ def test_every_label_kind_shows_and_follows_its_values(served) -> None:
     }
     assert panel.buttons["Double L (now {L:.1f})"].label == "Double L (now 1.5)"
     plot = panel.plots[0]
-    assert plot.handle.title == "Angle at L = 1.50"
-    assert [s["label"] for s in plot.handle.series] == ["t", "θ (1.5)", "omega"]
+    assert plot.handle.last_frame["title"] == "Angle at L = 1.50"
+    assert [e["label"] for e in plot.handle.last_frame["legend"]] == ["θ (1.5)", "omega"]
     assert panel.images[0].handle.label == "camera 3x"
     folder = [h for h in panel.gui._container_handle_from_uuid.values() if getattr(h, "label", None) == "Arm of 1.50 m"]
     assert len(folder) == 1
@@ -101,8 +101,8 @@ def test_every_label_kind_shows_and_follows_its_values(served) -> None:
     assert panel.handles_by_label["Length {L:.1f} m"].label == "Length 3.0 m"
     assert panel.handles_by_label["n = {n}"].label == "n = 12"
     assert panel.buttons["Double L (now {L:.1f})"].label == "Double L (now 3.0)"
-    assert plot.handle.title == "Angle at L = 3.00"
-    assert [s["label"] for s in plot.handle.series] == ["t", "θ (3.0)", "omega"]
+    assert plot.handle.last_frame["title"] == "Angle at L = 3.00"
+    assert [e["label"] for e in plot.handle.last_frame["legend"]] == ["θ (3.0)", "omega"]
     assert panel.images[0].handle.label == "camera 12x"
     assert folder[0].label == "Arm of 3.00 m"
     assert any(tuple(g._tab_labels) == ("Run 12",) for g in tab_groups)
@@ -110,9 +110,9 @@ def test_every_label_kind_shows_and_follows_its_values(served) -> None:
 
 def test_plot_axes_are_titled_with_units(served) -> None:
     _app, view = served
-    axes = view.panel.plots[0].handle.axes
-    assert axes[0]["label"] == "t (s)"  # x's unit
-    assert axes[1]["label"] == "rad"  # both series are in rad
+    axes = view.panel.plots[0].handle.last_frame["axes"]
+    assert axes["x"]["title"] == "t (s)"  # x's unit
+    assert axes["y"]["title"] == "rad"  # both series are in rad
 
 
 @pytest.mark.parametrize(

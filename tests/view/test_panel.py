@@ -5,6 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from ejsrl.view._plot_frame import decode_xy
+
 from ejsrl.view import _gui
 
 
@@ -144,13 +146,17 @@ def test_plots_append_one_point_a_frame_within_the_window(served):
         served.app.frame()
     plot = served.view.panel.plots[0]
     plot.push(force=True)
-    x, y, L = plot.handle.data
+    frame = plot.handle.last_frame  # what the browser draws
+    lines = [it for it in frame["items"] if it["t"] == "polyline"]
+    assert [it["stroke"] for it in lines] == ["rgb(255, 0, 0)", "#ff7f0e"]  # its colour, then the palette's
+    xy = decode_xy(lines[0]["xy"], 2)
+    x, y = xy[:, 0], xy[:, 1]
     assert x[-1] == pytest.approx(3.0)
-    assert x[0] >= 3.0 - 2.0 - 1e-9  # window 2.0
-    assert np.allclose(y, np.sin(x)) and np.allclose(L, 1.0)
-    assert plot.handle.series[1]["stroke"] == "rgb(255, 0, 0)"
+    assert x[0] >= 3.0 - 2.0 - 1e-6  # window 2.0
+    assert np.allclose(y, np.sin(x), atol=1e-6) and np.allclose(decode_xy(lines[1]["xy"], 2)[:, 1], 1.0)
+    assert frame["bounds"][1] - frame["bounds"][0] == pytest.approx(2.0)  # the x axis is the window
     served.app.reset()
-    assert len(plot.handle.data[0]) == 0
+    assert not [it for it in plot.handle.last_frame["items"] if it["t"] == "polyline"]
 
 
 def test_plot_pushes_are_throttled_while_playing(served):
@@ -159,7 +165,8 @@ def test_plot_pushes_are_throttled_while_playing(served):
     before = len(served.messages("GuiUpdateMessage"))
     for _ in range(10):
         served.app.frame()  # all within far less than 1/15 s
-    pushes = [m for m in served.messages("GuiUpdateMessage")[before:] if "data" in m.updates]
+    frames = {p.handle.frame._impl.uuid for p in served.view.panel.plots}
+    pushes = [m for m in served.messages("GuiUpdateMessage")[before:] if m.uuid in frames]
     assert len(pushes) <= 2
 
 

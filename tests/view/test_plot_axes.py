@@ -1,8 +1,8 @@
-"""The axes a plot's chart is sent: the x window of a strip chart, a flat y that looks flat.
+"""The axes a plot's panel is sent: the x window of a strip chart, a flat y that looks flat.
 
-What viser receives (the chart's ``scales``) decides what the user sees: uPlot draws the
-x axis over ``scales["x"]["range"]`` and, when y is not auto, the y axis over
-``scales["y"]["range"]``. The expected ranges are worked out here by hand from the points.
+What the 2D panel receives (the frame's ``bounds``, ``[xmin, xmax, ymin, ymax]``) decides
+what the user sees: the client draws the plot area over exactly those bounds. The expected
+ranges are worked out here by hand from the points.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import math
 
 import pytest
 
+from ejsrl.view._plot_frame import PAD
 from ejsrl.view._plots import PlotBinding
 from ejsrl.view.elements import Dynamic, Plot, Series
 
@@ -29,14 +30,26 @@ def _play(binding: PlotBinding, t0: float, t1: float, dt: float, f) -> None:
         binding.push(force=True)
 
 
+def _sent(binding: PlotBinding) -> dict:
+    """The frame the panel last sent to the browser (as the client parses it)."""
+    frame = binding.handle.last_frame
+    assert frame is not None, "no frame was sent"
+    return frame
+
+
 def _x_range(binding: PlotBinding) -> tuple[float, float]:
-    x = binding.handle.scales["x"]
-    assert x.get("auto") is False, f"x is left to the chart's auto-scaling: {x}"
-    return tuple(x["range"])
+    return tuple(_sent(binding)["bounds"][:2])
 
 
-def _y(binding: PlotBinding) -> dict:
-    return binding.handle.scales["y"]
+def _y_range(binding: PlotBinding) -> tuple[float, float]:
+    return tuple(_sent(binding)["bounds"][2:])
+
+
+def _auto_scaled(binding: PlotBinding, ys: list[float]) -> bool:
+    """Whether the y axis is the values' extent with the usual margin (not a range pinned around flat values)."""
+    lo, hi = min(ys), max(ys)
+    pad = PAD * (hi - lo)
+    return _y_range(binding) == pytest.approx((lo - pad, hi + pad), rel=1e-6, abs=1e-12)
 
 
 def test_a_window_longer_than_the_data_shows_the_data_at_the_left_of_the_window(served):
@@ -51,8 +64,8 @@ def test_once_the_data_is_longer_than_the_window_the_x_axis_is_the_last_window(s
     _play(b, 0.0, 12.0, 0.02, math.sin)
     lo, hi = _x_range(b)
     assert (lo, hi) == pytest.approx((6.0, 12.0))
-    x = b.handle.data[0]
-    assert x[-1] == pytest.approx(12.0) and x[0] >= lo - 1e-9  # every point sent is on the axis
+    x = b.buffer.data()[0]
+    assert x[-1] == pytest.approx(12.0) and x[0] >= lo - 1e-9  # every point kept is on the axis
 
 
 def test_the_x_window_follows_the_data_after_a_reset(served):
@@ -73,9 +86,8 @@ def test_a_flat_quantity_gets_a_y_range_where_round_off_looks_flat(served):
     # the tutorial's energy: 0.196 J/kg, RK4 round-off of 7.6e-10 over the run
     b = _binding(served, window=10.0)
     _play(b, 0.0, 9.0, 0.01, lambda t: 0.196 - 7.6e-10 * t / 9.0)
-    y = _y(b)
-    assert y.get("auto") is False, f"a flat line is auto-scaled onto its round-off: {y}"
-    lo, hi = y["range"]
+    lo, hi = _y_range(b)
+    assert hi - lo > 1e-6, f"a flat line is auto-scaled onto its round-off: {(lo, hi)}"
     assert lo < 0.196 - 7.6e-10 and hi > 0.196
     assert hi - lo >= 1e-3 * 0.196  # the round-off is < 1e-5 of the axis: a flat line
     assert (lo + hi) / 2 == pytest.approx(0.196, rel=1e-4)  # the line in the middle
@@ -84,36 +96,38 @@ def test_a_flat_quantity_gets_a_y_range_where_round_off_looks_flat(served):
 def test_zero_plotted_with_round_off_is_flat_too(served):
     b = _binding(served)
     _play(b, 0.0, 1.0, 0.01, lambda t: 1e-17 * math.sin(40 * t))
-    lo, hi = _y(b)["range"]
+    lo, hi = _y_range(b)
     assert lo < 0.0 < hi and hi - lo >= 1e-12
 
 
 def test_a_quantity_that_varies_is_auto_scaled(served):
     b = _binding(served, window=10.0)
     _play(b, 0.0, 3.0, 0.01, lambda t: 0.2 * math.sin(3 * t))
-    assert _y(b) == {"auto": True}
+    assert _auto_scaled(b, [0.2 * math.sin(3 * 0.01 * i) for i in range(301)])
 
 
 def test_a_flat_start_that_then_varies_goes_back_to_auto_scaling(served):
     b = _binding(served)
     _play(b, 0.0, 1.0, 0.01, lambda t: 1.0)
-    assert _y(b)["auto"] is False
+    assert _y_range(b) == pytest.approx((0.99, 1.01))  # pinned around the flat line: +-1 %
     _play(b, 1.01, 2.0, 0.01, lambda t: 1.0 + (t - 1.0))
-    assert _y(b) == {"auto": True}
+    assert _auto_scaled(b, [1.0, 2.0])
 
 
 def test_a_flat_line_does_not_resend_its_y_range_at_every_frame(served):
     b = _binding(served)
     _play(b, 0.0, 0.5, 0.01, lambda t: 0.196)
-    first = list(_y(b)["range"])
+    first = _y_range(b)
+    sent = b.handle.sent
     _play(b, 0.51, 5.0, 0.01, lambda t: 0.196 + 1e-9 * t)
-    assert list(_y(b)["range"]) == first
+    assert _y_range(b) == first
+    assert b.handle.sent > sent  # frames were sent (the line grew), with the same y axis
 
 
 def test_a_y_range_in_the_spec_wins_over_the_flat_range(served):
     b = _binding(served, y_range=(0.0, 0.5))
     _play(b, 0.0, 2.0, 0.01, lambda t: 0.196)
-    assert _y(b) == {"auto": False, "range": [0.0, 0.5]}
+    assert _y_range(b) == (0.0, 0.5)
 
 
 def test_the_tutorials_energy_plot_is_flat_and_its_angle_plot_shows_the_last_10_s(tmp_path):
@@ -137,10 +151,12 @@ def test_the_tutorials_energy_plot_is_flat_and_its_angle_plot_shows_the_last_10_
         t = app.model.t
         assert _x_range(angle) == pytest.approx((t - 10.0, t))
         assert _x_range(energy) == pytest.approx((t - 10.0, t))
-        lo, hi = _y(energy)["range"]
+        lo, hi = _y_range(energy)
         drift = max(energies) - min(energies)
         assert 0 < drift < 1e-6 * (hi - lo)  # RK4's drift is there, and invisible on the axis
         assert lo < min(energies) and max(energies) < hi
-        assert _y(angle) == {"auto": True}  # the angle swings: auto-scaled
+        theta = angle.buffer.data()[1]
+        omega = angle.buffer.data()[2]
+        assert _auto_scaled(angle, [*theta, *omega])  # the angle swings: auto-scaled
     finally:
         server.stop()

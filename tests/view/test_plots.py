@@ -48,10 +48,13 @@ def test_non_finite_points_are_skipped():
 def test_fixed_y_range_and_numeric_x_axis(served):
     plot = Plot("p", Dynamic(lambda m: m.t, "t"), [Series(Dynamic(lambda m: m.x), "x", "#00ff00")], y_range=(-2, 3))
     binding = PlotBinding(served.server.gui, plot, x_label="t")
-    assert binding.handle.scales["y"] == {"auto": False, "range": [-2.0, 3.0]}
-    assert binding.handle.scales["x"]["time"] is False
-    assert binding.handle.series[0]["label"] == "t"
-    assert binding.handle.series[1]["stroke"] == "rgb(0, 255, 0)"
+    binding.append(10.0, [50.0])  # outside the fixed range: the range stays
+    binding.append(20.0, [-40.0])
+    binding.push(force=True)
+    frame = binding.handle.last_frame
+    assert frame["bounds"] == [10.0, 20.0, -2.0, 3.0]
+    assert frame["axes"]["x"]["title"] == "t" and [v for v, _ in frame["axes"]["x"]["ticks"]] == [10.0, 12.0, 14.0, 16.0, 18.0, 20.0]
+    assert [it["stroke"] for it in frame["items"]] == ["rgb(0, 255, 0)"]
 
 
 def test_images_become_rgb_uint8_with_markers():

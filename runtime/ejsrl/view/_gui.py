@@ -365,7 +365,7 @@ class Panel:
                     x_label = getattr(el.x, "source", "") or self._time_name or "x"
                     labels = [self._text(s.label, s.where or el.where) for s in el.series]
                     binding = PlotBinding(gui, el, x_label=x_label, title=self._text(el.title, el.where), labels=labels, clock=self.clock,
-                                          height=None if self.has_scene else NO_SCENE_PLOT_HEIGHT)
+                                          height=el.height or (None if self.has_scene else NO_SCENE_PLOT_HEIGHT), key=f"plot-{len(self.plots)}")
                     self.plots.append(binding)
                     if is_dynamic(el.title):
                         self.texts.append(TextBinding(el.title, el.where, binding.set_title, binding.title))
@@ -528,11 +528,7 @@ class Panel:
                 b.last = shown
         playing = bool(app.is_playing())
         for p in self.plots:
-            x = app.safe_value(p.plot.x, p.plot.where)
-            ys = [app.safe_value(s.y, s.where or p.plot.where) for s in p.plot.series]
-            if x is not None and all(y is not None for y in ys):
-                p.append(x, ys)
-            p.push(force=not playing)
+            p.update(app, playing=playing)
         for im in self.images:
             if not im.due():
                 continue  # not rendered for nothing: the picture could not be sent yet

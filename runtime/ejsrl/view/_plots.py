@@ -1,24 +1,25 @@
-"""Plots (uPlot) and images in the control panel.
+"""Plots and images in the control panel.
 
-A :class:`PlotBuffer` keeps the points of one ``Plot`` (one per display frame), trims them
-to the plot's ``window`` (x-span) and ``max_points``; :class:`PlotBinding` pushes them to
-a viser uPlot chart at most ``max_rate`` times a second. :class:`ImageBinding` sends an
-image only when its pixels or its overlay points changed.
+A :class:`PlotBinding` shows one ``Plot`` on a 2D panel (:class:`ejsrl.view._panel2d.Panel2D`,
+the engine that also draws drawing panels). Each display frame :meth:`PlotBinding.update`
+reads the plot's expressions and files the values by their shapes:
 
-Two things about what the chart is sent:
+- series without an ``x`` of their own whose values are numbers, with the plot's ``x`` a
+  number: one point each in the strip chart's :class:`~ejsrl.view._plot_buffers.PlotBuffer`
+  (trimmed to ``window`` and ``max_points``);
+- a series with an ``x`` of its own, both numbers: its own x-y history
+  (:class:`~ejsrl.view._plot_buffers.TraceBuffer`, ``max_points`` long): a phase orbit;
+- x and y 1-D arrays of one length: a curve drawn as it is now (redrawn every frame);
+- a histogram: the values of its ``x`` (a number's history, or an array) counted in bins.
 
-- The x range is sent, not left to the chart: :func:`x_range` — [x_last - window, x_last]
-  once the data is longer than ``window``, [x_first, x_first + window] before, the data's
-  extent without a window. viser's chart, left to auto-scale x, keeps the x range
-  *relative* to the data's extent across updates (so a user's zoom survives new data) and
-  learns that relation from the range it shows; in the first updates that range is still
-  empty (null), and it learns e.g. [0, 1/span], which it keeps: the x axis ran far past
-  the data, squeezed into the left tenth of the plot. A fixed ``range`` turns that off.
-- uPlot auto-scales y to the data's extent however small, so a quantity that is constant
-  up to round-off (an energy that RK4 keeps to 1e-9) shows as a steep line with equal tick
-  labels. When the y values span less than :func:`min_y_span` (1 % of their magnitude) the
-  y scale is pinned to ± that span around them (and kept while the values stay flat and
-  inside it), so the line looks flat. A ``y_range`` in the spec always wins.
+Any other combination (an array against a number, arrays of different lengths, a 2-D
+array, text) pauses the app with a message at the series' spec location: a plot never
+shows nothing without saying why. At most ``max_rate`` times a second (every frame while
+paused) the binding builds the panel's frame (:func:`ejsrl.view._plot_frame.plot_frame`:
+ranges, ticks and their labels, legend) and sends it if it changed. Below the plot a line
+shows each history series' colour, label and latest value.
+
+:class:`ImageBinding` sends an image only when its pixels or its overlay points changed.
 """
 
 from __future__ import annotations
@@ -30,14 +31,35 @@ from typing import Any
 
 import numpy as np
 
-from ejsrl.view._wire import set_markdown, set_prop
+from ejsrl.view._plot_buffers import PlotBuffer, TraceBuffer
+from ejsrl.view._plot_frame import AxisConf, Layer, flat_range, min_span, plot_frame, x_range
+from ejsrl.view._wire import set_markdown
 from ejsrl.view.elements import Image, Plot, escape_markdown
 from ejsrl.world.colors import to_rgb
 
-__all__ = ["PlotBuffer", "PlotBinding", "ImageBinding", "prepare_image", "PALETTE"]
+__all__ = [
+    "PlotBuffer",
+    "TraceBuffer",
+    "PlotBinding",
+    "PlotShapeError",
+    "ImageBinding",
+    "prepare_image",
+    "PALETTE",
+    "x_range",
+    "min_span",
+    "flat_range",
+    "DEFAULT_HEIGHT",
+]
 
 #: colours of series that name none (matplotlib's tab10)
 PALETTE = ("#1f77b4", "#ff7f0e", "#2ca02c", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f", "#bcbd22", "#17becf")
+
+#: a plot's height (CSS pixels) when neither the spec nor the panel says
+DEFAULT_HEIGHT = 240
+
+
+class PlotShapeError(ValueError):
+    """A series' values cannot be drawn (an array against a number, lengths that differ, ...)."""
 
 
 def _css(color: Any, i: int) -> str:
@@ -50,68 +72,6 @@ def _css(color: Any, i: int) -> str:
     return f"rgb({r}, {g}, {b})"
 
 
-class PlotBuffer:
-    """The points of one plot: x (n,) and one y (n,) per series, trimmed to window and max_points."""
-
-    def __init__(self, n_series: int, *, window: float | None = None, max_points: int = 2000) -> None:
-        self.n_series = n_series
-        self.window = window
-        self.max_points = max(2, int(max_points))
-        cap = self.max_points * 2
-        self._x = np.empty(cap)
-        self._y = np.empty((n_series, cap))
-        self._start = 0
-        self._end = 0
-        self.rev = 0
-
-    def __len__(self) -> int:
-        return self._end - self._start
-
-    def clear(self) -> None:
-        """Forget every point."""
-        self._start = self._end = 0
-        self.rev += 1
-
-    def append(self, x: float, ys: list[float]) -> bool:
-        """Add one point; returns False (and adds nothing) if any value is not finite."""
-        if not math.isfinite(x) or not all(math.isfinite(y) for y in ys):
-            return False
-        if len(self) and x == self._x[self._end - 1]:
-            # the same instant again (paused, or a value changed from the panel): replace it
-            last = self._end - 1
-            if self._y[:, last].tolist() == list(ys):
-                return True
-            self._y[:, last] = ys
-            self.rev += 1
-            return True
-        if len(self) and x < self._x[self._end - 1]:
-            # the independent variable went back (a reset, or the user set it): start over
-            self.clear()
-        if self._end == len(self._x):
-            n = len(self)
-            self._x[:n] = self._x[self._start : self._end]
-            self._y[:, :n] = self._y[:, self._start : self._end]
-            self._start, self._end = 0, n
-        self._x[self._end] = x
-        self._y[:, self._end] = ys
-        self._end += 1
-        if len(self) > self.max_points:
-            self._start = self._end - self.max_points
-        if self.window is not None:
-            # x only grows: the points that left the window are the first few, usually one
-            lo = x - self.window
-            xs = self._x
-            while xs[self._start] < lo:
-                self._start += 1
-        self.rev += 1
-        return True
-
-    def data(self) -> tuple[np.ndarray, ...]:
-        """``(x, y_0, y_1, ...)`` as fresh float64 arrays."""
-        s, e = self._start, self._end
-        return (self._x[s:e].copy(), *(self._y[i, s:e].copy() for i in range(self.n_series)))
-
-
 def _value_text(v: float) -> str:
     """A value to four significant digits, without an exponent between 0.001 and 10^6."""
     mag = abs(v)
@@ -122,96 +82,31 @@ def _value_text(v: float) -> str:
     return text.replace("-", "\u2212")
 
 
-#: pixels per character of uPlot's tick labels, and for the tick, the gap and the axis title
-_TICK_CHAR_PX = 7.0
-_Y_AXIS_EXTRA_PX = 22
-_Y_AXIS_MIN_PX = 50
+def _numbers(value: Any, what: str) -> np.ndarray:
+    """``value`` as a float array (0-D for a number), or :class:`PlotShapeError` saying why not."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        shown = repr(value)
+        raise PlotShapeError(f"{what} must be a number or a 1-D array of numbers, not {shown[:60]}") from None
+    if a.ndim > 1:
+        raise PlotShapeError(f"{what} must be a number or a 1-D array, but it has shape {a.shape}")
+    return a
 
 
-def _tick_chars(lo: float, hi: float) -> int:
-    """Characters of the widest of about five uPlot tick labels over ``[lo, hi]``."""
-    span = abs(hi - lo) or abs(hi) or 1.0
-    decimals = max(0, int(-np.floor(np.log10(span / 5.0))))
-    return max(len(f"{v:,.{decimals}f}") for v in (lo, hi))
-
-
-def x_tick_space(lo: float, hi: float) -> int:
-    """The least pixels between x ticks so that their labels do not run into each other."""
-    if not (np.isfinite(lo) and np.isfinite(hi)):
-        return 50
-    return int(max(50, np.ceil((_TICK_CHAR_PX * _tick_chars(lo, hi) + 12) / 10.0) * 10))
-
-
-def y_axis_size(lo: float, hi: float) -> int:
-    """Pixels for the y axis so that uPlot's tick labels over ``[lo, hi]`` are not cut.
-
-    uPlot labels about five ticks with the decimals their spacing needs and thousands
-    separators ("-123,455.75"); the width grows with that text, in steps of 10 px.
-    """
-    if not (np.isfinite(lo) and np.isfinite(hi)):
-        return _Y_AXIS_MIN_PX
-    px = _TICK_CHAR_PX * _tick_chars(lo, hi) + _Y_AXIS_EXTRA_PX
-    return int(max(_Y_AXIS_MIN_PX, np.ceil(px / 10.0) * 10))
-
-
-def x_range(x: np.ndarray, window: float | None) -> tuple[float, float]:
-    """The x axis for points at ``x`` (sorted): the window, or the data (a unit span for one point)."""
-    if len(x) == 0:
-        return (0.0, float(window) if window else 1.0)
-    first, last = float(x[0]), float(x[-1])
-    if window:
-        w = float(window)
-        return (last - w, last) if last - first > w else (first, first + w)
-    return (first, last) if last > first else (first, first + 1.0)
-
-
-#: the least y span shown, relative to the values' magnitude, and its absolute floor. 1 %:
-#: uPlot labels ticks with at most three decimals, so around 0.2 a smaller axis labels
-#: every tick alike ("0.196")
-Y_MIN_REL_SPAN = 1e-2
-Y_MIN_ABS_SPAN = 1e-12
-
-
-def min_y_span(lo: float, hi: float) -> float:
-    """The least y span shown for values in ``[lo, hi]``: values that vary less are drawn as flat."""
-    if lo == hi == 0.0:  # exactly zero (a servo at rest): +-1, not ticks "0 0 0 -0 -0" over +-1e-12
-        return 1.0
-    return max(Y_MIN_REL_SPAN * max(abs(lo), abs(hi)), Y_MIN_ABS_SPAN)
-
-
-def flat_y_range(lo: float, hi: float, current: tuple[float, float] | None = None) -> tuple[float, float] | None:
-    """A fixed y range for values in ``[lo, hi]`` that span less than :func:`min_y_span`, else None.
-
-    The range is centred on the values and ``2 * min_y_span`` wide; ``current`` (the range
-    shown now) is kept while it still fits the values, so a flat line does not re-scale
-    the chart at every update.
-    """
-    if not (np.isfinite(lo) and np.isfinite(hi)):
-        return None
-    span = min_y_span(lo, hi)
-    if hi - lo >= span:
-        return None
-    if current is not None and current[0] <= lo and hi <= current[1] and current[1] - current[0] <= 4 * span:
-        return current
-    mid = 0.5 * (lo + hi)
-    return (mid - span, mid + span)
-
-
-#: after a tab connects to a chart that already holds points (a reload, a --shared lab), when
-#: the chart's scales are sent again (seconds on the view's clock): see :meth:`PlotBinding.reshow`
-RESHOW_AFTER = (0.5, 1.5, 3.0)
+def _described(a: np.ndarray) -> str:
+    return "a number" if a.ndim == 0 else f"an array of {len(a)} values"
 
 
 class PlotBinding:
-    """One ``Plot`` element shown as a viser uPlot chart, with a line of current values below.
+    """One ``Plot`` element shown on a 2D panel, with a line of current values below.
 
-    The x axis is labelled with ``plot.x_label`` (else ``x_label``, the x expression), the
-    y axis with ``plot.y_label``. uPlot's own legend shows values only under the mouse
-    (``--`` otherwise), so the chart's legend is replaced by a Markdown line that shows
-    each series' colour, label and latest value, and x's latest value.
-    ``title`` / ``labels``: the title and series labels as shown now (they may hold
-    ``{expr}``; :meth:`set_title` and :meth:`set_label` change them). ``height``: the
-    chart's height in pixels (default: its width / 1.6).
+    ``gui``: where to add it (viser's ``server.gui`` or a tab's ``client.gui``);
+    ``x_label``: the x axis' title when the plot has none (``plot.x_label``); ``title`` /
+    ``labels``: the title and series labels as shown now (they may hold ``{expr}``:
+    :meth:`set_title` and :meth:`set_label` change them); ``max_rate``: frames a second
+    at most while playing; ``height``: CSS pixels (default: ``plot.height``, else
+    :data:`DEFAULT_HEIGHT`); ``key``: the panel's name, unique in ``gui``.
     """
 
     def __init__(
@@ -225,166 +120,260 @@ class PlotBinding:
         max_rate: float = 15.0,
         clock: Callable[[], float] = time.monotonic,
         height: int | None = None,
+        key: str = "plot",
     ) -> None:
+        from ejsrl.view._panel2d import Panel2D
+
         self.plot = plot
-        self.buffer = PlotBuffer(len(plot.series), window=plot.window, max_points=plot.max_points)
         self.max_rate = max_rate
         self.clock = clock
+        series = plot.series
+        #: the strip chart of the series without an x of their own (those whose values are numbers)
+        self.buffer = PlotBuffer(len(series), window=plot.window, max_points=plot.max_points)
+        #: series index -> its own history (an x-y series, or a histogram of a number)
+        self.traces: dict[int, TraceBuffer] = {}
+        #: series index -> (N, 2) points of an array series, or (N,) values of a histogram, as now
+        self.arrays: dict[int, np.ndarray] = {}
+        #: which series draw from the strip chart (set by the values of the last frame)
+        self._strip: list[int] = [i for i, s in enumerate(series) if s.x is None and s.kind != "histogram"]
+        self._arrays_rev = 0
         self._sent_rev = -1
         self._last_push = -math.inf
-        #: when the scales are to be sent again (clock times, ascending): see :meth:`reshow`
-        self._reshow_at: list[float] = []
         self.title = str(plot.title) if title is None else title
-        self.labels = [str(s.label) for s in plot.series] if labels is None else list(labels)
+        self.labels = [str(s.label) for s in series] if labels is None else list(labels)
         self.x_name = x_label or "x"
-        self.colors = [_css(s.color, i) for i, s in enumerate(plot.series)]
-        series = [{"label": self.x_name}]
-        for i, s in enumerate(plot.series):
-            series.append({"label": self.labels[i] or f"y{i + 1}", "stroke": self.colors[i], "width": 2})
-        self._flat_y: tuple[float, float] | None = None
-        self._x_range = x_range(np.zeros(0), plot.window)
-        x_axis = getattr(plot, "x_label", "") or self.x_name
-        y_axis = getattr(plot, "y_label", "") or None
-        self._y_title = y_axis
-        self._y_size = y_axis_size(*plot.y_range) if plot.y_range is not None else _Y_AXIS_MIN_PX + 10
-        self._x_axis = {"label": x_axis, "size": 40, "labelSize": 18, "space": 50}
-        self.handle = gui.add_uplot(
-            data=self.buffer.data(),
-            series=tuple(series),
-            title=self.title or None,
-            scales=self._scales(),
-            # room for tick labels such as "-0.0025" on the left and a last x tick on the right
-            axes=self._axes(),
-            legend={"show": False},
-            padding=(8, 28, 0, 4),
-            aspect=1.6,
-            height=height,
-        )
-        self.values = gui.add_markdown(self._values_text())
+        self.colors = [_css(s.color, i) for i, s in enumerate(series)]
+        self.x_axis = AxisConf(plot.x_label or self.x_name, bool(plot.x_log), plot.x_range)
+        self.y_axis = AxisConf(plot.y_label or "", bool(plot.y_log), plot.y_range)
+        #: the last frame built (a dict of the 2D panel's contract), None before the first
+        self.frame: dict[str, Any] | None = None
+        self.height = int(height or plot.height or DEFAULT_HEIGHT)
+        self.handle = Panel2D(gui, key, height=self.height, max_rate=math.inf, clock=clock)  # rate-limited here
+        self.values = gui.add_markdown("")
+        self.push(force=True)
 
-    def _scales(self) -> dict[str, Any]:
-        """uPlot's scales: x fixed to :func:`x_range`; y fixed to ``y_range``, or to the flat range, or auto."""
-        scales: dict[str, Any] = {"x": {"time": False, "auto": False, "range": [float(v) for v in self._x_range]}}
-        if self.plot.y_range is not None:
-            lo, hi = (float(v) for v in self.plot.y_range)
-            scales["y"] = {"auto": False, "range": [lo, hi]}
-        elif self._flat_y is not None:
-            scales["y"] = {"auto": False, "range": [float(self._flat_y[0]), float(self._flat_y[1])]}
-        else:
-            scales["y"] = {"auto": True}
-        return scales
+    # -- values of the model --------------------------------------------------------------------
+    @property
+    def rev(self) -> int:
+        """Changes whenever what the plot shows may have changed."""
+        return self.buffer.rev + sum(t.rev for t in self.traces.values()) + self._arrays_rev
 
-    def _fit_scales(self, data: tuple[np.ndarray, ...]) -> None:
-        """Send the scales when the x window moved or y became flat or not (see the module's docstring)."""
-        xr = x_range(data[0], self.plot.window)
-        flat = self._flat_y
-        if self.plot.y_range is None and len(data[0]) and len(data) > 1:
-            ys = np.concatenate(data[1:])
-            flat = flat_y_range(float(ys.min()), float(ys.max()), self._flat_y)
-        if xr != self._x_range or flat != self._flat_y:
-            self._x_range, self._flat_y = xr, flat
-            self.handle.scales = self._scales()
+    def _trace(self, i: int) -> TraceBuffer:
+        t = self.traces.get(i)
+        if t is None:
+            s = self.plot.series[i]
+            t = self.traces[i] = TraceBuffer(s.max_points or self.plot.max_points)
+        return t
 
-    def _axes(self) -> tuple[dict[str, Any], dict[str, Any]]:
-        y = {"label": self._y_title, "size": self._y_size + (18 if self._y_title else 0), "labelSize": 18 if self._y_title else 0}
-        return (self._x_axis, y)
+    def _set_array(self, i: int, a: np.ndarray) -> None:
+        old = self.arrays.get(i)
+        if old is None or old.shape != a.shape or not np.array_equal(old, a, equal_nan=True):
+            self.arrays[i] = a.copy()
+            self._arrays_rev += 1
 
-    def _fit_axes(self, data: tuple[np.ndarray, ...]) -> None:
-        """Resize the axes when the tick labels the data needs change width.
+    def take(self, x: Any, values: list[tuple[Any, Any]], clock: float | None = None) -> None:
+        """File one frame's values: ``x`` the plot's x, ``values[i]`` series i's ``(x, y)``
+        (its own x or None, its y or None); ``clock``: the model's time (None: it has none).
 
-        The y axis grows to fit its widest label; x ticks are spaced so their labels do
-        not run into each other. Sent only when a size changes (it redraws the chart).
+        Raises :class:`PlotShapeError` (naming the series) for values that cannot be drawn;
+        the values of the other series are filed first.
         """
-        if len(data[0]) == 0:
+        plot = self.plot
+        problem: PlotShapeError | None = None
+        px = _numbers(x, "the plot's x") if any(s.x is None and s.kind != "histogram" for s in plot.series) else None
+        strip: list[int] = []
+        ys: list[float] = []
+        for i, (s, (sx, sy)) in enumerate(zip(plot.series, values)):
+            name = f"series {i + 1} ({self.labels[i] or s.kind})"
+            try:
+                if s.kind == "histogram":
+                    v = _numbers(sx, f"the x of {name}")
+                    if v.ndim == 0:
+                        self._trace(i).append(float(v), 0.0, clock)
+                        self.arrays.pop(i, None)
+                    else:
+                        self._set_array(i, v)
+                    continue
+                xv = px if s.x is None else _numbers(sx, f"the x of {name}")
+                yv = _numbers(sy, f"the y of {name}")
+                assert xv is not None
+                if xv.ndim == 0 and yv.ndim == 0:
+                    if s.x is None:
+                        strip.append(i)
+                        ys.append(float(yv))
+                    else:
+                        self._trace(i).append(float(xv), float(yv), clock)
+                    continue
+                if xv.ndim == 1 and yv.ndim == 1 and len(xv) == len(yv):
+                    self._set_array(i, np.column_stack((xv, yv)))
+                    continue
+                x_what = "the plot's x" if s.x is None else "its x"
+                if xv.ndim == 1 and yv.ndim == 1:
+                    raise PlotShapeError(f"{name}: {x_what} and y must have as many values, but {x_what} has {len(xv)} and y has {len(yv)}")
+                hint = " (give the series an x of its own with as many values)" if s.x is None and yv.ndim == 1 else ""
+                raise PlotShapeError(f"{name}: y is {_described(yv)} but {x_what} is {_described(xv)}{hint}; give both as numbers (a history) or both as arrays of one length (a curve)")
+            except PlotShapeError as exc:
+                if problem is None:
+                    problem = PlotShapeError(str(exc))
+                    problem.where = s.where or plot.where  # type: ignore[attr-defined]
+        self._strip = strip
+        if strip and px is not None:
+            row = [float("nan")] * len(plot.series)
+            for i, y in zip(strip, ys):
+                row[i] = y
+            self.buffer.append(float(px), [row[i] if i in strip else 0.0 for i in range(len(plot.series))], clock)
+        if problem is not None:
+            raise problem
+
+    def update(self, app: Any, *, playing: bool) -> None:
+        """Read this frame's values from ``app``'s model (the caller holds ``app.lock``) and
+        push; a shape that cannot be drawn pauses the app with its message."""
+        self.record(app)
+        self.push(force=not playing)
+
+    def record(self, app: Any) -> None:
+        """Read and file this frame's values without sending anything (a tab that is behind)."""
+        plot = self.plot
+        x = app.safe_value(plot.x, plot.where)
+        values = []
+        for s in plot.series:
+            where = s.where or plot.where
+            sx = app.safe_value(s.x, where) if s.x is not None else None
+            sy = app.safe_value(s.y, where) if s.y is not None else None
+            values.append((sx, sy))
+        if getattr(app, "error", None) is not None:
             return
-        changed = False
-        space = x_tick_space(*self._x_range)
-        if space != self._x_axis["space"]:
-            self._x_axis = dict(self._x_axis, space=space)
-            changed = True
-        ys = np.concatenate(data[1:]) if len(data) > 1 else np.zeros(0)
-        if self.plot.y_range is None and len(ys):
-            lo, hi = self._flat_y if self._flat_y is not None else (float(ys.min()), float(ys.max()))
-            size = y_axis_size(lo, hi)
-            if size != self._y_size:
-                self._y_size = size
-                changed = True
-        if changed:
-            self.handle.axes = self._axes()
+        needs_x = any(s.x is None and s.kind != "histogram" for s in plot.series)
+        if (needs_x and x is None) or any((s.x is not None and sx is None) or (s.y is not None and sy is None) for s, (sx, sy) in zip(plot.series, values)):
+            return
+        model = getattr(app, "model", None)
+        clock = None
+        if model is not None and getattr(model, "INDEPENDENT", None) is not None:
+            try:
+                clock = float(model._ejs_time())
+            except (TypeError, ValueError, AttributeError):
+                clock = None
+        try:
+            self.take(x, values, clock)
+        except PlotShapeError as exc:
+            app.fail(exc, getattr(exc, "where", plot.where))
 
-    def _values_text(self) -> str:
-        """The legend: colour, label and latest value of each series, then x's value."""
-        n = len(self.buffer)
-        last = [col[-1] for col in self.buffer.data()] if n else None
-        parts = []
-        for i, label in enumerate(self.labels):
-            name = escape_markdown(label or f"y{i + 1}")
-            value = f" = {_value_text(last[i + 1])}" if last is not None else ""
-            parts.append(f'<span style="color:{self.colors[i]}">&#9632;</span>&nbsp;{name}{value}')
-        x = f" &nbsp;at {escape_markdown(self.x_name)} = {_value_text(last[0])}" if last is not None else ""
-        return " &nbsp; ".join(parts) + x
+    def append(self, x: Any, ys: list[Any], clock: float | None = None) -> None:
+        """Record one point of the strip chart (x and one number per series; tests, scripted input).
 
-    def set_title(self, text: str) -> None:
-        """Show a new title (a title with ``{expr}`` whose value changed)."""
-        self.title = text
-        self.handle.title = text or None
-
-    def set_label(self, index: int, text: str) -> None:
-        """Show a new label for series ``index`` (0-based)."""
-        self.labels[index] = text
-        series = [dict(s) for s in self.handle.series]
-        series[index + 1]["label"] = text or f"y{index + 1}"
-        self.handle.series = tuple(series)
-        self.values.content = self._values_text()
-
-    def append(self, x: Any, ys: list[Any]) -> None:
-        """Record this frame's point (None or non-numeric values skip the frame)."""
+        Non-numeric values skip the frame."""
         try:
             xf = float(x)
             yf = [float(y) for y in ys]
         except (TypeError, ValueError):
             return
-        self.buffer.append(xf, yf)
+        self.buffer.append(xf, yf, clock)
 
-    def reshow(self) -> None:
-        """Send the scales again :data:`RESHOW_AFTER` seconds from now (by :meth:`push`).
+    # -- the frame ------------------------------------------------------------------------------
+    def layers(self) -> tuple[list[Layer], tuple[float, float] | None]:
+        """What each series draws now, and the strip chart's x range (None: not a strip chart)."""
+        plot = self.plot
+        data = self.buffer.data() if len(self.buffer) else None
+        out: list[Layer] = []
+        for i, s in enumerate(plot.series):
+            layer = Layer(s.kind, self.labels[i], self.colors[i], width=s.width, marker=s.marker, size=s.size)
+            if s.kind == "histogram":
+                from ejsrl.view._plot_frame import histogram
 
-        A tab that makes the chart with its points already in it (a reloaded tab, a new tab
-        on a ``--shared`` lab) may get it from viser's uPlot client without ticks or grid:
-        uPlot lays its axes out before the panel has its width and does not again until
-        its size or scales change (as when the window scrolls; a window not yet full did
-        not scroll for up to its length). New scales make the client build the chart
-        again, at its width, with the points it holds.
-        """
-        now = self.clock()
-        self._reshow_at = [now + d for d in RESHOW_AFTER]
+                vals = self.arrays.get(i)
+                if vals is None:
+                    vals = self.traces[i].data()[:, 0] if i in self.traces else np.zeros(0)
+                layer.counts, layer.edges = histogram(vals, s.bins, s.bin_range)
+            elif i in self.arrays:
+                layer.xy = self.arrays[i]
+            elif i in self.traces:
+                layer.xy = self.traces[i].data()
+            elif i in self._strip and data is not None:
+                layer.xy = np.column_stack((data[0], data[i + 1]))
+            out.append(layer)
+        strip_only = bool(self._strip) and len(self._strip) == len(plot.series)
+        x_auto = x_range(data[0] if data is not None else np.zeros(0), plot.window) if strip_only and not self.buffer.turns else None
+        return out, x_auto
+
+    def build(self) -> dict[str, Any]:
+        """The frame of the plot as it is now (:func:`ejsrl.view._plot_frame.plot_frame`)."""
+        layers, x_auto = self.layers()
+        legend = self.plot.legend if self.plot.legend is not None else len(self.plot.series) >= 2
+        previous = tuple(self.frame["bounds"]) if self.frame is not None else None
+        return plot_frame(self.title, layers, self.x_axis, self.y_axis, x_auto=x_auto, legend=legend, grid=self.plot.grid, previous=previous)
 
     def push(self, *, force: bool = False) -> bool:
-        """Send the data if it changed and the rate allows; returns True if sent."""
+        """Build and send the frame if anything changed and the rate allows; True if sent."""
         now = self.clock()
-        if self._reshow_at and now >= self._reshow_at[0]:
-            while self._reshow_at and now >= self._reshow_at[0]:
-                self._reshow_at.pop(0)
-            self.handle.scales = self._scales()  # a new dict: always sent
-        if self.buffer.rev == self._sent_rev:
+        rev = self.rev
+        if rev == self._sent_rev:
             return False
         if not force and now - self._last_push < 1.0 / self.max_rate:
             return False
-        data = self.buffer.data()
-        self._fit_scales(data)
-        self._fit_axes(data)
-        set_prop(self.handle, "data", data)
+        self.frame = self.build()
+        self.handle.show(self.frame)
         text = self._values_text()
         if text != self.values.content:
             set_markdown(self.values, text)
-        self._sent_rev = self.buffer.rev
+        self._sent_rev = rev
         self._last_push = now
         return True
+
+    def _values_text(self) -> str:
+        """The line below the plot: colour, label and latest value of each history series
+        (the x and y of an x-y series), then the strip chart's x."""
+        parts = []
+        data = self.buffer.data() if len(self.buffer) else None
+        for i, s in enumerate(self.plot.series):
+            name = escape_markdown(self.labels[i] or f"y{i + 1}")
+            swatch = f'<span style="color:{self.colors[i]}">&#9632;</span>&nbsp;{name}'
+            if i in self._strip:
+                value = f" = {_value_text(data[i + 1][-1])}" if data is not None else ""
+            elif s.kind != "histogram" and i in self.traces and len(self.traces[i]) and i not in self.arrays:
+                x, y = self.traces[i].data()[-1]
+                value = f" = {_value_text(y)} at {_value_text(x)}"
+            else:
+                continue
+            parts.append(swatch + value)
+        if not parts:
+            return ""
+        x = f" &nbsp;at {escape_markdown(self.x_name)} = {_value_text(data[0][-1])}" if data is not None and self._strip else ""
+        return " &nbsp; ".join(parts) + x
+
+    # -- titles, reset, tabs ----------------------------------------------------------------------
+    def set_title(self, text: str) -> None:
+        """Show a new title (a title with ``{expr}`` whose value changed)."""
+        self.title = text
+        self._sent_rev = -1
+        self.push(force=True)
+
+    def set_label(self, index: int, text: str) -> None:
+        """Show a new label for series ``index`` (0-based)."""
+        self.labels[index] = text
+        self._sent_rev = -1
+        self.push(force=True)
 
     def clear(self) -> None:
         """Forget the data (on reset) and show the empty plot."""
         self.buffer.clear()
+        for t in self.traces.values():
+            t.clear()
+        self.arrays.clear()
+        self._arrays_rev += 1
+        self.frame = None
         self.push(force=True)
+
+    def adopt(self, old: PlotBinding) -> None:
+        """Take over the points of ``old`` (the same plot in a reloaded tab) and show them."""
+        self.buffer = old.buffer
+        self.traces = old.traces
+        self.arrays = old.arrays
+        self._strip = old._strip
+        self.reshow()
+
+    def reshow(self) -> None:
+        """Send the frame again with the next :meth:`push` (its data was handed over)."""
+        self._sent_rev = -1
 
 
 def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:

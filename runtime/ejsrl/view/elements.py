@@ -279,20 +279,40 @@ class Button(Element):
 
 @dataclass
 class Series(Element):
-    """One curve of a plot: ``y`` is a ``Dynamic`` giving a number."""
+    """One series of a plot.
 
-    y: Any
+    ``y``: a ``Dynamic`` giving a number (a point per frame) or a 1-D array (a curve
+    redrawn every frame); ``x``: the series' own x (None: the plot's), a number (an x-y
+    history of its own, ``max_points`` long) or an array as long as ``y``; ``kind``:
+    ``"line"``, ``"scatter"`` or ``"histogram"`` (bars counting the values of ``x``, a
+    number's history or an array, in ``bins`` bins over ``bin_range`` or their extent);
+    ``marker``/``size``: marker shape and size (px); ``width``: line width (px).
+    """
+
+    y: Any = None
     label: Any = ""
     color: Any = None
+    x: Any = None
+    kind: str = "line"
+    marker: str | None = None
+    size: float = 6.0
+    width: float = 2.0
+    max_points: int | None = None
+    bins: int = 20
+    bin_range: tuple[float, float] | None = None
 
 
 @dataclass
 class Plot(Element):
-    """A line plot of ``series`` against the numeric ``x`` (a ``Dynamic``), one point a frame.
+    """A plot of ``series`` (EjsS's plotting panel), drawn by the 2D panel.
 
-    ``window``: the x-span kept (None keeps everything up to ``max_points``);
-    ``y_range``: fixed ``(ymin, ymax)`` or None for automatic. ``title`` and each series'
-    ``label`` are constant text or a ``Dynamic`` (a text with ``{expr}``).
+    ``x``: the x (a ``Dynamic`` or constant) of the series without one of their own: a
+    number (their points, one a frame, form a strip chart) or a 1-D array; ``window``: the
+    x-span kept (None keeps everything up to ``max_points``); ``x_range``/``y_range``:
+    fixed ``(lo, hi)`` or None for automatic; ``x_log``/``y_log``: logarithmic axes;
+    ``legend``: draw the labels in the plot (None: when there are two series or more);
+    ``height``: pixels (None: the panel's choice). ``title`` and each series' ``label``
+    are constant text or a ``Dynamic`` (a text with ``{expr}``).
     """
 
     title: Any
@@ -304,6 +324,12 @@ class Plot(Element):
     #: axis titles ("t (s)"); empty: the x expression, and no y title
     x_label: str = ""
     y_label: str = ""
+    x_range: tuple[float, float] | None = None
+    x_log: bool = False
+    y_log: bool = False
+    legend: bool | None = None
+    grid: bool = True
+    height: int | None = None
 
 
 @dataclass

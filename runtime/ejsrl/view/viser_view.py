@@ -181,17 +181,12 @@ class ViserView:
     def adopt(self, old: ViserView) -> None:
         """Take over the plot data of ``old``, the same app's view in a tab that was reloaded."""
         for new, previous in zip(self.panel.plots, old.panel.plots):
-            new.buffer = previous.buffer
-            new._sent_rev = -1
-            new.reshow()  # the tab makes its charts with these points in: see PlotBinding.reshow
+            new.adopt(previous)
 
     def _record_plots(self) -> None:
         app = self.app
         for p in self.panel.plots:
-            x = app.safe_value(p.plot.x, p.plot.where)
-            ys = [app.safe_value(s.y, s.where or p.plot.where) for s in p.plot.series]
-            if x is not None and all(y is not None for y in ys):
-                p.append(x, ys)
+            p.record(app)
 
     def on_reset(self) -> None:
         """Forget accumulated data (plot points, cached images) after a reset."""
