@@ -8,9 +8,9 @@ when it finishes. The commands may appear only as statements of a program's code
 from __future__ import annotations
 
 import ast
+import dataclasses
 from typing import TYPE_CHECKING
 
-from ejsgen._resolve import Names
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError
 from ejsgen.plan import Call, Expr, Line, ProgramPlan
@@ -85,7 +85,7 @@ def compile_programs(c: Compiler) -> None:
         first = next(iter(programs))
         c.errors.append(SpecError(c.doc.key_loc(("model", "programs", first)), "robot programs run in simulated time: the model needs an independent variable (an ODE page or a variable 't')"))
         return
-    names = Names(variables=c.names.variables, functions=c.names.functions, controls=c.names.controls, globals=c.names.globals, extra=set(PROGRAM_NAMES))
+    names = dataclasses.replace(c.names, extra=set(PROGRAM_NAMES))  # the spec's names (all of them), plus the commands
     for pname, prog in programs.items():
         path = ("model", "programs", pname)
         for key, what in (("robot", "Robot"), ("q", "joint-vector"), ("gripper", "gripper")):

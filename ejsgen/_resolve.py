@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import ast
 import builtins
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -25,7 +26,7 @@ from ejsgen.validate import MATH_NAMES
 from ejsgen.yamlload import TextOrigin
 from ejsrl.sim.names import MATH_CONSTANTS as _MATH_CONSTANTS
 
-__all__ = ["Names", "Snippet", "parse_snippet", "rewrite", "rewrite_source", "source_lines", "BUILTIN_NAMES"]
+__all__ = ["Names", "Snippet", "assigned_names", "parse_snippet", "rewrite", "rewrite_source", "source_lines", "BUILTIN_NAMES"]
 
 BUILTIN_NAMES = frozenset(n for n in dir(builtins) if not n.startswith("_")) - {
     "eval",
@@ -64,6 +65,9 @@ class Names:
     extra: set[str] = field(default_factory=set)
     #: the strings that name a listed asset (``ejsgen._assets.asset_names``): each becomes ``asset('...')``
     assets: frozenset[str] = frozenset()
+    #: names that are locals of one block only (a ``preliminary``'s, seen by its page's rates):
+    #: name -> (where it is visible, how to share it), said when another block uses the name
+    elsewhere: dict[str, tuple[str, str]] = field(default_factory=dict)
 
     def known(self) -> set[str]:
         return self.variables | self.functions | self.controls | self.globals | self.extra | set(BUILTIN_NAMES)
@@ -227,6 +231,11 @@ def _assigned_in(body: list[ast.stmt] | ast.AST) -> set[str]:
     return out
 
 
+def assigned_names(body: list[ast.stmt]) -> set[str]:
+    """The names a block of statements binds (its locals, before model variables are taken out)."""
+    return _assigned_in(body)
+
+
 def _arg_names(args: ast.arguments) -> set[str]:
     names = {a.arg for a in args.posonlyargs + args.args + args.kwonlyargs}
     if args.vararg:
@@ -298,6 +307,10 @@ class _Rewriter(ast.NodeTransformer):
                 return node
             self._err(node, f"'{name}' is not available in spec code")
             return node
+        if name in self.names.elsewhere:
+            visible, share = self.names.elsewhere[name]
+            self._err(node, f"unknown name '{name}' here: {visible}", share, kind=UnknownNameError)
+            return node
         self._err(node, f"unknown name '{name}'", self._suggest(name, called=id(node) in self._called), kind=UnknownNameError)
         return node
 
@@ -328,6 +341,43 @@ class _Rewriter(ast.NodeTransformer):
             if hint:
                 return hint
         return ""
+
+    # ``^`` is Python's exclusive or; authors coming from EJS's Java, MATLAB or a calculator
+    # mean a power by it. It is refused everywhere (bitwise xor is rare in labs and has a
+    # spelling that says what it is), pointing at the operator.
+    def _caret_at(self, left: ast.AST, right: ast.AST) -> tuple[int, int]:
+        """(line, col) of the ``^`` between ``left`` and ``right`` in the snippet's text."""
+        lines = self.snippet.text.split("\n")
+        row, col = left.end_lineno or left.lineno, left.end_col_offset or 0  # type: ignore[attr-defined]
+        while row <= len(lines):
+            raw = lines[row - 1].encode("utf-8")
+            at = raw.find(b"^", col)
+            if at >= 0:
+                return row, at
+            row, col = row + 1, 0
+        return right.lineno, right.col_offset  # type: ignore[attr-defined]
+
+    def visit_BinOp(self, node: ast.BinOp) -> ast.AST:
+        if isinstance(node.op, ast.BitXor):
+            line, col = self._caret_at(node.left, node.right)
+            power = _power_text(self.snippet.text.split("\n")[line - 1], col) or f"{ast.unparse(node.left)}**{ast.unparse(node.right)}"
+            self.errors.append(SpecError(
+                self.snippet.location(line, col),
+                "'^' is not a power in Python: it is the bitwise exclusive or",
+                f"did you mean {power!r} (** is the power)? for an exclusive or write np.bitwise_xor(a, b), or a != b for true/false",
+            ))
+        return self.generic_visit(node)
+
+    def visit_AugAssign(self, node: ast.AugAssign) -> ast.AST:
+        if isinstance(node.op, ast.BitXor):
+            line, col = self._caret_at(node.target, node.value)
+            target = ast.unparse(node.target)
+            self.errors.append(SpecError(
+                self.snippet.location(line, col),
+                "'^=' is not a power in Python: it is the bitwise exclusive or",
+                f"did you mean '{target} **= {ast.unparse(node.value)}' (** is the power)? for an exclusive or write {target} = np.bitwise_xor({target}, ...)",
+            ))
+        return self.generic_visit(node)
 
     def visit_Call(self, node: ast.Call) -> ast.AST:
         if isinstance(node.func, ast.Name):
@@ -432,6 +482,75 @@ class _Rewriter(ast.NodeTransformer):
     def visit_ClassDef(self, node: ast.ClassDef) -> ast.AST:
         self._err(node, "class definitions are not supported in spec code")
         return node
+
+
+_ATOM = re.compile(r"[A-Za-z_0-9.]+")
+
+
+def _power_text(line: str, byte_col: int) -> str:
+    """The operands next to the ``^`` at ``byte_col`` of ``line``, written as a power:
+    ``0.5*v^2 + 1`` -> ``v**2``, ``(k*x) ^ 4`` -> ``(k*x) ** 4``, ``f(x)^-1`` -> ``f(x)**-1``.
+
+    The operands are what the author wrote around the operator (a name, number, call or
+    bracketed group), not the tree Python made: ``^`` binds more loosely than ``*`` and
+    ``+``, so the tree's operands are not what was meant. Empty if they cannot be read.
+    """
+    at = len(line.encode("utf-8")[:byte_col].decode("utf-8", errors="replace"))
+    i = at
+    while i > 0 and line[i - 1] == " ":
+        i -= 1
+    start = i
+    while start > 0:  # a name, number, call or subscript: atoms and bracketed groups
+        ch = line[start - 1]
+        if ch in ")]":
+            depth, j = 0, start - 1
+            while j >= 0:
+                depth += {")": 1, "]": 1, "(": -1, "[": -1}.get(line[j], 0)
+                if depth == 0:
+                    break
+                j -= 1
+            if j < 0:
+                return ""
+            start = j
+        elif _ATOM.match(ch):
+            start -= 1
+        else:
+            break
+    left = line[start:i]
+    j = at + 1
+    while j < len(line) and line[j] == " ":
+        j += 1
+    end = j + 1 if j < len(line) and line[j] in "+-" else j
+    if end < len(line) and line[end] in "([":
+        depth, k = 0, end
+        while k < len(line):
+            depth += {"(": 1, "[": 1, ")": -1, "]": -1}.get(line[k], 0)
+            if depth == 0:
+                break
+            k += 1
+        end = k + 1
+    else:
+        m = _ATOM.match(line, end)
+        end = m.end() if m else end
+        if end < len(line) and line[end] in "([":  # a call or subscript after a name
+            return _power_text_call(line, start, i, at, j, end)
+    right = line[j:end]
+    if not left or not right.strip("+-"):
+        return ""
+    op = line[i:j].replace("^", "**")
+    return f"{left}{op}{right}"
+
+
+def _power_text_call(line: str, start: int, i: int, at: int, j: int, end: int) -> str:
+    """``_power_text`` when the right operand is a call or subscript (``x^f(2)``)."""
+    depth, k = 0, end
+    while k < len(line):
+        depth += {"(": 1, "[": 1, ")": -1, "]": -1}.get(line[k], 0)
+        if depth == 0:
+            break
+        k += 1
+    left, right = line[start:i], line[j : k + 1]
+    return f"{left}{line[i:j].replace('^', '**')}{right}" if left and right else ""
 
 
 def rewrite(tree: ast.AST, names: Names, snippet: Snippet, *, extra_locals: Iterable[str] = ()) -> tuple[ast.AST, list[SpecError]]:

@@ -13,7 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from ejsgen._assets import ASSET_FUNCTION, asset_names
-from ejsgen._resolve import Names, Snippet, parse_snippet, rewrite, rewrite_source, source_lines
+from ejsgen._view_compile_text import PRINT, has_console
+from ejsgen._resolve import Names, Snippet, assigned_names, parse_snippet, rewrite, rewrite_source, source_lines
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError, SpecErrors
@@ -50,10 +51,14 @@ class Compiler:
         self.programs: list[ProgramPlan] = []
         self.var_plans: list[Variable] = []
         self.pages: list[OdePlan | Call] = []
+        #: each ODE page's preliminary locals (by the page's path), which its rates see
+        self.preliminary_locals: dict[Path_, set[str]] = {}
         self.names = Names(variables=set(self.var_decls), functions=set(), controls=set(CONTROL_NAMES), globals={"np", *MATH_NAMES})
         # assets named by their path in code become asset('...'); asset(name) finds any of them
         self.names.assets = asset_names(self.spec.assets)
         self.names.globals.add(ASSET_FUNCTION)
+        if has_console(checked.view):  # print() in code also writes to the tab's console: the model's print
+            self.names.controls.add(PRINT)
 
     # -- helpers ----------------------------------------------------------------------------------
     def loc(self, path: Path_) -> Location:
@@ -155,10 +160,11 @@ class Compiler:
             lines.pop(0)
         return lines
 
-    def expr(self, path: Path_, what: str, *, text: str | None = None, lam: str | None = None) -> Expr | None:
-        """The rewritten expression at ``path`` as written by the author (``lam``: as a lambda)."""
+    def expr(self, path: Path_, what: str, *, text: str | None = None, lam: str | None = None, extra_locals: tuple[str, ...] = ()) -> Expr | None:
+        """The rewritten expression at ``path`` as written by the author (``lam``: as a lambda;
+        ``extra_locals``: locals of code that runs before it in the same method)."""
         snippet = self.snippet(path, what, "eval", text)
-        tree = self.parse_rewrite(snippet)
+        tree = self.parse_rewrite(snippet, extra_locals=extra_locals)
         if tree is None:
             return None
         assert isinstance(tree, ast.Expression)
@@ -330,6 +336,34 @@ class Compiler:
             self.add_method("_fixed_relations", "self", "", fixed)
 
     # -- evolution ----------------------------------------------------------------------------------------
+    def collect_preliminary_locals(self) -> None:
+        """The locals of each ODE page's ``preliminary`` (names it assigns that are not model
+        variables): its page's rates see them (``self.preliminary_locals``, by the page's path);
+        any other block that uses one is told where it is visible and how to share it."""
+        for i, page in enumerate(self.spec.model.evolution):
+            if not isinstance(page, OdePage) or page.ode.preliminary is None:
+                continue
+            path = ("model", "evolution", i, "ode")
+            code = page.ode.preliminary
+            texts = [(path + ("preliminary",), code)] if isinstance(code, str) else [
+                (path + ("preliminary", j, "code"), p.code) for j, p in enumerate(code) if p.enabled
+            ]
+            found: set[str] = set()
+            for ppath, text in texts:
+                try:
+                    tree = ast.parse(text)
+                except SyntaxError:
+                    continue  # reported where the block is compiled
+                found |= assigned_names(tree.body) - set(self.var_decls) - self.names.functions
+            self.preliminary_locals[path] = found
+            title = page.name or f"page {i + 1}"
+            loc = self.loc(path + ("preliminary",))
+            for name in sorted(found):
+                self.names.elsewhere.setdefault(name, (
+                    f"it is a local of the preliminary code of the ODE page '{title}' (line {loc.line}), seen only by that page's rates",
+                    f"to use it elsewhere, make it a model variable: declare '{name}: 0.0' under model.variables (the preliminary code then sets it for everyone)",
+                ))
+
     def compile_evolution(self) -> None:
         evolution = self.spec.model.evolution
         first = len(self.methods)
@@ -360,6 +394,7 @@ class Compiler:
             self.errors.append(SpecError(self.loc(path + ("independent",)) if "independent" in _get(self.doc.data, path) else self.loc(path), f"the independent variable '{ind}' is not a variable", did_you_mean(ind, self.var_decls) or f"declare it, e.g. '{ind}: 0.0'"))
             return None
         self.independents.append(ind)
+        shared = tuple(sorted(self.preliminary_locals.get(path, ())))
         states: list[str] = []
         rates: dict[str, Expr] = {}
         for state, rate in ode.equations.items():
@@ -379,7 +414,7 @@ class Compiler:
             self.state_vars.add(state)
             states.append(state)
             if isinstance(rate, str):
-                res = self.expr(spath, f"the rate of '{state}'")
+                res = self.expr(spath, f"the rate of '{state}'", extra_locals=shared)
                 if res is None:
                     continue
                 shape = infer_shape(ast.parse(res.source.strip(), mode="eval").body if "\n" not in res.source else ast.parse(f"({res.source})", mode="eval").body, self.var_shapes)
@@ -402,15 +437,19 @@ class Compiler:
         # rates: one per state, in order
         listed = f"[{', '.join(r.source for r in rates.values())}]"
         rates_fn: Expr | str
-        if len(listed) <= 60 and all("\n" not in r.source for r in rates.values()):  # short: inline, next to its states
-            rates_fn = Expr(listed, next(iter(rates.values())).where, "", "")
-        else:
-            rate_lines = [Line("return [")] + [Line(f"    {r.source},  # d{s}/d{ind}", r.where) for s, r in rates.items()] + [Line("]")]
-            rates_fn = self.add_method(self.method_name(f"{prefix}rates"), "self", "", rate_lines)
         preliminary = None
-        if ode.preliminary is not None:
-            pre = self.code_lines(ode.preliminary, path + ("preliminary",), f"the preliminary code of {title}")
-            preliminary = self.add_method(self.method_name(f"{prefix}preliminary"), "self", "", pre)
+        pre = self.code_lines(ode.preliminary, path + ("preliminary",), f"the preliminary code of {title}") if ode.preliminary is not None else []
+        rate_lines = [Line("return [")] + [Line(f"    {r.source},  # d{s}/d{ind}", r.where) for s, r in rates.items()] + [Line("]")]
+        if shared and pre:  # the preliminary's locals are the rates': one method runs both
+            head = Line(f"# preliminary: {', '.join(shared)} {'is a local' if len(shared) == 1 else 'are locals'} shared with the rates")
+            rates_fn = self.add_method(self.method_name(f"{prefix}rates"), "self", "", [head, *pre, *rate_lines])
+        else:
+            if len(listed) <= 60 and all("\n" not in r.source for r in rates.values()):  # short: inline, next to its states
+                rates_fn = Expr(listed, next(iter(rates.values())).where, "", "")
+            else:
+                rates_fn = self.add_method(self.method_name(f"{prefix}rates"), "self", "", rate_lines)
+            if ode.preliminary is not None:
+                preliminary = self.add_method(self.method_name(f"{prefix}preliminary"), "self", "", pre)
         # step
         step: Expr | float
         if "step" not in _get(self.doc.data, path):
@@ -467,6 +506,7 @@ class Compiler:
         user_imports = self.compile_imports()
         defs = self.collect_custom_names()
         self.compile_variables()
+        self.collect_preliminary_locals()
         for i, a in enumerate(self.spec.assets):
             self.asset(a, ("assets", i))
         self.compile_blocks()

@@ -36,6 +36,7 @@ __all__ = [
     "model_name_clash",
     "import_name_clash",
     "free_name",
+    "prelude_clash",
 ]
 
 # Every name ejsgen knows about is read from the runtime (ejsrl.sim.names): the prelude from the
@@ -79,7 +80,7 @@ def model_name_clash(name: str, what: str) -> tuple[str, str] | None:
     keeps for itself (``_ejs...``) or Python mangles (``__...``). Returns (message, hint).
     """
     if name in PRELUDE_NAMES:
-        return f"'{name}' is a prelude name and cannot name a {what}", "choose another name"
+        return prelude_clash(name, what)
     if name.startswith(_names.RUNTIME_PREFIX):
         return f"names starting with '{_names.RUNTIME_PREFIX}' are reserved for the runtime ('{name}')", f"rename the {what} (e.g. '{free_name(name)}')"
     if name.startswith("__"):
@@ -87,6 +88,39 @@ def model_name_clash(name: str, what: str) -> tuple[str, str] | None:
     if name in MODEL_NAMES or name == "self":
         return f"'{name}' is a name the generated app uses", f"rename the {what} (e.g. '{free_name(name)}')"
     return None
+
+
+#: what the prelude's constants are, for the message that refuses them as names
+_PRELUDE_MEANINGS = {"pi": "the constant π = 3.14159...", "e": "Euler's number 2.71828...", "inf": "infinity", "np": "NumPy"}
+#: names that say what authors usually mean by a prelude name they give a variable
+_MEANT = {
+    "e": ("restitution", "eccentricity"), "log": ("history", "records"), "step": ("h", "step_size"),
+    "floor": ("ground", "floor_y"), "degrees": ("angle_deg",), "radians": ("angle_rad",), "exp": ("exponent",),
+    "wait": ("delay",), "release": ("released",), "reset": ("restart",), "alert": ("warning",),
+}
+
+
+def prelude_clash(name: str, what: str) -> tuple[str, str]:
+    """Why a prelude name cannot name a ``what``, and names to use instead: (message, hint).
+
+    Refused, not shadowed: the prelude name means the same in every block of every spec
+    (``e`` is Euler's number in a spec that declares a restitution too), so a lab's code
+    reads the same to whoever opens it. The hint offers ``name_`` and, for the names authors
+    often mean something else by, names that say what it is.
+    """
+    if name in _PRELUDE_MEANINGS:
+        meaning = _PRELUDE_MEANINGS[name]
+    elif name in MATH_NAMES:
+        meaning = f"the function {name}() of Python's math module"
+    elif name in PROGRAM_COMMANDS:
+        meaning = f"the motion command {name}() of robot programs"
+    else:
+        meaning = f"the prelude's function {name}()"
+    others = ", ".join(f"'{n}'" for n in (free_name(name), *_MEANT.get(name, ())))
+    return (
+        f"'{name}' is a prelude name ({meaning}) and cannot name a {what}: every code block and expression of the spec reads '{name}' as the prelude's",
+        f"rename the {what}, e.g. {others}",
+    )
 
 
 def import_name_clash(name: str, variables: Iterable[str], functions: Iterable[str] = ()) -> str | None:
