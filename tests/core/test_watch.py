@@ -152,3 +152,46 @@ def test_rebuilder_gives_an_error_instead_of_raising_for_a_half_written_spec(tmp
     out = rb.rebuild()
     assert out.build is not None and out.error is None
     assert out.build.model_cls.VARIABLES["k"] == "float"
+
+
+def test_the_files_a_spec_names_and_its_own_modules_are_watched_and_read_again(tmp_path: Path, monkeypatch) -> None:
+    """A save of an asset or of a local module the spec imports rebuilds like a save of the
+    spec; the module is imported afresh (not the copy Python already holds)."""
+    (tmp_path / "helpers_watch_t.py").write_text("def gain():\n    return 3.0\n")
+    (tmp_path / "table.csv").write_text("1,2\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="K")
+                    .replace("title: Watched spring\n", "title: Watched spring\nimports: [from helpers_watch_t import gain]\n"
+                             "assets: [table.csv]\n")
+                    .replace("    s: 0.5\n", "    s: 0.5\n    g: {expr: gain()}\n"))
+    rb = Rebuilder(spec, tmp_path / "builds", [])
+    first = rb.rebuild()
+    assert first.build is not None, first.error
+    assert first.build.make_app().model.g == 3.0
+    files = {p.name for p in rb.files(first.plan)}
+    assert files == {"lab.ejs.yaml", "table.csv", "helpers_watch_t.py"}
+    assert (first.build.base_dir / "table.csv").read_text() == "1,2\n"  # beside app.py, where the app looks
+    watch = FileWatch(rb.files(first.plan), sleep=lambda s: None)
+    (tmp_path / "helpers_watch_t.py").write_text("def gain():\n    return 5.0\n")
+    assert watch.changed()
+    again = rb.rebuild()
+    assert again.build is not None and again.build.make_app().model.g == 5.0
+    (tmp_path / "table.csv").write_text("3,4\n")
+    assert watch.changed()
+    assert (rb.rebuild().build.base_dir / "table.csv").read_text() == "3,4\n"
+
+
+def test_watch_refuses_options_it_cannot_serve_with(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="K"))
+    for option, says in ((["--headless", "--duration", "1"], "headless"), (["--shared"], "--shared"),
+                         (["--processes", "2"], "one process")):
+        r = subprocess.run([sys.executable, "-P", "-m", "ejsgen", "run", "--watch", str(spec), *option],
+                           capture_output=True, text=True, timeout=120)
+        assert r.returncode == 2 and says in r.stderr, (option, r.stderr)
+    r = subprocess.run([sys.executable, "-P", "-m", "ejsgen", "run", "--help"], capture_output=True, text=True, timeout=120)
+    assert "--watch" in r.stdout and "one process" in " ".join(r.stdout.split())

@@ -209,3 +209,29 @@ def test_half_a_save_is_not_reported(live, monkeypatch) -> None:
     assert shown == [] and err.getvalue() == ""
     poll_until(watcher, "rebuilt")
     assert shown == [] and lab.error is None
+
+
+def test_a_spec_broken_from_the_start_shows_its_error_then_its_lab(tmp_path: Path) -> None:
+    spec = tmp_path / "live.ejs.yaml"
+    spec.write_text(BROKEN.format(s=0.5, kmax=20, word="Before"))
+    rebuilder = Rebuilder(spec, tmp_path / "builds", [])
+    first = rebuilder.rebuild()
+    assert first.build is None and "unknown name 'xx'" in (first.error or "")
+    lab = LiveLab(max_sessions=4)
+    watcher = Watcher(rebuilder, lab, first, log=io.StringIO(), err=io.StringIO())
+    server = lab.start("127.0.0.1", 0)
+    watcher.start(first)
+    try:
+        async def scenario() -> None:
+            tab = await open_tab(server)
+            await tab.until(lambda: any("does not build" in t for t in tab.texts()), "the error page")
+            assert not lab.classroom.sessions
+            save(spec, SPEC.format(s=0.5, kmax=20, word="Good"))
+            poll_until(watcher, "rebuilt")
+            await tab.until(lambda: any(t.startswith("Good: p=") for t in tab.texts()), "the lab")
+            assert len(lab.classroom.sessions) == 1
+            await tab.close()
+
+        run_async(scenario())
+    finally:
+        lab.stop()
