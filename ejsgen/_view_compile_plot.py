@@ -147,7 +147,7 @@ class _PlotCompiler:
         dyn = self.vc.number(value, path, "", what)
         if dyn is None or len(self.c.errors) > before:
             return dyn, None
-        res = self.c.expr_source(path, what)
+        res = self.c.expr_source(path, what, text=value)
         return dyn, (None if res is None else expr_shape(res[1], self.c.var_shapes))
 
     def range_(self, key: str, log: bool) -> tuple[float, float] | None:
@@ -257,10 +257,12 @@ class _PlotCompiler:
         return Call("E.Plot", [], kw)
 
     def x_title(self) -> str:
-        """The x axis' title: the x that the series share (a histogram's values), with its unit."""
-        own = {str(s.x).strip() for s in self.p.series if s.x is not None}
-        if own and len(own) == 1 and all(s.x is not None for s in self.p.series):
-            return self.vc._axis_title(own.pop())
+        """The x axis' title, with its unit: the plot's x, or the x every series has of its own
+        (a histogram's values); none when the series' own x's differ."""
+        series = self.p.series
+        if series and all(s.x is not None for s in series):
+            own = {str(s.x).strip() for s in series}
+            return self.vc._axis_title(own.pop()) if len(own) == 1 else ""  # x's of their own that differ: none fits
         return self.vc._axis_title(self.p.x)
 
     def y_title(self) -> str:

@@ -53,9 +53,9 @@ MIN_ABS_SPAN = 1e-12
 
 def encode_xy(a: np.ndarray) -> str:
     """An (N, 2) or (N, 4) array as the contract's ``xy``: base64 of little-endian float32, row-major."""
-    import base64
+    from ejsrl.view._panel2d import encode_xy as encode
 
-    return base64.b64encode(np.ascontiguousarray(a, dtype="<f4").tobytes()).decode("ascii")
+    return encode(a)
 
 
 @dataclass

@@ -45,20 +45,18 @@ def nice_step(span: float, target: int = TARGET_TICKS) -> float:
 def linear_ticks(lo: float, hi: float, target: int = TARGET_TICKS) -> tuple[list[float], float]:
     """``(ticks, step)``: the multiples of :func:`nice_step` within ``[lo, hi]`` (``lo < hi``).
 
-    Each tick is ``k * step`` computed from its integer ``k`` (no accumulated round-off);
-    one within 1e-9 steps of zero is exactly 0.0.
+    Each tick is the float nearest ``k * step`` written in decimal (no round-off: 0.6, not
+    0.6000000000000001); zero is +0.0.
     """
     if not (math.isfinite(lo) and math.isfinite(hi)) or hi <= lo:
         return [], 0.0
     step = nice_step(hi - lo, target)
+    exp = math.floor(math.log10(step) + 1e-9)
+    mant = round(step / 10.0**exp)
     k0 = math.ceil(lo / step - 1e-9)
     k1 = math.floor(hi / step + 1e-9)
-    ticks = []
-    for k in range(k0, k1 + 1):
-        v = k * step
-        if abs(v) < 1e-9 * step:
-            v = 0.0
-        ticks.append(v)
+    # k * mant x 10^exp read from its decimal text: 0.6, not 3 * 0.2 = 0.6000000000000001
+    ticks = [float(f"{k * mant}e{exp}") + 0.0 for k in range(k0, k1 + 1)]
     return ticks, step
 
 
