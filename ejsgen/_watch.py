@@ -26,9 +26,11 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
 import dataclasses
 import hashlib
 import importlib.util
+import io
 import shutil
 import signal
 import sys
@@ -392,10 +394,16 @@ def cmd_watch(spec: str, app_args: list[str], *, output: str | None = None,
             title = first.build.meta.title if first.build is not None else path.name
             server = lab.start(args.host, args.port, allow_origins=origins, title=title)
             watcher.start(first)
-            announce(title, args.host, server.get_port(), places=lab.max_sessions, asked_port=args.port)
+            said = io.StringIO()
+            with contextlib.redirect_stdout(said):  # where it serves (its warnings go to stderr as they are)
+                announce(title, args.host, server.get_port(), places=lab.max_sessions, asked_port=args.port)
+            for line in said.getvalue().splitlines():
+                if "--shared" not in line:  # not with --watch
+                    print(line)
             extra = len(watcher.watch.paths) - 1
             also = f" and the {extra} file{'s' if extra != 1 else ''} it names" if extra else ""
-            print(f"  watching {path}{also}: every save rebuilds the lab and reloads its tabs (one process)", flush=True)
+            print(f"  live editing: watching {path}{also}; every save rebuilds the lab and reloads its tabs "
+                  f"(one process, up to {lab.max_sessions} tabs: --max-sessions N)", flush=True)
             watcher.run()
         except KeyboardInterrupt:
             pass

@@ -261,6 +261,13 @@ class LiveLab:
         with self._lock:
             self._parked.pop(client.client_id, None)
 
+    def _sessions(self) -> list[Any]:
+        """The classroom's sessions now (open tabs' and closed tabs' kept for a reload)."""
+        if self.classroom is None:
+            return []
+        with self.classroom._lock:
+            return list(self.classroom.sessions.values())
+
     def _client(self, client_id: int | None) -> Any:
         if client_id is None or self.server is None:
             return None
@@ -277,7 +284,7 @@ class LiveLab:
             self.error = text
             parked = list(self._parked.values())
         told = 0
-        for session in list(self.classroom.sessions.values()) if self.classroom is not None else []:
+        for session in self._sessions():
             with session.lock:
                 view = session.view
                 if view is not None and not view.closed and session.app is not None:
@@ -306,7 +313,7 @@ class LiveLab:
         tabs = sessions = 0
         carried: list[str] | None = None
         if self.classroom is not None:
-            for session in list(self.classroom.sessions.values()):
+            for session in self._sessions():
                 try:
                     names, shown = self._swap_session(session, build, kept)
                 except Exception:  # noqa: BLE001 - one tab's trouble must not stop the others
@@ -326,6 +333,7 @@ class LiveLab:
         from ejsrl.app._sessions import Classroom
 
         classroom = self.classroom
+        new_app = build.make_app()  # before anything of the old lab is undone (it could raise)
         with session.lock:
             old_app = session.app
             if old_app is None or session.freed:
@@ -338,7 +346,6 @@ class LiveLab:
             if live:
                 Classroom._close_view(session, old_view)  # pauses it, remembering whether it played
             classroom.scheduler.remove(session)
-            new_app = build.make_app()
             names = carry_over(old_app, new_app, kept)
             with old_app.lock:
                 old_app.on_wake = None
