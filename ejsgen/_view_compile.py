@@ -502,6 +502,11 @@ _ELEMENT_COMPILERS: dict[str, Callable[[ViewCompiler, ViewItem, int], Call | Non
     "scene": ViewCompiler._scene,
 }
 
+from ejsgen._view_compile2d import compile_drawing, compile_keyboard  # noqa: E402 - it uses ViewCompiler's helpers
+
+_ELEMENT_COMPILERS["drawing"] = compile_drawing
+_ELEMENT_COMPILERS["keyboard"] = compile_keyboard
+
 
 def _ints2(vc: ViewCompiler, value: Any, path: Path_, base: str, what: str) -> Any:
     if len(value) != 2 or any(v <= 0 or v > 8192 for v in value):

@@ -391,6 +391,11 @@ GUI_ELEMENT_MODELS: dict[str, type[Strict]] = {
     "image": ImageEl,
 }
 
+from ejsgen._spec2d import DrawingEl, KeyboardEl  # noqa: E402 - it builds on the types above
+
+GUI_ELEMENT_MODELS["drawing"] = DrawingEl
+GUI_ELEMENT_MODELS["keyboard"] = KeyboardEl
+
 # -- view: 3D elements ------------------------------------------------------------------------
 # Derived from the kinds' declarations (ejsrl.world.kinds): one model per kind, named
 # ``<Kind>El``, with the common properties first.

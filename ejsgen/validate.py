@@ -372,7 +372,7 @@ def _tree(items: list[Any], path: Path_) -> list[ViewItem]:
         vi = ViewItem(kind, props, kpath)
         if kind == "tabs":
             vi.tabs = [(label, _tree(children, kpath + ("tabs", label))) for label, children in props.tabs.items()]
-        elif "children" in type(props).model_fields:
+        elif "children" in type(props).model_fields and kind != "drawing":  # a drawing's 2D children: ejsgen._view_compile2d
             vi.children = _tree(props.children, kpath + ("children",))
         out.append(vi)
     return out

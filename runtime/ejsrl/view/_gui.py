@@ -25,6 +25,7 @@ from ejsrl.view.elements import (
     Button,
     Checkbox,
     Control,
+    Drawing,
     Dropdown,
     Dynamic,
     Folder,
@@ -34,6 +35,7 @@ from ejsrl.view.elements import (
     Number,
     Plot,
     Scene,
+    SceneKeys,
     Slider,
     Tabs,
     Text,
@@ -252,6 +254,8 @@ class Panel:
         self._label_shown: dict[int, str] = {}
         self.plots: list[PlotBinding] = []
         self.images: list[ImageBinding] = []
+        #: the 2D drawing panels (ejsrl.view._drawing.DrawingBinding)
+        self.drawings: list[Any] = []
         self.buttons: dict[str, Any] = {}
         self.handles_by_label: dict[str, Any] = {}
         self._error_rev_shown: int | None = None
@@ -376,6 +380,14 @@ class Panel:
                     binding = ImageBinding(gui, el, label=self._text(el.label, el.where), clock=self.clock)
                     self.images.append(binding)
                     self._track(el.label, el.where, binding.handle, "label")
+                elif isinstance(el, Drawing):
+                    from ejsrl.view._drawing import DrawingBinding
+
+                    self.drawings.append(DrawingBinding(gui, el, self.app, key=f"drawing-{len(self.drawings)}", clock=self.clock))
+                elif isinstance(el, SceneKeys):
+                    from ejsrl.view._drawing import SceneKeysBinding
+
+                    self.drawings.append(SceneKeysBinding(gui, el, self.app, key=f"scene-keys-{len(self.drawings)}"))
                 elif isinstance(el, Scene):
                     pass  # mirrored from the world by the scene mirror
                 else:
@@ -529,6 +541,8 @@ class Panel:
         playing = bool(app.is_playing())
         for p in self.plots:
             p.update(app, playing=playing)
+        for d in self.drawings:
+            d.refresh()
         for im in self.images:
             if not im.due():
                 continue  # not rendered for nothing: the picture could not be sent yet
@@ -544,6 +558,8 @@ class Panel:
             p.clear()
         for im in self.images:
             im.clear()
+        for d in self.drawings:
+            d.clear()
         for b in self.controls:
             b.user_time = -math.inf
 

@@ -68,8 +68,25 @@
     c.addEventListener("keyup", function (e) { key(p, e, "up"); });
     c.addEventListener("blur", function () { p.held = {}; });
     if (window.ResizeObserver) new ResizeObserver(function () { request(p); }).observe(c);
+    if (root.getAttribute("data-scene-keys")) sceneKeys(p);
     request(p);
   };
+
+  // keys of the 3D view: reported while the 3D view has the focus (it was clicked last)
+  function scene3d(t) { return !!(t && t.tagName === "CANVAS" && !t.classList.contains("ejs2d-c")); }
+  function sceneKeys(p) {
+    if (p.sceneKeys) return;
+    p.sceneKeys = true;
+    window.addEventListener("pointerdown", function (e) { p.sceneFocus = scene3d(e.target); }, true);
+    var on = function (phase) {
+      return function (e) {
+        var t = e.target;
+        if (p.sceneFocus && (!t || t === document.body || t === document.documentElement || scene3d(t))) key(p, e, phase);
+      };
+    };
+    window.addEventListener("keydown", on("down"), true);
+    window.addEventListener("keyup", on("up"), true);
+  }
 
   function b64(s) {
     var bin = atob(s), n = bin.length, u = new Uint8Array(n);
@@ -305,11 +322,16 @@
   }
 
   // -- dragging -------------------------------------------------------------------------------
-  // a draggable item's handle points: markers/circles/polyline rows; segments and arrows
-  // at their start, or with "handle": "end" at their end (an arrow's tip)
+  // a draggable item's handle points: each row of markers and circles (a set: the row is
+  // sent as "i"); segments and arrows at their start, or with "handle": "end" at their end
+  // (an arrow's tip); a polyline at its first point (its last with "handle": "end")
   function hitRows(p, it, d, stride, r) {
     if (!it.drag || !it.id) return;
     var n = d.length / stride, end = it.handle === "end";
+    if (it.t === "polyline") {   // a spring, a path: dragged by its first point (its last with handle end)
+      if (n) hitPoint(p, it, d[end ? 2 * n - 2 : 0], d[end ? 2 * n - 1 : 1], 0, 0);
+      return;
+    }
     for (var i = 0; i < n; i++) {
       var x = d[stride * i], y = d[stride * i + 1];
       if (stride === 4 && end) {

@@ -407,3 +407,8 @@ class Scene(Element):
 
     children: list[Node3D]
 
+
+# the 2D drawing panel's records (ejsrl.view.elements2d), re-exported for generated apps (E.Drawing, ...)
+from ejsrl.view.elements2d import Drag2D, Drawing, SceneKeys, Shape2D  # noqa: E402
+
+__all__ += ["Drawing", "Shape2D", "Drag2D", "SceneKeys"]
