@@ -313,6 +313,98 @@ def _methods() -> str:
     return ", ".join(f"`{m}`" + (" (default)" if m == default else "") for m in ODE_METHODS) + "\n"
 
 
+def _vision_signature(obj: Any, name: str) -> str:
+    """``name(params)`` with the defaults and the ``*`` before keyword-only parameters,
+    without annotations (what a lab's code writes)."""
+    try:
+        sig = inspect.signature(obj)
+    except (TypeError, ValueError):  # a builtin or C function without a signature
+        return f"{name}(...)"
+    params = [p.replace(annotation=inspect.Parameter.empty) for p in sig.parameters.values() if p.name != "self"]
+    return name + str(sig.replace(parameters=params, return_annotation=inspect.Signature.empty))
+
+
+def _vision_rows(name: str, obj: Any) -> list[str]:
+    """Rows of the vision table for one public name: a function, or a class and its public
+    methods and properties, or a constant (its kind and size)."""
+    if inspect.isclass(obj):
+        rows = [f"| `{_vision_signature(obj, name)}` | {_first_line(obj)} |"]
+        for attr, member in vars(obj).items():
+            if attr.startswith("_"):
+                continue
+            if isinstance(member, property):
+                rows.append(f"| `{name}.{attr}` | {_first_line(member.fget) if member.fget else ''} |")
+            elif isinstance(member, (staticmethod, classmethod)) or inspect.isfunction(member):
+                fn = getattr(obj, attr)
+                rows.append(f"| `{_vision_signature(fn, f'{name}.{attr}')}` | {_first_line(fn)} |")
+        return rows
+    if callable(obj):
+        return [f"| `{_vision_signature(obj, name)}` | {_first_line(obj)} |"]
+    import numpy as np
+
+    if isinstance(obj, np.ndarray):
+        what = f"array, shape {obj.shape}, {obj.dtype}"
+    elif isinstance(obj, dict):
+        what = "mapping of " + ", ".join(f"`{k}`" for k in obj)
+    else:
+        what = f"{type(obj).__name__} of {len(obj)} names" if hasattr(obj, "__len__") else type(obj).__name__
+    doc = _constant_doc(name)
+    return [f"| `{name}` | {_cell(doc.replace('``', '`')) + ' — ' if doc else ''}{_cell(what)} |"]
+
+
+def _constant_doc(name: str) -> str:
+    """The ``#:`` comment above ``name``'s assignment in the vision package's source (its docstring)."""
+    import pkgutil
+
+    import ejsrl.vision as vision
+
+    modules = [vision.__name__] + [f"{vision.__name__}.{m.name}" for m in pkgutil.iter_modules(vision.__path__)]
+    pattern = re.compile(rf"^#: (.*)\n{re.escape(name)}\s*[:=]", re.M)
+    for module in modules:
+        loaded = sys.modules.get(module)  # what ``import ejsrl.vision`` loaded (not the optional numba kernels)
+        if loaded is None:
+            continue
+        try:
+            source = inspect.getsource(loaded)
+        except (OSError, TypeError):
+            continue
+        found = pattern.search(source)
+        if found:
+            return found.group(1).strip()
+    return ""
+
+
+def _vision() -> str:
+    """Every public name of ``ejsrl.vision`` (its ``__all__``), grouped by the module that
+    defines it (titled by that module's docstring), with signatures and first docstring lines."""
+    import importlib
+
+    import ejsrl.vision as vision
+
+    groups: dict[str, list[str]] = {}
+    constants: list[str] = []
+    for name in vision.__all__:
+        obj = getattr(vision, name)
+        module = getattr(obj, "__module__", None) if (inspect.isclass(obj) or callable(obj)) else None
+        if module is None or not module.startswith("ejsrl.vision"):
+            constants.append(name)
+        else:
+            groups.setdefault(module, []).append(name)
+    out = []
+    for module, names in groups.items():
+        doc = (importlib.import_module(module).__doc__ or module).strip().split("\n\n")[0]
+        title = " ".join(doc.split()).rstrip(".")
+        rows = ["| name | what it does |", "|---|---|"]
+        for name in names:
+            rows.extend(_vision_rows(name, getattr(vision, name)))
+        out.append(f"#### {title}\n\n`{module}`\n\n" + "\n".join(rows) + "\n")
+    rows = ["| name | what it is |", "|---|---|"]
+    for name in constants:
+        rows.extend(_vision_rows(name, getattr(vision, name)))
+    out.append("#### Constants\n\n" + "\n".join(rows) + "\n")
+    return "\n".join(out)
+
+
 def _sections() -> dict[str, Callable[[], str]]:
     from ejsgen import spec
 
@@ -337,6 +429,7 @@ def _sections() -> dict[str, Callable[[], str]]:
         "scene-properties": lambda: _per_kind(spec.SCENE_ELEMENT_MODELS, skip=common),
         "prelude": _prelude,
         "reserved": _reserved,
+        "vision": _vision,
     }
 
 
@@ -344,7 +437,7 @@ def _sections() -> dict[str, Callable[[], str]]:
 SECTIONS: tuple[str, ...] = (
     "top-level", "variable", "model", "code-page", "ode", "ode-methods", "events", "evolution-pages",
     "program", "simulation", "fmu", "view-elements", "view-properties", "plot-series", "scene-elements",
-    "scene-common", "scene-properties", "prelude", "reserved",
+    "scene-common", "scene-properties", "prelude", "reserved", "vision",
 )
 
 

@@ -269,3 +269,47 @@ def test_a_preliminary_local_used_elsewhere_says_where_it_is_visible(tmp_path: P
     app = load_app(build_text(tmp_path, declared, "declared"))
     app.step_once()
     assert app.model.acc == pytest.approx(-4.0 * app.model.x, rel=1e-3)  # the last rate evaluation's
+
+
+# -- 7. the vision API in the language reference --------------------------------------------------
+
+
+def _vision_section() -> str:
+    text = LANGUAGE.read_text(encoding="utf-8")
+    m = re.search(r"<!-- generated: vision -->\n(.*?)<!-- end generated -->", text, re.S)
+    assert m, "specs/language.md has no vision section"
+    return m.group(1)
+
+
+def test_every_public_vision_name_is_in_the_reference_with_its_signature_and_first_line() -> None:
+    import inspect
+
+    import ejsrl.vision as vision
+
+    section = _vision_section()
+    rows = {m.group(1): m.group(2) for m in re.finditer(r"^\| `([^`]+)` \| (.*) \|$", section, re.M)}
+    by_name = {key.split("(")[0]: (key, what) for key, what in rows.items()}
+    for name in vision.__all__:
+        assert name in by_name, f"ejsrl.vision.{name} is missing from the language reference"
+        obj = getattr(vision, name)
+        if not callable(obj):
+            continue
+        sig = inspect.signature(obj)
+        params = [p.replace(annotation=inspect.Parameter.empty) for p in sig.parameters.values() if p.name != "self"]
+        want = name + str(sig.replace(parameters=params, return_annotation=inspect.Signature.empty))
+        key, what = by_name[name]
+        assert key == want, f"{name}: the reference says {key}, the code {want}"
+        first = " ".join((inspect.getdoc(obj) or "").split("\n\n")[0].split()).replace("``", "`").replace("|", "\\|")
+        assert what == first, f"{name}: the reference says {what!r}, the docstring {first!r}"
+    # what the labs needed, found by the name a user searches for
+    for name in ("color_segment", "blobs", "centroid", "connected_components", "draw_points", "threshold", "threshold_otsu", "threshold_adaptive", "color_mask"):
+        assert name in by_name
+
+
+def test_ejsgen_docs_prints_the_vision_functions(capsys) -> None:
+    from ejsgen.cli import main
+
+    assert main(["docs"]) == 0
+    out = capsys.readouterr().out
+    assert "## The vision library" in out
+    assert "| `color_segment(img, color, *, min_saturation=80, min_value=50, min_area=10)` |" in out
