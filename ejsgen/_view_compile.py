@@ -502,6 +502,11 @@ _ELEMENT_COMPILERS: dict[str, Callable[[ViewCompiler, ViewItem, int], Call | Non
     "scene": ViewCompiler._scene,
 }
 
+from ejsgen._view_compile_text import compile_console, compile_table  # noqa: E402 - they use ViewCompiler's helpers
+
+_ELEMENT_COMPILERS["table"] = compile_table
+_ELEMENT_COMPILERS["console"] = compile_console
+
 from ejsgen._view_compile2d import compile_drawing, compile_keyboard  # noqa: E402 - it uses ViewCompiler's helpers
 
 _ELEMENT_COMPILERS["drawing"] = compile_drawing

@@ -391,6 +391,11 @@ GUI_ELEMENT_MODELS: dict[str, type[Strict]] = {
     "image": ImageEl,
 }
 
+from ejsgen._spec_text import ConsoleEl, TableEl  # noqa: E402 - they build on Strict
+
+GUI_ELEMENT_MODELS["table"] = TableEl
+GUI_ELEMENT_MODELS["console"] = ConsoleEl
+
 from ejsgen._spec2d import DrawingEl, KeyboardEl  # noqa: E402 - it builds on the types above
 
 GUI_ELEMENT_MODELS["drawing"] = DrawingEl

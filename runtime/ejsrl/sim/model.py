@@ -591,6 +591,18 @@ class ModelBase:
         """Show a message in the UI (printed in headless runs)."""
         self._ejs_ctl.alert(str(text))
 
+    def print(self, *values: Any, sep: str | None = " ", end: str | None = "\n", file: Any = None, flush: bool = False) -> None:
+        """``print()`` in the code of a lab with a ``console`` element: printed as Python prints
+        (the terminal, a headless run's output), and shown in this simulation's console."""
+        import builtins
+
+        builtins.print(*values, sep=sep, end=end, file=file, flush=flush)
+        if file is None or file is sys.stdout:
+            from ejsrl.sim._console import console_log
+
+            text = (" " if sep is None else str(sep)).join(str(v) for v in values) + ("\n" if end is None else str(end))
+            console_log(self._ejs_ctl).write(text)
+
     @property
     def _ejs_world(self) -> WorldAccess:
         """The world as this model's code reaches it: its controller (the app)."""

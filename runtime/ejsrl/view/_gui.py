@@ -42,6 +42,7 @@ from ejsrl.view.elements import (
     is_dynamic,
     keep_spaces,
 )
+from ejsrl.view.elements_text import Console, Table
 
 __all__ = ["Panel", "ControlBinding", "USER_HOLD_SECONDS"]
 
@@ -254,6 +255,8 @@ class Panel:
         self._label_shown: dict[int, str] = {}
         self.plots: list[PlotBinding] = []
         self.images: list[ImageBinding] = []
+        #: the tables and consoles (``ejsrl.view._table.TableBinding``, ``ejsrl.view._console.ConsoleBinding``)
+        self.text_views: list[Any] = []
         #: the 2D drawing panels (ejsrl.view._drawing.DrawingBinding)
         self.drawings: list[Any] = []
         self.buttons: dict[str, Any] = {}
@@ -388,6 +391,14 @@ class Panel:
                     from ejsrl.view._drawing import SceneKeysBinding
 
                     self.drawings.append(SceneKeysBinding(gui, el, self.app, key=f"scene-keys-{len(self.drawings)}"))
+                elif isinstance(el, Table):
+                    from ejsrl.view._table import TableBinding
+
+                    self.text_views.append(TableBinding(gui, el, self._locked_value))
+                elif isinstance(el, Console):
+                    from ejsrl.view._console import ConsoleBinding
+
+                    self.text_views.append(ConsoleBinding(gui, el, self.app))
                 elif isinstance(el, Scene):
                     pass  # mirrored from the world by the scene mirror
                 else:
@@ -403,6 +414,11 @@ class Panel:
         with self.app.lock:
             value = self.app.safe_value(prop, where)
         return "" if value is None else str(value)
+
+    def _locked_value(self, prop: Any, where: str) -> Any:
+        """A property's value read now, the model lock held (while the panel is built)."""
+        with self.app.lock:
+            return self.app.safe_value(prop, where)
 
     def _track(self, prop: Any, where: str, handle: Any, attr: str) -> None:
         """Keep ``handle.<attr>`` showing ``prop`` if it changes at run time."""
@@ -543,6 +559,8 @@ class Panel:
             p.update(app, playing=playing)
         for d in self.drawings:
             d.refresh()
+        for tv in self.text_views:
+            tv.refresh(app.safe_value)
         for im in self.images:
             if not im.due():
                 continue  # not rendered for nothing: the picture could not be sent yet

@@ -140,21 +140,56 @@ def escaped(value: Any, spec: str = "") -> str:
 
 
 _RUN = re.compile(r" {2,}")
+#: the delimiter row under a Markdown table's header: | --- | :-: | ---: |
+_TABLE_RULE = re.compile(r"^\s*\|?\s*:?-+:?\s*(\|\s*:?-+:?\s*)*\|?\s*$")
+
+
+def _spaced(line: str) -> str:
+    body = line.lstrip(" ")
+    lead = "&nbsp;" * (len(line) - len(body))
+    return lead + _RUN.sub(lambda m: " " + "&nbsp;" * (len(m.group()) - 1), body)
+
+
+def _is_table_start(lines: list[str], i: int) -> bool:
+    """Whether a Markdown table (a header row, then its delimiter row) starts at line ``i``."""
+    return i + 1 < len(lines) and "|" in lines[i] and "|" in lines[i + 1] and bool(_TABLE_RULE.match(lines[i + 1]))
 
 
 def keep_spaces(text: str) -> str:
-    """Markdown that shows ``text``'s spaces and line breaks as written.
+    """Markdown that shows ``text``'s spaces and line breaks as written, and its tables as tables.
 
     Runs of spaces and the spaces that start a line become non-breaking spaces (the
     renderer would collapse them, and would show a line indented by four as a code
-    box); a line break becomes ``<br>``.
+    box); a line break becomes ``<br>``. A Markdown table (a header row with ``|``, a
+    delimiter row such as ``|---|--:|``, then rows with ``|``) is kept as lines of its
+    own, a block apart from the text around it, so the renderer draws it as a table.
+    A value interpolated into a cell (``E.escaped``) cannot end it or add a cell: its
+    ``|`` and line breaks arrive as character references and ``<br>``.
     """
-    lines = []
-    for line in text.replace("\t", "    ").split("\n"):
-        body = line.lstrip(" ")
-        lead = "&nbsp;" * (len(line) - len(body))
-        lines.append(lead + _RUN.sub(lambda m: " " + "&nbsp;" * (len(m.group()) - 1), body))
-    return "<br>".join(lines)
+    lines = text.replace("\t", "    ").split("\n")
+    blocks: list[str] = []
+    para: list[str] = []
+    i = 0
+    while i < len(lines):
+        if not _is_table_start(lines, i):
+            para.append(lines[i])
+            i += 1
+            continue
+        if para and not para[-1].strip():
+            para.pop()  # the blank line before the table: the block break stands for it
+        if para:
+            blocks.append("<br>".join(_spaced(line) for line in para))
+        para = []
+        end = i + 2
+        while end < len(lines) and "|" in lines[end] and lines[end].strip():
+            end += 1
+        blocks.append("\n".join(line.strip() for line in lines[i:end]))
+        i = end
+        if i < len(lines) and not lines[i].strip():
+            i += 1  # the blank line after it, likewise
+    if para or not blocks:
+        blocks.append("<br>".join(_spaced(line) for line in para))
+    return "\n\n".join(blocks)
 
 
 @dataclass
@@ -412,3 +447,9 @@ class Scene(Element):
 from ejsrl.view.elements2d import Drag2D, Drawing, SceneKeys, Shape2D  # noqa: E402
 
 __all__ += ["Drawing", "Shape2D", "Drag2D", "SceneKeys"]
+
+
+# the data and text elements' records (ejsrl.view.elements_text), re-exported for generated apps (E.Table, ...)
+from ejsrl.view.elements_text import Console, Table, TableRow  # noqa: E402
+
+__all__ += ["Table", "TableRow", "Console"]
