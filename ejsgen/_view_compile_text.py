@@ -4,9 +4,9 @@ A table of ``rows`` becomes ``E.Table(rows=[E.TableRow(value=E.Dynamic("k"), lab
 unit="N/m"), ...])``: each row's unit is the variable's ``unit:`` unless the row gives its
 own. A table of ``data`` becomes ``E.Table(data=E.Dynamic(...), columns=[...], units=[...])``;
 an array whose shape is known at build time must be 1-D or 2-D with as many columns as
-headers. Formats are checked by formatting a number with them. A ``console`` makes
-``print`` in the spec's code the model's (:meth:`ejsrl.sim.model.ModelBase.print`), which also
-writes to the tab's console: :func:`has_console` tells the compiler before it compiles code.
+headers. Formats are checked by formatting a number with them. ``print`` in spec code is
+the model's (:meth:`ejsrl.sim.model.ModelBase.print`, a prelude control), which also writes
+to the simulation's console log, shown by a ``console``.
 """
 
 from __future__ import annotations
@@ -22,21 +22,7 @@ from ejsgen.yamlload import Path_
 if TYPE_CHECKING:
     from ejsgen._view_compile import ViewCompiler
 
-__all__ = ["compile_table", "compile_console", "has_console", "PRINT"]
-
-#: the name spec code prints with; in a lab with a console it is the model's method
-PRINT = "print"
-
-
-def has_console(items: list[ViewItem]) -> bool:
-    """Whether the view (folders and tabs included) has a ``console`` element."""
-    for item in items:
-        if item.kind == "console":
-            return True
-        if has_console(item.children) or any(has_console(children) for _label, children in item.tabs):
-            return True
-    return False
-
+__all__ = ["compile_table", "compile_console"]
 
 def _check_format(vc: ViewCompiler, spec: str, path: Path_) -> bool:
     """Whether ``spec`` formats a number (else an error at ``path``, with an example)."""

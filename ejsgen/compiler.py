@@ -13,7 +13,6 @@ from pathlib import Path
 from typing import Any
 
 from ejsgen._assets import ASSET_FUNCTION, asset_names
-from ejsgen._view_compile_text import PRINT, has_console
 from ejsgen._resolve import Names, Snippet, assigned_names, parse_snippet, rewrite, rewrite_source, source_lines
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._suggest import did_you_mean
@@ -57,8 +56,6 @@ class Compiler:
         # assets named by their path in code become asset('...'); asset(name) finds any of them
         self.names.assets = asset_names(self.spec.assets)
         self.names.globals.add(ASSET_FUNCTION)
-        if has_console(checked.view):  # print() in code also writes to the tab's console: the model's print
-            self.names.controls.add(PRINT)
 
     # -- helpers ----------------------------------------------------------------------------------
     def loc(self, path: Path_) -> Location:

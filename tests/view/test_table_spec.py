@@ -70,11 +70,9 @@ def test_a_console_too_tall(tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     assert got.startswith("10:23: error:") and "2000" in got
 
 
-def test_print_is_the_models_only_in_a_lab_with_a_console(tmp_path: Path) -> None:
-    body = "ejs: 1\ntitle: P\nmodel:\n  variables: {{t: 0.0}}\n  init: |\n    print('hi', t)\nview:\n{view}"
-    for view, want in (("  - console: {}\n", "self.print('hi', self.t)"), ("  - label: {text: x}\n", "print('hi', self.t)")):
-        spec = tmp_path / "p.ejs.yaml"
-        spec.write_text(body.format(view=view))
-        assert main(["build", str(spec), "-o", str(tmp_path / "out")]) == 0
-        lines = [ln.strip() for ln in (tmp_path / "out" / "app.py").read_text().splitlines()]
-        assert want in lines
+def test_print_in_code_is_the_models_which_also_writes_to_the_console(tmp_path: Path) -> None:
+    spec = tmp_path / "p.ejs.yaml"
+    spec.write_text("ejs: 1\ntitle: P\nmodel:\n  variables: {t: 0.0}\n  init: |\n    print('hi', t)\nview:\n  - console: {}\n")
+    assert main(["build", str(spec), "-o", str(tmp_path / "out")]) == 0
+    lines = [ln.strip() for ln in (tmp_path / "out" / "app.py").read_text().splitlines()]
+    assert "self.print('hi', self.t)" in lines

@@ -591,9 +591,13 @@ class ModelBase:
         """Show a message in the UI (printed in headless runs)."""
         self._ejs_ctl.alert(str(text))
 
+    @prelude("control")
     def print(self, *values: Any, sep: str | None = " ", end: str | None = "\n", file: Any = None, flush: bool = False) -> None:
-        """``print()`` in the code of a lab with a ``console`` element: printed as Python prints
-        (the terminal, a headless run's output), and shown in this simulation's console."""
+        """Print as Python does (the terminal; a headless run's output), and in this tab's ``console`` element, if the lab has one.
+
+        The simulation keeps its last lines (``ejsrl.sim._console.ConsoleLog``); text for
+        another ``file`` goes there only.
+        """
         import builtins
 
         builtins.print(*values, sep=sep, end=end, file=file, flush=flush)
