@@ -276,7 +276,7 @@ class DrawingEl(Strict):
     """Background colour (a CSS name or '#rrggbb')."""
     keys: dict[str, Code] = Field(default_factory=dict)
     """Key: code run when the key is pressed while the panel has the keyboard focus (click it), then the fixed relations. Keys: letters, digits, ArrowUp, ArrowDown, ArrowLeft, ArrowRight, Space, Enter, Escape, + and -."""
-    children: list[dict[str, Any]] = Field(default_factory=list)
+    children: list[Any] = Field(default_factory=list)
     """The 2D elements, drawn in order: point, particle, circle, segment, arrow, spring, polygon, polyline, trace, text, image, axes, grid."""
 
 

@@ -110,10 +110,12 @@ def _png_data_url(img: Any) -> str:
 
 
 class _ShapeState:
-    """What a child keeps between frames: a trace's points, an image's encoding."""
+    """What a child keeps between frames: a trace's points (and the independent variable's value
+    at the last one: when it goes back, the trace starts again), an image's encoding."""
 
     def __init__(self) -> None:
         self.trace: list[tuple[float, float]] = []
+        self.time: float | None = None
         self.image_key: Any = None
         self.image_url: str | None = None
 
@@ -147,6 +149,15 @@ class DrawingBinding:
         """Forget the traces (on reset)."""
         for st in self.states.values():
             st.trace.clear()
+
+    def _time(self) -> float | None:
+        """The model's independent variable now (None if it has none)."""
+        model = self.app.model
+        name = getattr(model, "INDEPENDENT", None)
+        try:
+            return float(getattr(model, name)) if name else None
+        except (TypeError, ValueError, AttributeError):
+            return None
 
     def _value(self, prop: Any, where: str) -> Any:
         return self.app.safe_value(prop, where)
@@ -253,6 +264,10 @@ class DrawingBinding:
         elif kind == "trace":
             pt = _xy(p["point"], f"the point of {s.name}")[0]
             st = self.states[s.name]
+            now = self._time()
+            if now is not None and st.time is not None and now < st.time:
+                st.trace.clear()  # the independent variable went back (a reset, a new launch): a new trace
+            st.time = now
             if np.all(np.isfinite(pt)) and (not st.trace or st.trace[-1] != (pt[0], pt[1])):
                 st.trace.append((float(pt[0]), float(pt[1])))
                 limit = int(p.get("max_points", 1000))

@@ -1,0 +1,191 @@
+"""The drawing element's binding without a browser: frames that put each element where the
+model says, drags that write the bound variables within their constraint and run on_drag, keys
+that run their actions, traces, sets and errors."""
+
+from __future__ import annotations
+
+import base64
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ejsrl.view._drawing import DrawingBinding, nice_ticks, spring_points
+from testkit import ROOT
+
+from test_panel2d import FakeGui
+
+PROJECTILE = ROOT / "examples" / "projectile_2d.ejs.yaml"
+
+
+def built(tmp_path: Path, spec: Path | str):
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from ejsrl.view.elements2d import Drawing
+
+    if isinstance(spec, str):
+        path = tmp_path / "lab.ejs.yaml"
+        path.write_text(spec)
+        spec = path
+    app = load_app(build(spec, tmp_path / "app"))
+    drawing = next(el for el in app.view if isinstance(el, Drawing))
+    return app, DrawingBinding(FakeGui(), drawing, app, key="d")
+
+
+def xy(item) -> np.ndarray:
+    width = 4 if item["t"] in ("segments", "arrows", "rects") else 2
+    return np.frombuffer(base64.b64decode(item["xy"]), dtype="<f4").reshape(-1, width).astype(float)
+
+
+def item(binding, t: str, ident: str | None = None, n: int = 0):
+    binding.refresh()
+    items = [it for it in binding.frame["items"] if it["t"] == t and (ident is None or it.get("id") == ident)]
+    return items[n]
+
+
+@pytest.fixture
+def projectile(tmp_path):
+    return built(tmp_path, PROJECTILE)
+
+
+def test_the_frame_puts_each_element_where_the_model_says(projectile) -> None:
+    app, b = projectile
+    m = app.model
+    app.play()
+    for _ in range(20):
+        app.frame()
+        b.refresh()  # the view refreshes every display frame
+    f = b.frame
+    assert f["bounds"] == [-1.0, 21.0, -1.0, 11.0] and f["aspect"] == "equal"
+    ball = [it for it in f["items"] if it["t"] == "circles" and it["fill"] == "crimson"][0]
+    assert np.allclose(xy(ball), [[m.x, m.y]], atol=1e-5) and ball["r"] == 0.2
+    vel = [it for it in f["items"] if it["t"] == "arrows" and it["stroke"] == "royalblue"][0]
+    assert np.allclose(xy(vel), [[m.x, m.y, 0.25 * m.vx, 0.25 * m.vy]], atol=1e-5)
+    targets = [it for it in f["items"] if it.get("id") is None and it["t"] == "markers"][0]
+    assert np.allclose(xy(targets), [[10, 0], [14, 0], [18, 0]])  # a set: one item, N rows
+    trace = [it for it in f["items"] if it["t"] == "polyline" and it["stroke"] == "#868e96"][0]
+    pts = xy(trace)
+    assert len(pts) >= 20 and np.allclose(pts[-1], [m.x, m.y], atol=1e-5)
+    # the analytic flight: y = y0 + v sin(a) t - g t^2 / 2 at the trace's last point
+    a = np.radians(m.angle)
+    assert abs(m.y - (m.y0 + m.v0 * np.sin(a) * m.t - 0.5 * m.g * m.t**2)) < 1e-9
+    text = [it for it in f["items"] if it["t"] == "text"][0]
+    assert text["text"] == f"{m.y:.1f} m"
+    assert f["title"] == f"range so far: {m.x - m.x0:.2f} m   hits: 0"
+    assert [t[0] for t in f["axes"]["x"]["ticks"]][:1] and f["axes"]["grid"] is True
+    app.reset()
+    b.clear()
+    assert len(xy(item(b, "polyline", n=2))) == 1  # the trace starts again after a reset
+
+
+def test_a_drag_is_clamped_to_its_region_and_runs_on_drag(projectile) -> None:
+    app, b = projectile
+    m = app.model
+    assert b.drag("launcher", "start", 1.0, 0.5)
+    assert b.drag("launcher", "move", 25.0, -3.0)  # right of and below the region [0, 10, 0, 8]
+    assert (m.x0, m.y0) == (10.0, 0.0)
+    assert (m.x, m.y) == (10.0, 0.0)  # on_drag: initialize(): the ball starts from the launcher
+    b.drag("launcher", "release", 4.0, 9.0)
+    assert (m.x0, m.y0) == (4.0, 8.0)
+    assert np.allclose(xy(item(b, "circles", "launcher")), [[4.0, 8.0]])
+    # the fixed relations ran: the launch arrow's tip moved with the launcher
+    assert abs(m.tip_x - (4.0 + 0.25 * m.v0 * np.cos(np.radians(m.angle)))) < 1e-12
+
+
+def test_dragging_the_arrow_tip_sets_speed_and_angle(projectile) -> None:
+    app, b = projectile
+    m = app.model
+    launch = item(b, "arrows", "launch")
+    assert launch["handle"] == "end" and launch["drag"] == "xy"
+    b.drag("launch", "move", m.x0 + 0.25 * 10.0, m.y0 + 0.25 * 10.0)  # 10*sqrt(2) m/s at 45 degrees
+    assert abs(m.v0 - 10.0 * np.sqrt(2)) < 1e-9 and abs(m.angle - 45.0) < 1e-9
+    b.drag("launch", "move", m.x0 - 3.0, m.y0 - 1.0)  # backwards and down: the angle stays in [0, 90]
+    assert m.angle == 90.0 or m.angle == 0.0
+    assert not b.drag("ball", "move", 0.0, 0.0)  # not draggable: nothing happens
+    assert not b.drag("nobody", "move", 0.0, 0.0)
+
+
+def test_keys_run_their_actions(projectile) -> None:
+    app, b = projectile
+    m = app.model
+    angle = m.angle
+    b.on_event({"k": "key", "key": "ArrowUp", "phase": "down"})
+    assert m.angle == angle + 1.0
+    b.on_event({"k": "key", "key": "ArrowUp", "phase": "up"})  # a release does nothing
+    assert m.angle == angle + 1.0
+    assert not app.is_playing()
+    b.on_event({"k": "key", "key": " ", "phase": "down"})  # Space
+    assert app.is_playing()
+    assert not b.key("q")
+
+
+CURVE = """ejs: 1
+title: C
+model:
+  variables:
+    x: 1.0
+    y: 0.0
+    P: [[0.0, 0.0], [1.0, 1.0], [2.0, 0.5]]
+    moves: 0
+    released: 0
+  custom: |
+    def on_circle(px, py):
+        a = atan2(py, px)
+        return [2*cos(a), 2*sin(a)]
+view:
+  - drawing:
+      x_range: [-3, 3]
+      y_range: [-3, 3]
+      children:
+        - particle: {name: bead, position: [x, y], drag: {bind: [x, y], along: curve, curve: on_circle,
+                     on_drag: moves = moves + 1, on_release: released = released + 1}}
+        - point: {name: cloud, position: P, drag: {bind: P}}
+        - segment: {name: s, start: [0, 0], end: [x, y], drag: {bind: y, along: y, handle: end}}
+        - particle: {name: bad, position: "np.zeros((2, 5))"}
+"""
+
+
+def test_a_drag_on_a_curve_a_set_row_and_along_y(tmp_path) -> None:
+    app, b = built(tmp_path, CURVE.replace('        - particle: {name: bad, position: "np.zeros((2, 5))"}\n', ""))
+    m = app.model
+    b.drag("bead", "move", 3.0, 4.0)
+    assert np.allclose([m.x, m.y], [1.2, 1.6]) and m.moves == 1  # the circle of radius 2, towards (3, 4)
+    b.drag("bead", "release", 0.0, -5.0)
+    assert np.allclose([m.x, m.y], [0.0, -2.0]) and m.released == 1 and m.moves == 1
+    b.on_event({"k": "drag", "id": "cloud", "phase": "move", "x": 5.0, "y": 6.0, "i": 1})
+    assert np.array_equal(m.P, [[0.0, 0.0], [5.0, 6.0], [2.0, 0.5]])  # row 1 of the set, the others kept
+    frame_items = {it.get("id"): it for it in (b.refresh() or b.frame)["items"]}
+    assert frame_items["cloud"]["drag"] == "xy" and frame_items["s"]["drag"] == "y"
+    x_before = m.x
+    b.drag("s", "move", 9.0, 1.5)  # along y: x is not written
+    assert (m.x, m.y) == (x_before, 1.5)
+    b.on_event({"k": "drag", "id": "cloud", "phase": "move", "x": 1.0, "y": 1.0, "i": 7})  # no row 7
+    assert app.error is not None and "row 7" in app.error.message
+
+
+def test_a_set_of_the_wrong_shape_at_run_time_is_an_error_naming_the_element(tmp_path) -> None:
+    app, b = built(tmp_path, CURVE)
+    b.refresh()
+    assert app.error is not None
+    assert "N x 2" in app.error.message and "transpose" in app.error.message
+    assert app.error.where.endswith(":23:21")  # the element's properties in the spec
+
+
+def test_spring_points_zig_zag_between_the_ends() -> None:
+    a, b = np.array([0.0, 0.0]), np.array([4.0, 0.0])
+    pts = spring_points(a, b, coils=5, radius=0.2)
+    assert len(pts) == 2 * 5 + 4
+    assert np.array_equal(pts[0], a) and np.array_equal(pts[-1], b)
+    mids = pts[2:-2]
+    assert np.allclose(np.abs(mids[:, 1]), 0.2) and np.all(np.sign(mids[:-1, 1]) != np.sign(mids[1:, 1]))
+    assert np.all(np.diff(mids[:, 0]) > 0) and mids[0, 0] > 0.4 and mids[-1, 0] < 3.6
+    # turned by 90 degrees, the spring turns with it
+    turned = spring_points(a, np.array([0.0, 4.0]), coils=5, radius=0.2)
+    assert np.allclose(turned[:, ::-1] * [1, -1], pts * [1, 1]) or np.allclose(np.abs(turned[2:-2, 0]), 0.2)
+
+
+def test_nice_ticks() -> None:
+    assert nice_ticks(-1, 21) == [0, 5, 10, 15, 20]
+    assert nice_ticks(0, 1) == pytest.approx([0, 0.2, 0.4, 0.6, 0.8, 1.0])
+    assert nice_ticks(-0.003, 0.003) == pytest.approx([-0.003, -0.002, -0.001, 0, 0.001, 0.002, 0.003])
+    assert nice_ticks(1, 1) == []
