@@ -32,7 +32,7 @@ def served(built):
 
 def scene_canvas(page) -> int | None:
     """The index of the 3D view's canvas (the widest outside the plots), once it is laid out."""
-    widths = page.evaluate("() => [...document.querySelectorAll('canvas')].map(c => c.closest('.uplot') ? 0 : c.getBoundingClientRect().width)")
+    widths = page.evaluate("() => [...document.querySelectorAll('canvas')].map(c => c.closest('div[data-ejs2d]') ? 0 : c.getBoundingClientRect().width)")
     if not widths or max(widths) < 300:
         return None
     return widths.index(max(widths))

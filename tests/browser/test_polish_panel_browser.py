@@ -166,7 +166,7 @@ def test_a_lab_without_a_scene_gives_the_window_to_its_panel(built, page):
         strip = np.asarray(Image.open(io.BytesIO(page.screenshot(clip={"x": 0, "y": 0, "width": left, "height": 800}))).convert("RGB")).astype(int)
         assert (strip.max(axis=(0, 1)) - strip.min(axis=(0, 1))).max() == 0, "something shows left of the panel"
         # the plots use the room: as wide as the panel, and still wholly readable in height
-        chart = page.locator(".uplot").first
+        chart = page.locator("div[data-key^=\"plot-\"] canvas").first
         wait_until(lambda: (chart.bounding_box() or {}).get("width", 0) > 0, timeout=20, what="the first chart to be laid out")
         box = chart.bounding_box()
         assert box["width"] > 0.75 * width and box["height"] < 0.5 * page.viewport_size["height"], box

@@ -1,4 +1,4 @@
-"""Plot buffers, uPlot options, image preparation and the server helper."""
+"""Plot buffers, a plot's frame on the 2D panel, image preparation and the server helper."""
 
 from __future__ import annotations
 
