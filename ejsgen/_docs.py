@@ -407,6 +407,7 @@ def _vision() -> str:
 
 def _sections() -> dict[str, Callable[[], str]]:
     from ejsgen import spec
+    from ejsgen import _spec2d  # after spec, which registers the drawing element from it
 
     common = _scene_common()
     return {
@@ -424,6 +425,9 @@ def _sections() -> dict[str, Callable[[], str]]:
         "view-elements": lambda: _kinds_table(spec.GUI_ELEMENT_MODELS, {"scene": "The 3D world: a list of 3D elements (see [3D elements](#3d-elements))."}),
         "view-properties": lambda: _per_kind(spec.GUI_ELEMENT_MODELS),
         "plot-series": lambda: field_table(spec.SeriesEl),
+        "drawing-elements": lambda: _spec2d.docs_kinds(),
+        "drawing-properties": lambda: _spec2d.docs_properties(),
+        "drag": lambda: _spec2d.docs_drag(),
         "scene-elements": lambda: _kinds_table(spec.SCENE_ELEMENT_MODELS),
         "scene-common": lambda: field_table(spec.SCENE_ELEMENT_MODELS[next(iter(spec.SCENE_ELEMENT_MODELS))], common),
         "scene-properties": lambda: _per_kind(spec.SCENE_ELEMENT_MODELS, skip=common),
@@ -436,7 +440,7 @@ def _sections() -> dict[str, Callable[[], str]]:
 #: the names of the generated sections, each of which language.md must hold once
 SECTIONS: tuple[str, ...] = (
     "top-level", "variable", "model", "code-page", "ode", "ode-methods", "events", "evolution-pages",
-    "program", "simulation", "fmu", "view-elements", "view-properties", "plot-series", "scene-elements",
+    "program", "simulation", "fmu", "view-elements", "view-properties", "plot-series", "drawing-elements", "drawing-properties", "drag", "scene-elements",
     "scene-common", "scene-properties", "prelude", "reserved", "vision",
 )
 

@@ -235,16 +235,25 @@ CHILD_MODELS: dict[str, type[Strict]] = {
 }
 
 
+def _inline(node: Any, defs: dict[str, Any]) -> Any:
+    """``node`` with every ``{"$ref": "#/$defs/X"}`` replaced by X's schema (the 2D models have no cycles)."""
+    if isinstance(node, dict):
+        ref = node.get("$ref")
+        if isinstance(ref, str) and ref.startswith("#/$defs/"):
+            return _inline(defs[ref.removeprefix("#/$defs/")], defs)
+        return {k: _inline(v, defs) for k, v in node.items()}
+    if isinstance(node, list):
+        return [_inline(v, defs) for v in node]
+    return node
+
+
 def _children_schema(schema: dict[str, Any]) -> None:
-    """The JSON Schema of ``children``: one-key objects of the 2D kinds (their models in ``$defs``)."""
-    defs = schema.setdefault("$defs", {})
+    """The JSON Schema of ``children``: one-key objects of the 2D kinds, their schemas inline."""
     items = []
     for kind, model in CHILD_MODELS.items():
-        sub = model.model_json_schema(ref_template="#/$defs/{model}")
-        for name, d in sub.pop("$defs", {}).items():
-            defs.setdefault(name, d)
-        defs[model.__name__] = sub
-        items.append({"type": "object", "description": model.__doc__ or kind, "properties": {kind: {"$ref": f"#/$defs/{model.__name__}"}},
+        sub = model.model_json_schema()
+        defs = sub.pop("$defs", {})
+        items.append({"type": "object", "description": model.__doc__ or kind, "properties": {kind: _inline(sub, defs)},
                       "required": [kind], "additionalProperties": False})
     schema["properties"]["children"]["items"] = {"oneOf": items}
 
@@ -285,3 +294,34 @@ class KeyboardEl(Strict):
 
     keys: dict[str, Code]
     """Key: code run when it is pressed, then the fixed relations. Keys: letters, digits, ArrowUp, ArrowDown, ArrowLeft, ArrowRight, Space, Enter, Escape, + and - (a drawing panel takes its own keys:)."""
+
+
+# -- the reference's generated tables (ejsgen._docs: sections drawing-elements, drawing-properties, drag) --
+
+
+def docs_kinds() -> str:
+    """The table of the 2D kinds, each linked to its properties."""
+    rows = ["| kind | what it is |", "|---|---|"]
+    for kind, cls in CHILD_MODELS.items():
+        rows.append(f"| [`{kind}`](#2d-{kind}) | {(cls.__doc__ or '').strip()} |")
+    return "\n".join(rows) + "\n"
+
+
+def docs_properties() -> str:
+    """Each 2D kind's own properties (those every 2D element has come first, once)."""
+    from ejsgen._docs import field_table
+
+    common = list(_Shape.model_fields)
+    out = ["Every 2D element takes\n", field_table(PointEl, common)]
+    for kind, cls in CHILD_MODELS.items():
+        own = [f for f in cls.model_fields if f not in common]
+        out.append(f"#### 2D `{kind}`\n\n{(cls.__doc__ or '').strip()}\n")
+        out.append(field_table(cls, own) if own else "No properties of its own.\n")
+    return "\n".join(out)
+
+
+def docs_drag() -> str:
+    """The table of ``drag:``."""
+    from ejsgen._docs import field_table
+
+    return field_table(DragEl)

@@ -189,3 +189,19 @@ def test_nice_ticks() -> None:
     assert nice_ticks(0, 1) == pytest.approx([0, 0.2, 0.4, 0.6, 0.8, 1.0])
     assert nice_ticks(-0.003, 0.003) == pytest.approx([-0.003, -0.002, -0.001, 0, 0.001, 0.002, 0.003])
     assert nice_ticks(1, 1) == []
+
+
+def test_the_projectile_lands_where_the_closed_form_says(projectile) -> None:
+    app, _b = projectile
+    m = app.model
+    v, a, g, y0, x0 = m.v0, np.radians(m.angle), m.g, m.y0, m.x0
+    app.play()
+    for _ in range(2000):
+        app.frame()
+        if not app.is_playing():
+            break
+    assert not app.is_playing() and app.error is None  # the ground event stopped it
+    t_land = (v * np.sin(a) + np.sqrt((v * np.sin(a)) ** 2 + 2 * g * y0)) / g
+    assert abs(m.t - t_land) < 1e-5
+    assert abs(m.x - (x0 + v * np.cos(a) * t_land)) < 1e-4
+    assert m.hits == int(np.any(np.abs(m.targets[:, 0] - m.x) < 0.6))
