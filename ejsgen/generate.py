@@ -78,7 +78,9 @@ def _imports(texts: list[str]) -> list[str]:
 
 
 def _code_names(lines: list[str]) -> set[str]:
-    """The names a Python source line may load (not attributes, strings or comments)."""
+    """The names a Python source line may load (not attributes, strings or comments; the
+    values of an f-string, which Python 3.11 reads as one string token, are code)."""
+    import ast
     import io
     import tokenize
 
@@ -89,6 +91,11 @@ def _code_names(lines: list[str]) -> set[str]:
             for tok in tokenize.generate_tokens(io.StringIO(line.strip() + "\n").readline):
                 if tok.type == tokenize.NAME and previous != ".":
                     names.add(tok.string)
+                elif tok.type == tokenize.STRING and "f" in re.match(r"[A-Za-z]*", tok.string).group().lower():
+                    try:  # a label's f'... {2*pi/self.omega:.4f} ...': pi is loaded
+                        names.update(n.id for n in ast.walk(ast.parse(tok.string, mode="eval")) if isinstance(n, ast.Name))
+                    except SyntaxError:
+                        pass
                 previous = tok.string
         except (tokenize.TokenError, SyntaxError):  # a line of a longer statement: its start was read
             pass

@@ -110,9 +110,11 @@ def table_html(title: str, headers: Sequence[str], units: Sequence[str], rows: S
         out.append(_CAPTION.format(esc(title)))
     if any(headers) or any(units):
         out.append("<thead><tr>")
+        first = rows[0] if rows else []
         for j, h in enumerate(headers):
             unit = units[j] if j < len(units) else ""
-            out.append(_TH.format(esc(h) + (_UNIT.format(esc(unit)) if unit else ""), align="left" if j == 0 and not h else "right"))
+            numeric = j < len(first) and _looks_numeric(first[j])  # a header sits as its column's first cell does
+            out.append(_TH.format(esc(h) + (_UNIT.format(esc(unit)) if unit else ""), align="right" if numeric else "left"))
         out.append("</tr></thead>")
     out.append("<tbody>")
     for row in rows:
