@@ -12,11 +12,12 @@ import time
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from ejsgen._watch import Rebuilder, Watcher
 from ejsrl.app._reload import LiveLab
-from testkit.guard_client import Client, gui_update, run_async
+from testkit.guard_client import CAMERA, Client, gui_update, run_async
 
 SPEC = """\
 ejs: 1
@@ -40,6 +41,8 @@ view:
   - slider: {{bind: k, min: 0.5, max: {kmax}, label: Stiffness}}
   - label: {{text: "{word}: p={{p:.2f}} s={{s:.2f}}"}}
   - plot: {{title: Position, x: t, series: [{{y: x, label: x}}], window: 10}}
+  - scene:
+      - sphere: {{position: [x, 0, 0], radius: 0.1}}
 simulation:
   fps: 30
 """
@@ -54,6 +57,20 @@ def validate_text(spec: Path) -> str:
     with pytest.raises(EjsError) as info:
         load_plan(spec)
     return str(info.value)
+
+
+def shown_texts(client: Client) -> list[str]:
+    """The Markdown and HTML of the client's panel as they read now (created, then updated), unescaped."""
+    current: dict[str, str] = {}
+    for m in client.received:
+        if m.get("type") in ("GuiMarkdownMessage", "GuiHtmlMessage"):
+            props = m.get("props", {})
+            current[m["uuid"]] = str(props.get("_markdown", props.get("content", "")))
+        elif m.get("type") == "GuiUpdateMessage" and m.get("uuid") in current:
+            for key in ("_markdown", "content"):
+                if key in m["updates"]:
+                    current[m["uuid"]] = str(m["updates"][key])
+    return [html.unescape(t) for t in current.values()]
 
 
 def last_uuid(client: Client, kind: str, label: str) -> str:
@@ -121,9 +138,13 @@ def test_a_save_reloads_the_tab_in_place_keeping_what_the_author_did_not_change(
         await tab.send(gui_update(last_uuid(tab, "GuiButtonMessage", "Play"), value=True))
         await tab.until(lambda: session.app.model.p > 0.5, "p to grow while playing")
         old_app = session.app
+        # the user turned the 3D view: the reload keeps it there (a new view would frame the scene)
+        await tab.send(dict(CAMERA, position=[4.0, -2.0, 1.5], look_at=[0.5, 0.0, 0.2]))
+        camera = server.get_clients()[session.client_id].camera
+        await tab.until(lambda: np.allclose(camera.position, [4.0, -2.0, 1.5]), "the user's camera")
 
         save(spec, SPEC.format(s=2.5, kmax=50, word="After"))
-        p_saved = old_app.model.p
+        p_saved, t_saved = old_app.model.p, old_app.model.t
         poll_until(watcher, "rebuilt")
         new_app = session.app
         assert new_app is not old_app and lab.classroom.sessions[token] is session  # the same session, a new model
@@ -133,12 +154,18 @@ def test_a_save_reloads_the_tab_in_place_keeping_what_the_author_did_not_change(
         await tab.until(lambda: new_app.model.p > p_saved + 0.3, "p to go on from where it was")
         assert new_app.model.t >= p_saved  # the independent variable kept too
         # the tab was sent the new panel: the new label, the slider's new range
-        await tab.until(lambda: any(t.startswith("After: p=") for t in tab.texts()), "the new label")
+        await tab.until(lambda: any(t.startswith("After: p=") for t in shown_texts(tab)), "the new label")
         sliders = [m for m in tab.received if m.get("type") == "GuiSliderMessage"
                    and m.get("props", {}).get("label") == "Stiffness"]
         assert sliders[-1]["props"]["max"] == 50 and sliders[0]["props"]["max"] == 20
         assert sliders[-1]["value"] == k_user  # the new slider shows the kept value
         assert token_of(tab) == token and len(lab.classroom.sessions) == 1
+        # the strip chart (its expressions unchanged) kept the points from before the save
+        x_points = session.view.panel.plots[0].buffer.data()[0]
+        assert x_points[0] < t_saved - 0.3 and x_points[-1] > t_saved
+        assert np.allclose(camera.position, [4.0, -2.0, 1.5]) and np.allclose(camera.look_at, [0.5, 0.0, 0.2])
+        moved = [m for m in tab.received if m.get("type") == "SetCameraPositionMessage"]
+        assert moved and np.allclose(moved[-1]["position"], [4.0, -2.0, 1.5])  # what the tab was told last
         line = out.getvalue().strip().splitlines()[-1]
         assert "1 tab reloaded" in line and "new initial values: s" in line, line
         outcome, report, since_save = watcher.last_report
@@ -178,8 +205,8 @@ def test_a_broken_save_shows_the_error_instead_of_the_lab_until_a_good_one(live)
 
         save(spec, SPEC.format(s=0.5, kmax=20, word="Fixed"))
         poll_until(watcher, "rebuilt")
-        await tab.until(lambda: any(t.startswith("Fixed: p=") for t in tab.texts()), "the lab back")
-        await late.until(lambda: any(t.startswith("Fixed: p=") for t in late.texts()), "the late tab's lab")
+        await tab.until(lambda: any(t.startswith("Fixed: p=") for t in shown_texts(tab)), "the lab back")
+        await late.until(lambda: any(t.startswith("Fixed: p=") for t in shown_texts(late)), "the late tab's lab")
         assert token_of(tab) == token and len(lab.classroom.sessions) == 2
         app = lab.classroom.sessions[token].app
         assert app.is_playing() and app.model.p >= p_paused  # it plays on from where it was
@@ -228,7 +255,7 @@ def test_a_spec_broken_from_the_start_shows_its_error_then_its_lab(tmp_path: Pat
             assert not lab.classroom.sessions
             save(spec, SPEC.format(s=0.5, kmax=20, word="Good"))
             poll_until(watcher, "rebuilt")
-            await tab.until(lambda: any(t.startswith("Good: p=") for t in tab.texts()), "the lab")
+            await tab.until(lambda: any(t.startswith("Good: p=") for t in shown_texts(tab)), "the lab")
             assert len(lab.classroom.sessions) == 1
             await tab.close()
 

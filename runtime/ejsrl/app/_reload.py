@@ -401,28 +401,31 @@ def _camera_of(client: Any) -> tuple[Any, ...] | None:
 def _restore_camera(client: Any, camera: tuple[Any, ...]) -> None:
     position, look_at, up, fov = camera
     try:
-        with client.atomic():
+        with client.atomic():  # viser moves look_at with the position: the position first
             client.camera.up_direction = up
-            client.camera.look_at = look_at
             client.camera.position = position
+            client.camera.look_at = look_at
             client.camera.fov = fov
     except Exception:  # noqa: BLE001
         log.debug("restoring a tab's camera failed", exc_info=True)
 
 
 def _plot_key(plot: Any) -> tuple[Any, ...]:
-    """What a strip chart's points depend on: its x and y expressions and its window."""
+    """What a plot's recorded points depend on: its x, each series' data expressions and
+    kind, its window and length (labels, colours and ranges do not change the points)."""
 
     def src(prop: Any) -> Any:
         return getattr(prop, "source", repr(prop))
 
-    series = tuple(src(getattr(s, "y", None)) for s in getattr(plot, "series", ()))
-    return (type(plot).__name__, src(getattr(plot, "x", None)), series, getattr(plot, "window", None))
+    series = tuple((src(getattr(s, "y", None)), src(getattr(s, "x", None)), getattr(s, "kind", None),
+                    getattr(s, "max_points", None)) for s in getattr(plot, "series", ()))
+    return (type(plot).__name__, src(getattr(plot, "x", None)), series, getattr(plot, "window", None),
+            getattr(plot, "max_points", None))
 
 
 def _keep_plots(view: Any, old_view: Any, app: App) -> None:
-    """Give the new view's charts the points of the old view's charts in the same places
-    whose expressions did not change (a chart whose data changed starts afresh)."""
+    """Give the new view's plots the points of the old view's plots in the same places
+    whose data expressions did not change (a plot whose data changed starts afresh)."""
     try:
         pairs = list(zip(view.panel.plots, old_view.panel.plots))
     except AttributeError:
@@ -430,10 +433,7 @@ def _keep_plots(view: Any, old_view: Any, app: App) -> None:
     with app.lock:
         for new, old in pairs:
             try:
-                if _plot_key(new.plot) != _plot_key(old.plot) or type(new.buffer) is not type(old.buffer):
-                    continue
-                new.buffer = old.buffer
-                new._sent_rev = -1
-                new.reshow()
-            except Exception:  # noqa: BLE001 - a chart of another kind: it starts afresh
-                log.debug("keeping a chart's points failed", exc_info=True)
+                if _plot_key(new.plot) == _plot_key(old.plot):
+                    new.adopt(old)
+            except Exception:  # noqa: BLE001 - a plot of another kind: it starts afresh
+                log.debug("keeping a plot's points failed", exc_info=True)
