@@ -70,12 +70,13 @@ def frame_ticks(p: dict) -> tuple[list[str], list[str]]:
 
 def tick_labels(texts: list) -> tuple[list[str], list[str]]:
     """(x tick labels, y tick labels) of a plot's drawn ``[text, x, y, rotated]``: the x ticks
-    share a baseline, the y ticks a right edge (rotated text, the y axis' title, is left out)."""
+    share a baseline (the most common one), the y ticks a right edge left of every other text
+    (rotated text, the y axis' title, is left out)."""
     texts = [t for t in texts if not (len(t) > 3 and t[3])]
     by_y = Counter(round(t[2], 1) for t in texts)
     row = by_y.most_common(1)[0][0] if by_y else None
-    by_x = Counter(round(t[1], 1) for t in texts if round(t[2], 1) != row)
-    col = by_x.most_common(1)[0][0] if by_x else None
+    rest = [round(t[1], 1) for t in texts if round(t[2], 1) != row]
+    col = min(rest) if rest else None  # the y ticks' right edge is left of every other text
     xs = [t[0] for t in texts if round(t[2], 1) == row]
     ys = [t[0] for t in texts if round(t[1], 1) == col and round(t[2], 1) != row]
     return xs, ys
