@@ -120,12 +120,13 @@ class Compiler:
         return new
 
     # -- code blocks ---------------------------------------------------------------------------------
-    def code_lines(self, code: Code | None, path: Path_, what: str, *, names: Names | None = None) -> list[Line]:
-        """The rewritten lines of a code block (a string or a list of pages)."""
+    def code_lines(self, code: Code | None, path: Path_, what: str, *, names: Names | None = None, extra_locals: tuple[str, ...] = ()) -> list[Line]:
+        """The rewritten lines of a code block (a string or a list of pages); ``extra_locals``:
+        names its pages may use as locals (assigned by another of its pages)."""
         if code is None:
             return []
         if isinstance(code, str):
-            return self._block_lines(path, what, names)
+            return self._block_lines(path, what, names, extra_locals)
         lines: list[Line] = []
         for i, page in enumerate(code):
             ppath = path + (i, "code")
@@ -134,12 +135,12 @@ class Compiler:
                 lines.append(Line(f"# {title}: disabled"))
                 continue
             lines.append(Line(f"# {title}"))
-            lines.extend(self._block_lines(ppath, f"{what} ({title})", names))
+            lines.extend(self._block_lines(ppath, f"{what} ({title})", names, extra_locals))
         return lines
 
-    def _block_lines(self, path: Path_, what: str, names: Names | None = None) -> list[Line]:
+    def _block_lines(self, path: Path_, what: str, names: Names | None = None, extra_locals: tuple[str, ...] = ()) -> list[Line]:
         snippet = self.snippet(path, what)
-        tree = self.parse_rewrite(snippet, names=names)
+        tree = self.parse_rewrite(snippet, names=names, extra_locals=extra_locals)
         if tree is None or not isinstance(tree, ast.Module) or not tree.body:
             return []
         return self.tree_lines(snippet, tree)
@@ -435,7 +436,7 @@ class Compiler:
         listed = f"[{', '.join(r.source for r in rates.values())}]"
         rates_fn: Expr | str
         preliminary = None
-        pre = self.code_lines(ode.preliminary, path + ("preliminary",), f"the preliminary code of {title}") if ode.preliminary is not None else []
+        pre = self.code_lines(ode.preliminary, path + ("preliminary",), f"the preliminary code of {title}", extra_locals=shared) if ode.preliminary is not None else []
         rate_lines = [Line("return [")] + [Line(f"    {r.source},  # d{s}/d{ind}", r.where) for s, r in rates.items()] + [Line("]")]
         if shared and pre:  # the preliminary's locals are the rates': one method runs both
             head = Line(f"# preliminary: {', '.join(shared)} {'is a local' if len(shared) == 1 else 'are locals'} shared with the rates")

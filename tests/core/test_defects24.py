@@ -313,3 +313,18 @@ def test_ejsgen_docs_prints_the_vision_functions(capsys) -> None:
     out = capsys.readouterr().out
     assert "## The vision library" in out
     assert "| `color_segment(img, color, *, min_saturation=80, min_value=50, min_area=10)` |" in out
+
+
+def test_preliminary_pages_share_their_locals_and_an_event_is_told_it_cannot(tmp_path: Path) -> None:
+    text = PRELIMINARY.replace(
+        "        preliminary: |\n          acc = -w**2*x\n          calls = calls + 1\n",
+        "        preliminary:\n          - {name: force, code: \"f = -w**2*x\"}\n          - {name: accel, code: \"acc = f / 1.0\"}\n",
+    )
+    app = load_app(build_text(tmp_path, text))
+    for _ in range(100):
+        app.step_once()
+    assert app.model.x == pytest.approx(np.cos(2.0), abs=1e-7)
+    bad = text.replace("          v: acc\n", "          v: acc\n        events:\n          - {name: turn, when: \"acc\", action: \"calls = calls + 1\"}\n")
+    errors = build_errors(tmp_path, bad)
+    line, col = position(bad, "when: \"acc\"", "acc")
+    assert len(errors) == 1 and errors[0].startswith(f"bad.ejs.yaml:{line}:{col}: error: unknown name 'acc' here: it is a local of the preliminary code")
