@@ -209,13 +209,24 @@ def _spec_line(file: str, line: int) -> str | None:
 
 
 def _installed_paths() -> list[Path]:
+    """Where installed code lives: the standard library, every site-packages folder (the
+    user's too) and ejsgen's own packages (an editable install lives in a checkout)."""
+    import site
+
+    import ejsgen
+    import ejsrl
+
     paths = {sysconfig.get_paths()[k] for k in ("stdlib", "platstdlib", "purelib", "platlib")}
-    return [Path(p).resolve() for p in paths if p]
+    paths.add(site.getusersitepackages())
+    paths.update(p for p in sys.path if Path(p).name in ("site-packages", "dist-packages"))
+    found = [Path(p).resolve() for p in paths if p]
+    return found + [Path(m.__file__).resolve().parent for m in (ejsgen, ejsrl)]
 
 
 def local_modules(plan: Any) -> dict[str, Path]:
     """The modules the spec's ``imports:`` name that are files outside the Python
-    installation (the author's own): module name -> file."""
+    installation and outside ejsgen (the author's own): module name -> file. They are
+    watched, and imported afresh for every build."""
     installed = _installed_paths()
     out: dict[str, Path] = {}
     for text in getattr(plan, "user_imports", []):
@@ -230,6 +241,8 @@ def local_modules(plan: Any) -> dict[str, Path]:
         else:
             continue
         for name in names:
+            if name.split(".")[0] in ("ejsrl", "ejsgen"):
+                continue
             try:
                 found = importlib.util.find_spec(name)
             except (ImportError, ValueError):
@@ -392,8 +405,8 @@ def cmd_watch(spec: str, app_args: list[str], *, output: str | None = None,
             first = rebuilder.rebuild()
             watcher = Watcher(rebuilder, lab, first, output=output)
             title = first.build.meta.title if first.build is not None else path.name
+            watcher.start(first)  # the build (or its error) is there before the first tab connects
             server = lab.start(args.host, args.port, allow_origins=origins, title=title)
-            watcher.start(first)
             said = io.StringIO()
             with contextlib.redirect_stdout(said):  # where it serves (its warnings go to stderr as they are)
                 announce(title, args.host, server.get_port(), places=lab.max_sessions, asked_port=args.port)

@@ -195,3 +195,23 @@ def test_watch_refuses_options_it_cannot_serve_with(tmp_path: Path) -> None:
         assert r.returncode == 2 and says in r.stderr, (option, r.stderr)
     r = subprocess.run([sys.executable, "-P", "-m", "ejsgen", "run", "--help"], capture_output=True, text=True, timeout=120)
     assert "--watch" in r.stdout and "one process" in " ".join(r.stdout.split())
+
+
+def test_the_runtime_and_installed_packages_are_not_imported_again(tmp_path: Path) -> None:
+    """Only the author's own modules are read afresh: importing ejsrl again would make new
+    classes (a kept ``Robot`` would no longer be a ``Robot``) and cost a second a save."""
+    import sys
+
+    import ejsrl.robotics
+
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="K")
+                    .replace("title: Watched spring\n", "title: Watched spring\n"
+                             "imports: [from ejsrl.robotics import models, import numpy.linalg, import json]\n"))
+    rb = Rebuilder(spec, tmp_path / "builds", [])
+    before = (sys.modules["ejsrl.robotics"], sys.modules["numpy.linalg"], sys.modules["json"])
+    out = rb.rebuild()
+    assert out.build is not None, out.error
+    assert rb.modules == {} and rb.files(out.plan) == [spec]
+    assert (sys.modules["ejsrl.robotics"], sys.modules["numpy.linalg"], sys.modules["json"]) == before
+    assert before[0] is ejsrl.robotics
