@@ -215,3 +215,24 @@ def test_the_runtime_and_installed_packages_are_not_imported_again(tmp_path: Pat
     assert rb.modules == {} and rb.files(out.plan) == [spec]
     assert (sys.modules["ejsrl.robotics"], sys.modules["numpy.linalg"], sys.modules["json"]) == before
     assert before[0] is ejsrl.robotics
+
+
+def test_with_o_dir_every_good_build_is_also_written_as_a_full_app(tmp_path: Path) -> None:
+    import io
+
+    from ejsgen._watch import Watcher
+    from ejsrl.app._reload import LiveLab
+
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="First"))
+    rb = Rebuilder(spec, tmp_path / "builds", [])
+    first = rb.rebuild()
+    out = tmp_path / "kept"
+    watcher = Watcher(rb, LiveLab(), first, output=str(out), log=io.StringIO(), err=io.StringIO(), sleep=lambda s: None)
+    watcher.start(first)
+    assert "'First'" in (out / "app.py").read_text() and (out / "ejsrl").is_dir() and (out / "requirements.txt").is_file()
+    spec.write_text(SPEC.format(k=4.0, doc="d", s=0.5, kmax=20, label="Second"))
+    os.utime(spec, ns=(spec.stat().st_mtime_ns + 1_000_000,) * 2)
+    assert watcher.poll_once() == "rebuilt"
+    assert "'Second'" in (out / "app.py").read_text()
+    assert [p.name for p in (tmp_path / "builds").iterdir()] == ["build-2"]  # the older build folder is gone

@@ -356,7 +356,13 @@ class LiveLab:
             if client is None:  # a closed tab: its view is built when it comes back
                 return names, 0
             _clear(client)
-            classroom._attach(session, client, False)  # the new panel and scene, the token, playing again
+            try:
+                classroom._attach(session, client, False)  # the new panel and scene, the token, playing again
+            except Exception as exc:  # noqa: BLE001 - a view the runtime cannot build: say so in the tab
+                log.exception("ejsrl: showing the new build failed")
+                _show_error_to(client, f"internal error: the new lab could not be shown ({type(exc).__name__}: {exc}); "
+                                       "please report it. The next save tries again.")
+                return names, 0
             view = session.view
             if view is not None and not view.closed:
                 if old_view is not None:
