@@ -236,3 +236,26 @@ def test_with_o_dir_every_good_build_is_also_written_as_a_full_app(tmp_path: Pat
     assert watcher.poll_once() == "rebuilt"
     assert "'Second'" in (out / "app.py").read_text()
     assert [p.name for p in (tmp_path / "builds").iterdir()] == ["build-2"]  # the older build folder is gone
+
+
+def test_a_saved_data_file_is_what_the_rebuilt_lab_reads(tmp_path: Path) -> None:
+    """The data-fitting lab reads measured.csv by name; a save of the CSV rebuilds the lab
+    and its new model holds the new data (the rebuilt app's assets are beside its app.py)."""
+    import shutil
+
+    from testkit import EXAMPLES
+
+    shutil.copy2(EXAMPLES / "data_fitting.ejs.yaml", tmp_path)
+    shutil.copytree(EXAMPLES / "data_fitting", tmp_path / "data_fitting")
+    csv = tmp_path / "data_fitting" / "measured.csv"
+    rb = Rebuilder(tmp_path / "data_fitting.ejs.yaml", tmp_path / "builds", [])
+    first = rb.rebuild()
+    assert first.build is not None, first.error
+    app = first.build.make_app()
+    assert app.error is None and app.model.data.shape == (81, 2)
+    watch = FileWatch(rb.files(first.plan), sleep=lambda s: None)
+    lines = csv.read_text().splitlines(keepends=True)
+    csv.write_text("".join(lines[:-1]))  # one measurement fewer
+    assert watch.changed()
+    again = rb.rebuild()
+    assert again.build is not None and again.build.make_app().model.data.shape == (80, 2)
