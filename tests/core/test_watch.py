@@ -259,3 +259,21 @@ def test_a_saved_data_file_is_what_the_rebuilt_lab_reads(tmp_path: Path) -> None
     assert watch.changed()
     again = rb.rebuild()
     assert again.build is not None and again.build.make_app().model.data.shape == (80, 2)
+
+
+def test_the_users_camera_is_kept_unless_the_author_changed_the_specs_camera() -> None:
+    """A reload keeps the tab's camera where the user left it, unless the spec's 3D ``view``
+    element changed (then the new view shows the camera the author asked for)."""
+    from ejsrl.app._reload import _camera_spec
+    from ejsrl.view.elements import Dynamic, Node3D, Scene
+
+    def lab(preset: str, color: str, *, view: bool = True) -> list:
+        nodes = [Node3D("sphere", "bob", position=Dynamic(lambda m: (m.x, 0, 0), "[x, 0, 0]"), color=color)]
+        if view:
+            nodes.insert(0, Node3D("view", "view1", props={"preset": preset, "follow": Dynamic(lambda m: "bob", "'bob'")}))
+        return [Scene(nodes)]
+
+    assert _camera_spec(lab("xz", "red")) == _camera_spec(lab("xz", "navy"))  # a colour: the camera stays
+    assert _camera_spec(lab("xz", "red")) != _camera_spec(lab("xy", "red"))  # the spec's camera changed
+    assert _camera_spec(lab("xz", "red")) != _camera_spec(lab("xz", "red", view=False))
+    assert _camera_spec(lab("xz", "red", view=False)) == _camera_spec(lab("xz", "navy", view=False)) == []

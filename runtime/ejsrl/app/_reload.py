@@ -341,8 +341,10 @@ class LiveLab:
             old_view = session.view
             client = self._client(session.client_id)
             live = old_view is not None and not old_view.closed
-            # the camera where the user left it (also while a build error was shown)
-            camera = _camera_of(client) if client is not None and old_view is not None else None
+            # the camera where the user left it (also while a build error was shown), unless
+            # the author changed the camera the spec asks for: then the new one shows it
+            keep_camera = old_view is not None and _camera_spec(old_app.view) == _camera_spec(build.view)
+            camera = _camera_of(client) if client is not None and keep_camera else None
             if live:
                 Classroom._close_view(session, old_view)  # pauses it, remembering whether it played
             classroom.scheduler.remove(session)
@@ -414,6 +416,42 @@ def _restore_camera(client: Any, camera: tuple[Any, ...]) -> None:
             client.camera.fov = fov
     except Exception:  # noqa: BLE001
         log.debug("restoring a tab's camera failed", exc_info=True)
+
+
+def _fingerprint(value: Any) -> Any:
+    """A comparable digest of a view element's definition: expressions by their spec text
+    (``Dynamic.source``), functions by name, containers and dataclasses field by field."""
+    import dataclasses
+
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return (type(value).__name__, tuple((f.name, _fingerprint(getattr(value, f.name)))
+                                            for f in dataclasses.fields(value)))
+    if hasattr(value, "source") and hasattr(value, "fn"):  # a Dynamic
+        return ("dynamic", value.source)
+    if isinstance(value, dict):
+        return tuple(sorted((str(k), _fingerprint(v)) for k, v in value.items()))
+    if isinstance(value, (list, tuple)):
+        return tuple(_fingerprint(v) for v in value)
+    if isinstance(value, np.ndarray):
+        return ("array", value.shape, value.tobytes())
+    if callable(value):
+        return ("function", getattr(value, "__qualname__", repr(type(value))))
+    return repr(value)
+
+
+def _camera_spec(view: Any) -> list[Any]:
+    """The spec's camera of the 3D view: the fingerprints of its ``view`` elements (none: the
+    framed first view)."""
+    from ejsrl.world.binding import scene_elements
+
+    found: list[Any] = []
+    stack = list(scene_elements(list(view or [])))
+    while stack:
+        element = stack.pop()
+        if getattr(element, "kind", None) == "view":
+            found.append(_fingerprint(element))
+        stack.extend(getattr(element, "children", None) or [])
+    return found
 
 
 def _plot_key(plot: Any) -> tuple[Any, ...]:
