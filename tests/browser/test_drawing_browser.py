@@ -31,15 +31,18 @@ model:
     label_text: "<b>bold</b><img src=x onerror=window.__pwn=1>"
 view:
   - markdown: {text: "Notes about the lab"}
-  - drawing:
-      x_range: [-4, 4]
-      y_range: [-3, 3]
-      height: 300
-      keys: {ArrowUp: "count = count + 1", a: "count = count + 10"}
+  - folder:
+      label: The panel
       children:
-        - particle: {name: red, position: [px, py], radius: 0.3, color: "#ff0000"}
-        - particle: {name: blue, position: [bx, by], radius: 0.3, color: "#0000ff", drag: {bind: bx, along: x, region: [-2, 2, -3, 3]}}
-        - text: {position: [0, -1], text: "{label_text}", size: 16, color: black}
+        - drawing:
+            x_range: [-4, 4]
+            y_range: [-3, 3]
+            height: 300
+            keys: {ArrowUp: "count = count + 1", a: "count = count + 10"}
+            children:
+              - particle: {name: red, position: [px, py], radius: 0.3, color: "#ff0000"}
+              - particle: {name: blue, position: [bx, by], radius: 0.3, color: "#0000ff", drag: {bind: bx, along: x, region: [-2, 2, -3, 3]}}
+              - text: {position: [0, -1], text: "{label_text}", size: 16, color: black}
   - keyboard: {keys: {ArrowUp: "count3 = count3 + 1"}}
   - slider: {bind: px, min: -3, max: 3, label: Red x}
   - scene:
@@ -242,5 +245,37 @@ def test_markup_in_a_text_element_is_drawn_as_text(lab, browser_context):
                               " return c.measureText('<b>bold</b><img src=x onerror=window.__pwn=1>').width; })()")
         dark_cols = np.where((band < 100).any(axis=0))[0]
         assert dark_cols.max() - dark_cols.min() > 0.8 * width
+    finally:
+        page.close()
+
+
+@pytest.mark.browser
+def test_the_panel_survives_its_folder_closed_and_opened(lab, browser_context):
+    app, url = lab
+    page = open_tab(browser_context, url)
+    try:
+        model = session_model(app, page).model
+        shown = ("(() => { const c = document.querySelector('canvas.ejs2d-c');"
+                 " return !!c && c.checkVisibility() && Math.abs(c.getBoundingClientRect().height - 300) < 1; })()")
+        page.get_by_text("The panel").first.click()  # close the folder
+        wait_until(lambda: not page.evaluate(shown), what="the folder to close")
+        page.get_by_text("The panel").first.click()  # ... and open it again
+        wait_until(lambda: page.evaluate(shown), what="the folder to open again")
+        boxes: list = []  # the folder's opening animation moves the canvas: wait until it stays put
+        wait_until(lambda: boxes.append(canvas_box(page)) or (len(boxes) > 3 and boxes[-1] == boxes[-2] == boxes[-3]),
+                   what="the canvas to stop moving")
+        # drawn again (the red disc at (1, 2)), and a drag still reaches the server
+        box = canvas_box(page)
+        cx, cy = world_to_css(box, 1.0, 2.0)
+        rgb = page.evaluate(f"(() => {{ const c = document.querySelector('canvas.ejs2d-c'); const r = devicePixelRatio;"
+                            f" return Array.from(c.getContext('2d').getImageData(Math.round({cx} * r), Math.round({cy} * r), 1, 1).data); }})()")
+        assert rgb[:3] == [255, 0, 0]
+        sx, sy = world_to_css(box, 0.0, -2.0)
+        tx, _ = world_to_css(box, 1.0, -2.0)
+        page.mouse.move(box["x"] + sx, box["y"] + sy)
+        page.mouse.down()
+        page.mouse.move(box["x"] + tx, box["y"] + sy, steps=4)
+        page.mouse.up()
+        wait_until(lambda: abs(model.bx - 1.0) < 0.05, what="bx dragged to 1 after the folder opened again")
     finally:
         page.close()

@@ -141,3 +141,20 @@ def test_a_good_panel_builds_into_records_of_the_app(tmp_path) -> None:
     assert drawing.children[0].drag.bind == ("P",) and drawing.children[0].drag.set_x is None
     assert drawing.children[1].drag.along == "curve"
     assert drawing.children[2].drag.handle == "end"
+
+
+def test_the_panel_engine_loads_from_a_pyz_bundle(tmp_path) -> None:
+    import subprocess
+    import sys
+
+    from ejsgen.cli import build
+    from testkit import EXAMPLES
+
+    out = build(EXAMPLES / "projectile_2d.ejs.yaml", tmp_path / "proj", bundle=True)
+    pyz = out / "proj.pyz"
+    code = ("import sys; sys.path.insert(0, sys.argv[1]); from ejsrl.view import _panel2d as p; "
+            "assert '.pyz' in p.__file__, p.__file__; print(len(p.engine_js())); print('window.__ejs2d' in p.engine_js())")
+    r = subprocess.run([sys.executable, "-P", "-c", code, str(pyz)], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    size, found = r.stdout.split()
+    assert int(size) > 10_000 and found == "True"

@@ -73,7 +73,7 @@
   };
 
   // keys of the 3D view: reported while the 3D view has the focus (it was clicked last)
-  function scene3d(t) { return !!(t && t.tagName === "CANVAS" && !t.classList.contains("ejs2d-c")); }
+  function scene3d(t) { return !!(t && t.tagName === "CANVAS" && !t.classList.contains("ejs2d-c") && !t.classList.contains("ejs2d-k")); }
   function sceneKeys(p) {
     if (p.sceneKeys) return;
     p.sceneKeys = true;
@@ -142,12 +142,12 @@
     var c = p.canvas, f = p.frame;
     if (!c || !c.isConnected) return;
     var dpr = window.devicePixelRatio || 1;
-    var w = c.clientWidth, h = c.clientHeight;
+    var rect = c.getBoundingClientRect(), w = rect.width, h = rect.height;   // fractional CSS px
     if (w <= 0 || h <= 0) return;
     var W = Math.round(w * dpr), H = Math.round(h * dpr);
     if (c.width !== W || c.height !== H) { c.width = W; c.height = H; }
     var ctx = c.getContext("2d");
-    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    ctx.setTransform(W / w, 0, 0, H / h, 0, 0);   // one canvas pixel per device pixel
     ctx.clearRect(0, 0, w, h);
     if (!f) return;
     if (f.background) { ctx.fillStyle = f.background; ctx.fillRect(0, 0, w, h); }

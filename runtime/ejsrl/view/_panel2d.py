@@ -210,7 +210,8 @@ def _canvas_html(dom_id: str, key: str, input_uuid: str, height: int, scene_keys
         f'<div data-ejs2d="{html.escape(dom_id)}" data-key="{html.escape(key)}" data-ev="{html.escape(input_uuid)}"'
         f'{" data-scene-keys=1" if scene_keys else ""} '
         f'style="width:100%;height:{int(height)}px;position:relative">'
-        f'<canvas class="ejs2d-c" tabindex="0" style="width:100%;height:100%;display:block;touch-action:none"></canvas></div>'
+        f'<canvas class="{"ejs2d-k" if scene_keys else "ejs2d-c"}" tabindex="{-1 if scene_keys else 0}" '
+        f'style="width:100%;height:100%;display:block;touch-action:none"></canvas></div>'
         f'<img alt="" style="display:none" src="data:," onerror="{engine}">'
     )
 
