@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from ejsrl.view._plot_frame import decode_xy
-from ejsrl.view._plots import PlotBinding, PlotShapeError
+from ejsrl.view._plots import PlotBinding
 from ejsrl.view.elements import Dynamic, Plot, Series, value_of
 
 
@@ -37,13 +37,12 @@ class _App:
     def __init__(self) -> None:
         self.model = _Model()
         self.error = None
-        self.where = None
 
     def safe_value(self, prop, where=""):
         return None if self.error is not None else value_of(prop, self.model)
 
     def fail(self, exc, where=""):
-        self.error, self.where = exc, where
+        self.error = exc
 
 
 def _items(b: PlotBinding, kind: str) -> list[dict]:
@@ -190,8 +189,8 @@ def test_values_that_cannot_be_drawn_pause_the_app_with_a_message(served, x, y, 
     s = Series(Dynamic(y, "y"), "model", x=Dynamic(x, "x"), where="lab.ejs.yaml:12:9")
     b = PlotBinding(served.server.gui, Plot("p", 0.0, [s], where="lab.ejs.yaml:10:5"), clock=served.clock)
     b.update(app, playing=True)
-    assert isinstance(app.error, PlotShapeError) and message in str(app.error), app.error
-    assert "series 1 (model)" in str(app.error) and app.where == "lab.ejs.yaml:12:9"
+    assert message in app.error.message, app.error
+    assert app.error.message.startswith("the plot 'p' cannot draw series 1 (model): ") and app.error.where == "lab.ejs.yaml:12:9"
 
 
 def test_an_array_against_the_plots_number_x_pauses_with_a_hint(served):
@@ -231,3 +230,11 @@ def test_the_legend_lists_labelled_series_with_their_kind(served):
     one = PlotBinding(served.server.gui, Plot("p", 0.0, series[:1]), clock=served.clock, key="one")
     one.update(app, playing=False)
     assert one.handle.last_frame["legend"] == []  # one series: no legend unless asked
+
+
+def test_a_plot_x_that_is_not_a_number_pauses_at_the_plot(served):
+    app = _App()
+    b = PlotBinding(served.server.gui, Plot("p", Dynamic(lambda m: "later", "label"), [Series(Dynamic(lambda m: m.t, "t"), "t")], where="lab.ejs.yaml:10:5"), clock=served.clock)
+    b.update(app, playing=True)
+    assert app.error.message == "the plot 'p' cannot draw: the plot's x must be a number or a 1-D array of numbers, not 'later'"
+    assert app.error.where == "lab.ejs.yaml:10:5"

@@ -187,15 +187,15 @@ class PlotBinding:
             name = f"series {i + 1} ({self.labels[i] or s.kind})"
             try:
                 if s.kind == "histogram":
-                    v = _numbers(sx, f"the x of {name}")
+                    v = _numbers(sx, "its x")
                     if v.ndim == 0:
                         self._trace(i).append(float(v), 0.0, clock)
                         self.arrays.pop(i, None)
                     else:
                         self._set_array(i, v)
                     continue
-                xv = px if s.x is None else _numbers(sx, f"the x of {name}")
-                yv = _numbers(sy, f"the y of {name}")
+                xv = px if s.x is None else _numbers(sx, "its x")
+                yv = _numbers(sy, "its y")
                 assert xv is not None
                 if xv.ndim == 0 and yv.ndim == 0:
                     if s.x is None:
@@ -209,12 +209,12 @@ class PlotBinding:
                     continue
                 x_what = "the plot's x" if s.x is None else "its x"
                 if xv.ndim == 1 and yv.ndim == 1:
-                    raise PlotShapeError(f"{name}: {x_what} and y must have as many values, but {x_what} has {len(xv)} and y has {len(yv)}")
+                    raise PlotShapeError(f"{x_what} and y must have as many values, but {x_what} has {len(xv)} and y has {len(yv)}")
                 hint = " (give the series an x of its own with as many values)" if s.x is None and yv.ndim == 1 else ""
-                raise PlotShapeError(f"{name}: y is {_described(yv)} but {x_what} is {_described(xv)}{hint}; give both as numbers (a history) or both as arrays of one length (a curve)")
+                raise PlotShapeError(f"y is {_described(yv)} but {x_what} is {_described(xv)}{hint}; give both as numbers (a history) or both as arrays of one length (a curve)")
             except PlotShapeError as exc:
                 if problem is None:
-                    problem = PlotShapeError(str(exc))
+                    problem = PlotShapeError(f"{name}: {exc}")
                     problem.where = s.where or plot.where  # type: ignore[attr-defined]
         self._strip = strip
         if strip and px is not None:
@@ -256,7 +256,11 @@ class PlotBinding:
         try:
             self.take(x, values, clock)
         except PlotShapeError as exc:
-            app.fail(exc, getattr(exc, "where", plot.where))
+            from ejsrl.sim.model import UserCodeError
+
+            title = f" '{self.title}'" if self.title else ""
+            sep = " " if str(exc).startswith("series") else ": "
+            app.fail(UserCodeError(f"the plot{title} cannot draw{sep}{exc}", getattr(exc, "where", plot.where)))
 
     def append(self, x: Any, ys: list[Any], clock: float | None = None) -> None:
         """Record one point of the strip chart (x and one number per series; tests, scripted input).
