@@ -202,3 +202,16 @@ def test_a_sweep_on_a_dask_local_cluster_reads_the_assets(lab: tuple[Path, Path,
     assert proc.returncode == 0, proc.stderr
     assert "on a Dask LocalCluster of 2 workers" in proc.stderr
     assert [float(v) for v in read(tmp_path / "dask.summary.csv")["kmean"]] == pytest.approx([want["mean"], 2 * want["mean"]], rel=1e-12)
+
+
+def test_a_cache_folder_others_may_write_into_is_not_used(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    from ejsrl.app._assets import asset_cache_root
+
+    shared = tmp_path / "xdg"
+    (shared / "ejsgen" / "assets").mkdir(parents=True)
+    (shared / "ejsgen" / "assets").chmod(0o777)  # as a folder another user planted would be
+    monkeypatch.setenv("XDG_CACHE_HOME", str(shared))
+    monkeypatch.setattr("tempfile.gettempdir", lambda: str(tmp_path / "tmp"))
+    root = asset_cache_root()
+    assert root == tmp_path / "tmp" / f"ejsgen-assets-{os.getuid()}"
+    assert stat.S_IMODE(root.stat().st_mode) == 0o700

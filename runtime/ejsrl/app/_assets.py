@@ -102,11 +102,20 @@ def asset_cache_root() -> Path:
     for root in candidates:
         try:
             root.mkdir(parents=True, exist_ok=True, mode=0o700)
-            if os.access(root, os.W_OK | os.X_OK):
+            if os.access(root, os.W_OK | os.X_OK) and _ours(root):
                 return root
         except OSError:
             continue
     raise OSError("no writable folder for the app's assets: set XDG_CACHE_HOME to a folder you can write")
+
+
+def _ours(folder: Path) -> bool:
+    """Whether ``folder`` is this user's and no one else may write into it (a folder someone
+    else made in the shared temporary folder, to plant files there, is not used)."""
+    if not hasattr(os, "getuid"):
+        return True
+    st = folder.lstat()
+    return stat.S_ISDIR(st.st_mode) and st.st_uid == os.getuid() and not st.st_mode & (stat.S_IWGRP | stat.S_IWOTH)
 
 
 def bundle_assets(archive: Path | str) -> Path:
