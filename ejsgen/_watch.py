@@ -7,9 +7,9 @@ module, some tens of milliseconds, not the second a new ``ejsgen run`` takes.
 
 - **What is watched**: the spec, every file it copies into the app (``assets:``, meshes,
   FMUs) and the local Python modules its ``imports:`` name (files outside the Python
-  installation). Each is polled :data:`POLL_SECONDS` apart by modification time and size;
-  a file that moved is read only once it has kept both for :data:`SETTLE_SECONDS` (an
-  editor may write in several steps), and a save that leaves the content as it was
+  installation). Each is polled :data:`POLL_SECONDS` apart by modification time, size and
+  inode (a save by renaming a new file over the old one); a file that moved is read only
+  once it has kept them for :data:`SETTLE_SECONDS` (an editor may write in several steps), and a save that leaves the content as it was
   (the same SHA-256) rebuilds nothing.
 - **The rule of kept values** (:func:`kept_variables`): a variable keeps its current value
   across the reload when its declaration (initial value or ``expr:``, and its type) is
@@ -107,12 +107,14 @@ def kept_variables(old: Any, new: Any) -> set[str]:
 # -- watching files ------------------------------------------------------------------------------------
 
 
-def _stat(path: Path) -> tuple[int, int] | None:
+def _stat(path: Path) -> tuple[int, int, int] | None:
+    """(modification time in ns, size, inode): an editor that saves by renaming a new file over
+    the old one changes the inode."""
     try:
         st = path.stat()
     except OSError:
         return None
-    return (st.st_mtime_ns, st.st_size)
+    return (st.st_mtime_ns, st.st_size, st.st_ino)
 
 
 def _digest(path: Path) -> str | None:
@@ -132,7 +134,7 @@ class FileWatch:
                  clock: Callable[[], float] = time.monotonic) -> None:
         self.sleep, self.clock = sleep, clock
         self.paths: list[Path] = []
-        self._stats: dict[Path, tuple[int, int] | None] = {}
+        self._stats: dict[Path, tuple[int, int, int] | None] = {}
         self._digests: dict[Path, str | None] = {}
         self.watch(paths)
 
@@ -149,7 +151,7 @@ class FileWatch:
         times = [s[0] for s in self._stats.values() if s is not None]
         return max(times) / 1e9 if times else time.time()
 
-    def stats(self) -> dict[Path, tuple[int, int] | None]:
+    def stats(self) -> dict[Path, tuple[int, int, int] | None]:
         return {p: _stat(p) for p in self.paths}
 
     def moved(self) -> bool:

@@ -277,3 +277,17 @@ def test_the_users_camera_is_kept_unless_the_author_changed_the_specs_camera() -
     assert _camera_spec(lab("xz", "red")) != _camera_spec(lab("xy", "red"))  # the spec's camera changed
     assert _camera_spec(lab("xz", "red")) != _camera_spec(lab("xz", "red", view=False))
     assert _camera_spec(lab("xz", "red", view=False)) == _camera_spec(lab("xz", "navy", view=False)) == []
+
+
+def test_a_save_by_renaming_a_new_file_over_the_spec_is_seen(tmp_path: Path) -> None:
+    """Editors that save atomically write a new file and rename it over the old one; the
+    same size and (on a coarse clock) the same time still make a change."""
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text("k: 1.0\n")
+    watch = FileWatch([spec], sleep=lambda s: None)
+    new = tmp_path / ".lab.ejs.yaml.swp"
+    new.write_text("k: 2.0\n")
+    st = spec.stat()
+    os.utime(new, ns=(st.st_atime_ns, st.st_mtime_ns))  # the same time and size as the old file
+    new.replace(spec)
+    assert watch.changed()
