@@ -196,3 +196,18 @@ def test_the_engine_ships_with_the_package() -> None:
     text = engine_js()
     assert "window.__ejs2d" in text and "fillText" in text and "innerHTML" not in text
     assert resources.files("ejsrl.view").joinpath("_panel2d.js").is_file()
+
+
+def test_frames_at_the_rate_but_jittering_are_all_sent() -> None:
+    """A lab at 60 frames/s ticks every 16.7 ms on average, some early: none is held back
+    (a strict minimum interval sent about two frames in three)."""
+    clock = FakeClock()
+    panel = Panel2D(FakeGui(), "p", max_rate=60.0, clock=clock)
+    for i in range(120):
+        clock.advance(0.0150 if i % 2 else 0.0183)
+        panel.show(dict(FRAME, bounds=[0, 1 + i, 0, 1]))
+    assert panel.sent == 120
+    for i in range(120):  # ... but twice the rate is held to it
+        clock.advance(1 / 120)
+        panel.show(dict(FRAME, bounds=[0, 1000 + i, 0, 1]))
+    assert 60 <= panel.sent - 120 <= 62

@@ -233,8 +233,8 @@ class Panel2D:
     ``key``: a name for the panel, unique in its GUI (the canvas carries it as
     ``data-key``); ``height``: CSS pixels; ``on_event(event)``: called with each valid
     event (see :func:`parse_events`), in order, with no app lock held;
-    ``max_rate``: the most frames a second sent (a frame refused by the rate is kept and
-    sent by the next :meth:`show` or :meth:`flush`); ``clock``: monotonic seconds;
+    ``max_rate``: the most frames a second sent, on average (a frame refused by the rate is
+    kept and sent by the next :meth:`show` or :meth:`flush`); ``clock``: monotonic seconds;
     ``scene_keys``: a panel of height 0 that reports the keys pressed while the 3D view has
     the focus (the 3D view was clicked last) instead of its own.
     """
@@ -261,7 +261,8 @@ class Panel2D:
         self.dropped = 0
         self._last_text: str | None = None
         self._pending: str | None = None
-        self._last_push = -math.inf
+        self._last_push = clock()
+        self._budget = 1.0
         self._seq = -1
         self._tokens = MAX_EVENTS_PER_SECOND
         self._token_time = clock()
@@ -293,10 +294,15 @@ class Panel2D:
         if text is None:
             return False
         now = self.clock()
-        if now - self._last_push < 1.0 / self.max_rate:
+        # a budget of frames refilled at max_rate a second (at most 2 kept): frames that come at
+        # the rate but a little early (a 60 frames/s lab's ticks jitter) are not refused
+        self._budget = min(2.0, self._budget + (now - self._last_push) * self.max_rate)
+        self._last_push = now
+        if self._budget < 1.0:
             return False
+        self._budget -= 1.0
         self.frame.content = _frame_html(self.dom_id, text)
-        self._last_text, self._pending, self._last_push = text, None, now
+        self._last_text, self._pending = text, None
         self.sent += 1
         return True
 
