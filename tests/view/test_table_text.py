@@ -234,3 +234,15 @@ def test_text_without_a_table_keeps_its_spaces_and_line_breaks() -> None:
 
     assert keep_spaces("a  b\n  c") == "a &nbsp;b<br>&nbsp;&nbsp;c"
     assert keep_spaces("x | y\nno rule here") == "x | y<br>no rule here"  # a pipe alone makes no table
+
+
+def test_an_array_changed_in_place_is_shown_and_an_unchanged_table_is_not_rebuilt(served) -> None:
+    app, view = served
+    (_values, data, _many), _ = _bindings(view)
+    before = data.shown
+    app.frame()
+    assert data.shown is before  # nothing changed: not formatted again, nothing sent
+    with app.lock:
+        app.model.data[1, 1] = 9.0  # the same array object, one element changed
+    app.frame()
+    assert cells(data.handle.content).rows[2] == ["1.00", "9.00"]

@@ -19,7 +19,7 @@ from ejsrl.view._wire import set_prop
 from ejsrl.view.elements import format_value
 from ejsrl.view.elements_text import Table
 
-__all__ = ["TableBinding", "cell_text", "table_html", "table_cells"]
+__all__ = ["TableBinding", "cell_text", "table_html", "table_cells", "table_values", "same_values"]
 
 #: an array in one cell is written out up to this many numbers (else its shape is shown)
 CELL_ARRAY_MAX = 12
@@ -71,17 +71,46 @@ def _number(x: Any, spec: str) -> str:
         return format(float(x), ".6g")
 
 
-def table_cells(table: Table, value_of: Callable[[Any, str], Any]) -> tuple[list[str], list[str], list[list[str]], int]:
-    """The table's (headers, units, rows of cell texts, rows left out) as the model is now.
-
-    ``value_of(prop, where)`` reads a property (the app's ``safe_value``: None after an error).
-    """
+def table_values(table: Table, value_of: Callable[[Any, str], Any]) -> list[Any]:
+    """What the table shows, read from the model now: each row's value, or the data (an array
+    copy, so a later change of the model's array is seen as one). ``value_of(prop, where)``
+    reads a property (the app's ``safe_value``: None after an error)."""
     if table.data is None:
-        rows = []
-        for r in table.rows:
-            rows.append([r.label, cell_text(value_of(r.value, r.where or table.where), r.format or table.format), r.unit])
-        return ["", "value", "unit"], [], rows, 0
+        return [value_of(r.value, r.where or table.where) for r in table.rows]
     value = value_of(table.data, table.where)
+    if isinstance(value, np.ndarray):
+        value = value.copy()
+    return [value]
+
+
+def same_values(a: list[Any] | None, b: list[Any]) -> bool:
+    """Whether two readings of a table's values are the same (so its HTML would be too)."""
+    if a is None or len(a) != len(b):
+        return False
+    for x, y in zip(a, b):
+        if type(x) is not type(y):
+            return False
+        if isinstance(x, np.ndarray):
+            if x.shape != y.shape or x.dtype != y.dtype or not np.array_equal(x, y, equal_nan=x.dtype.kind in "fc"):
+                return False
+            continue
+        try:
+            if not bool(x == y) and not (x != x and y != y):  # nan == nan here
+                return False
+        except Exception:  # noqa: BLE001 - values that cannot be compared: shown again
+            return False
+    return True
+
+
+def table_cells(table: Table, value_of: Callable[[Any, str], Any], values: list[Any] | None = None) -> tuple[list[str], list[str], list[list[str]], int]:
+    """The table's (headers, units, rows of cell texts, rows left out) as the model is now
+    (``values``: a reading by :func:`table_values`, else one is made)."""
+    if values is None:
+        values = table_values(table, value_of)
+    if table.data is None:
+        rows = [[r.label, cell_text(v, r.format or table.format), r.unit] for r, v in zip(table.rows, values)]
+        return ["", "value", "unit"], [], rows, 0
+    value = values[0]
     if value is None:
         return list(table.columns), list(table.units), [[_MISSING] * max(1, len(table.columns))], 0
     try:
@@ -143,16 +172,25 @@ class TableBinding:
 
     def __init__(self, gui: Any, table: Table, value_of: Callable[[Any, str], Any]) -> None:
         self.table = table
-        self.shown = self._html(value_of)
+        self.values = table_values(table, value_of)
+        self.shown = self._html()
         self.handle = gui.add_html(self.shown)
 
-    def _html(self, value_of: Callable[[Any, str], Any]) -> str:
-        headers, units, rows, more = table_cells(self.table, value_of)
+    def _html(self) -> str:
+        headers, units, rows, more = table_cells(self.table, lambda p, w: None, self.values)
         return table_html(self.table.title, headers, units, rows, more)
 
     def refresh(self, value_of: Callable[[Any, str], Any]) -> None:
-        """Show the model's values now (the caller holds the model lock); sends only a change."""
-        text = self._html(value_of)
+        """Show the model's values now (the caller holds the model lock); sends only a change.
+
+        The values are compared with the last ones shown first: a frame that changed none of
+        them costs a read and a comparison, not the formatting of every cell.
+        """
+        values = table_values(self.table, value_of)
+        if same_values(self.values, values):
+            return
+        self.values = values
+        text = self._html()
         if text != self.shown:
             set_prop(self.handle, "content", text)
             self.shown = text
