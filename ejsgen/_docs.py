@@ -302,7 +302,8 @@ def _reserved() -> str:
         "- A variable may not have the name of a method the generated model defines for the spec (`_rates`, `_page1`, `_button_go`, ...).\n"
         "\nAn import (`import m as NAME`, `from m import NAME`) may not bind a variable's or custom function's name, "
         "a prelude name, or a name of the generated app's module or methods: " + ", ".join(f"`{n}`" for n in app) + ".\n"
-        "\nNot available in spec code (an error says so): " + ", ".join(f"`{n}`" for n in sorted(hidden)) + ".\n"
+        "\nNot available in spec code (an error says so): " + ", ".join(f"`{n}`" for n in sorted(hidden)) + "; "
+        "`open` only reads a file listed under `assets:` (`open('notes.txt')`).\n"
     )
 
 
