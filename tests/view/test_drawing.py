@@ -205,3 +205,63 @@ def test_the_projectile_lands_where_the_closed_form_says(projectile) -> None:
     assert abs(m.t - t_land) < 1e-5
     assert abs(m.x - (x0 + v * np.cos(a) * t_land)) < 1e-4
     assert m.hits == int(np.any(np.abs(m.targets[:, 0] - m.x) < 0.6))
+
+
+PICTURE = """ejs: 1
+title: I
+assets: [dot.png]
+model:
+  variables:
+    img: {expr: "np.zeros((4, 6, 3), dtype=np.uint8)"}
+    show: true
+    shade: 0.5
+view:
+  - drawing:
+      x_range: [0, 10]
+      y_range: [0, 10]
+      axes: true
+      children:
+        - image: {source: img, position: [5, 5], size: [6, 4]}
+        - image: {file: dot.png, position: [1, 1], size: [2, 2]}
+        - particle: {position: [1, 1], visible: show, color: "[shade, 0, 1 - shade]"}
+        - grid: {spacing: 2}
+        - axes: {}
+"""
+
+
+def test_images_visibility_colours_grids_and_axes(tmp_path) -> None:
+    import cv2
+
+    dot = np.zeros((3, 3, 3), dtype=np.uint8)
+    dot[1, 1] = (0, 0, 255)  # BGR: red in the middle
+    cv2.imwrite(str(tmp_path / "dot.png"), dot)
+    app, b = built(tmp_path, PICTURE)
+    app.model.img[1, 2] = (10, 200, 30)
+    b.refresh()
+    images = [it for it in b.frame["items"] if it["t"] == "image"]
+    assert (images[0]["x0"], images[0]["y0"], images[0]["x1"], images[0]["y1"]) == (2.0, 3.0, 8.0, 7.0)
+
+    def decoded(src: str) -> np.ndarray:
+        raw = base64.b64decode(src.removeprefix("data:image/png;base64,"))
+        return cv2.cvtColor(cv2.imdecode(np.frombuffer(raw, np.uint8), cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+
+    assert np.array_equal(decoded(images[0]["src"]), app.model.img)  # the array's pixels, losslessly
+    assert tuple(decoded(images[1]["src"])[1, 1]) == (255, 0, 0)  # the file, read relative to the app
+    particle = [it for it in b.frame["items"] if it["t"] == "circles"][0]
+    assert particle["fill"] == "rgb(128,0,128)"
+    app.model.show = False
+    b.refresh()
+    assert not [it for it in b.frame["items"] if it["t"] == "circles"]
+    grid = [it for it in b.frame["items"] if it["t"] == "segments"][0]
+    rows = xy(grid)
+    vertical = rows[rows[:, 0] == rows[:, 2]]
+    assert set(np.round(vertical[:, 0], 9)) >= {0.0, 2.0, 4.0, 6.0, 8.0, 10.0}
+    assert np.all(np.round(vertical[:, 0] / 2, 9) % 1 == 0)  # every spacing, nothing between
+    axes = [it for it in b.frame["items"] if it["t"] == "arrows"][0]
+    assert np.allclose(xy(axes), [[0, 0, 10, 0], [0, 0, 0, 10]])
+    ticks = dict(b.frame["axes"]["x"]["ticks"])
+    assert ticks[0] == "0" and ticks[10] == "10" and ticks[-2] == "\u22122"
+    # a new picture is encoded again only when its pixels change
+    src = images[0]["src"]
+    b.refresh()
+    assert [it for it in b.frame["items"] if it["t"] == "image"][0]["src"] is src
