@@ -85,6 +85,8 @@ def test_a_log_axis_is_ticked_at_powers_of_ten_labelled_as_numbers():
     assert labels[0] == "0.001" and labels[-1] in ("10000", "100000", "1e5")
     ticks, labels = log_ticks(3.0, 70.0)  # less than two decades: 2 and 5 times them too
     assert ticks == [5.0, 10.0, 20.0, 50.0] and labels == ["5", "10", "20", "50"]
+    ticks, labels = log_ticks(2.4, 14.0)  # within one decade: every whole multiple
+    assert labels == ["3", "4", "5", "6", "7", "8", "9", "10"]
     ticks, labels = log_ticks(1e-9, 1e-7)
     assert labels[0] == "1e\u22129" and len(set(labels)) == len(labels)
     assert log_ticks(0.0, 1.0) == ([], [])  # no log axis through zero

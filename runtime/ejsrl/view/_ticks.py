@@ -16,8 +16,9 @@ The rule for a label's text (``specs/reference.md``, "Plots"):
   in the axis title they read as part of it (is "2m" 2 milli or 2 metres?).
 - A minus sign is the typographic one (U+2212), as in print.
 - A logarithmic axis is ticked at the powers of ten it spans (every 2nd, 3rd ... when it
-  spans many decades), with 2 and 5 times them when it spans less than two decades; its
-  labels follow the same rule ("0.01", "100", "1e6", "2e-5").
+  spans many decades), with 2 and 5 times them when it spans less than two decades, and
+  every whole multiple (2, 3, ... 9 times them) within one decade; its labels are numbers
+  ("0.01", "100", "1e6", "2e-5").
 """
 
 from __future__ import annotations
@@ -110,7 +111,10 @@ def log_ticks(lo: float, hi: float) -> tuple[list[float], list[str]]:
     e0 = math.floor(math.log10(lo) + 1e-9)
     e1 = math.floor(math.log10(hi) + 1e-9)
     decades = math.log10(hi) - math.log10(lo)
-    if decades < 2:
+    if decades < 1:
+        mults = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
+        every = 1
+    elif decades < 2:
         mults = (1.0, 2.0, 5.0)
         every = 1
     else:
