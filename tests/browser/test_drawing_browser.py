@@ -29,6 +29,7 @@ model:
     count: 0
     count3: 0
     label_text: "<b>bold</b><img src=x onerror=window.__pwn=1>"
+    pic: {expr: "np.full((2, 2, 3), [0, 200, 0], dtype=np.uint8)"}
 view:
   - markdown: {text: "Notes about the lab"}
   - folder:
@@ -43,6 +44,7 @@ view:
               - particle: {name: red, position: [px, py], radius: 0.3, color: "#ff0000"}
               - particle: {name: blue, position: [bx, by], radius: 0.3, color: "#0000ff", drag: {bind: bx, along: x, region: [-2, 2, -3, 3]}}
               - text: {position: [0, -1], text: "{label_text}", size: 16, color: black}
+              - image: {source: pic, position: [-3, 2], size: [1, 1]}
   - keyboard: {keys: {ArrowUp: "count3 = count3 + 1"}}
   - slider: {bind: px, min: -3, max: 3, label: Red x}
   - scene:
@@ -138,6 +140,11 @@ def test_a_red_circle_lands_where_the_bounds_put_it_with_crisp_edges(lab, browse
         blurred = [p for p in right if not (tuple(p) == (255, 255, 255) or (p[0] > 200 and p[1] < 60))]
         assert len(blurred) <= 2, f"the edge is blurred over {len(blurred)} device pixels: {right.tolist()}"
         assert tuple(row[red.max() + 4]) == (255, 255, 255)
+        # an image item: its pixels fill the square its position and size give
+        gx, gy = world_to_css(box, -3.0, 2.0)
+        half = 0.5 * scale(box) * 2 - 2  # device pixels, a little inside the edge
+        for dx, dy in ((0, 0), (-half, -half), (half, half)):
+            assert tuple(shot[int(round(gy * 2 + dy)), int(round(gx * 2 + dx))]) == (0, 200, 0)
     finally:
         page.close()
 

@@ -13,7 +13,7 @@
   var SEND_MS = 60;      // at most one message per 60 ms (viser's sender keeps one per 50 ms)
   var MAX_QUEUE = 24;    // events a message carries at most
   var HIT_PX = 10;       // how near (CSS px) a pointer must be to grab a point
-  var E = { panels: {}, images: {}, draws: 0 };
+  var E = { panels: {}, draws: 0 };
   window.__ejs2d = E;
 
   function panel(id) {
@@ -305,17 +305,24 @@
       text(ctx, it.text, X(M, it.x), Y(M, it.y), fin(it.size) ? it.size : 12, it.color, it.align || "center");
       hitPoint(p, it, it.x, it.y, 0, 0);
     } else if (t === "image") {
-      var im = E.images[it.src];
-      if (!im) {
-        im = E.images[it.src] = new Image();
+      // one picture per item of the panel, replaced when its source changes (no cache that grows)
+      if (!p.images) p.images = {};
+      var im = p.images[k];
+      if (!im || im.ejsSrc !== it.src) {
+        var old = im;
+        im = p.images[k] = new Image();
+        im.prev = old && old.complete && old.naturalWidth ? old : old && old.prev;   // shown until this one loads
+        if (im.prev) im.prev.prev = null;
+        im.ejsSrc = it.src;
         im.onload = function () { request(p); };
-        im.src = String(it.src).indexOf("data:image/") === 0 ? it.src : "data:,";
+        im.src = String(it.src).indexOf("data:image/") === 0 ? it.src : "data:,";   // data URLs only: nothing fetched
       }
       x = X(M, it.x0); y = Y(M, it.y1);
       var x3 = X(M, it.x1), y3 = Y(M, it.y0);
-      if (im.complete && im.naturalWidth && isFinite(x) && isFinite(y)) {
+      var shown = im.complete && im.naturalWidth ? im : im.prev;
+      if (shown && isFinite(x) && isFinite(y)) {
         ctx.imageSmoothingEnabled = !!it.smooth;
-        ctx.drawImage(im, Math.min(x, x3), Math.min(y, y3), Math.abs(x3 - x), Math.abs(y3 - y));
+        ctx.drawImage(shown, Math.min(x, x3), Math.min(y, y3), Math.abs(x3 - x), Math.abs(y3 - y));
       }
       hitPoint(p, it, (it.x0 + it.x1) / 2, (it.y0 + it.y1) / 2, 0, 0);
     }
