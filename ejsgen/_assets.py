@@ -22,7 +22,7 @@ from pathlib import Path, PurePosixPath
 
 from ejsgen.errors import Location, SpecError
 
-__all__ = ["checked_asset", "MESH_EXTENSIONS", "ASSET_FUNCTION", "asset_names", "asset_call", "opens_an_asset"]
+__all__ = ["checked_asset", "MESH_EXTENSIONS", "ASSET_FUNCTION", "asset_names", "asset_call", "opens_an_asset", "unlisted_file"]
 
 #: extensions read as meshes by the runtime (``ejsrl.world.mesh``)
 MESH_EXTENSIONS = ("obj", "stl", "ply", "glb", "gltf", "off", "dae", "3mf", "wrl", "wrz", "vrml")
@@ -145,3 +145,43 @@ def opens_an_asset(call: ast.Call, assets: frozenset[str]) -> bool:
         return False
     modes = [a for a in call.args[1:2]] + [k.value for k in call.keywords if k.arg == "mode"]
     return all(isinstance(m, ast.Constant) and isinstance(m.value, str) and m.value and set(m.value) <= _READ_MODES for m in modes)
+
+
+def _looks_like_path(text: str) -> bool:
+    """Whether a string could be a relative file path (``data.csv``, ``img/a.png``), to look for beside the spec."""
+    if not text or len(text) > 255 or "\n" in text or text.strip() != text:
+        return False
+    p = PurePosixPath(text.replace("\\", "/"))
+    return not p.is_absolute() and ".." not in p.parts and bool(p.suffix) and not Path(text).is_absolute()
+
+
+def unlisted_file(call: ast.Call, assets: frozenset[str], spec_dir: Path | None, *, asset_is_ours: bool) -> tuple[ast.AST, str, str] | None:
+    """A file a call names that the built app will not have: ``(node, message, hint)`` or None.
+
+    ``asset('x')`` (``asset_is_ours``: the name is the app's function, not the spec's own)
+    of a path not listed under ``assets:``; or any call whose first argument is the path of
+    a file beside the spec that is not listed (``np.loadtxt('data.csv')`` with no ``assets:``),
+    which would read the working directory's file, not the app's.
+    """
+    if not call.args:
+        return None
+    first = call.args[0]
+    if not (isinstance(first, ast.Constant) and isinstance(first.value, str)) or first.value in assets:
+        return None
+    text = first.value
+    if asset_is_ours and isinstance(call.func, ast.Name) and call.func.id == ASSET_FUNCTION:
+        from ejsgen._suggest import did_you_mean
+
+        return first, f"'{text}' is not listed under 'assets:'", did_you_mean(text, sorted(assets)) or f"list the file: assets: [{text}]"
+    if spec_dir is None or not _looks_like_path(text):
+        return None
+    try:
+        folder = spec_dir.resolve()
+        real = (folder / text).resolve()
+        beside = real.is_file() and real.is_relative_to(folder)
+    except (OSError, ValueError, RuntimeError):
+        return None
+    if not beside:
+        return None
+    return (first, f"'{text}' is a file beside the spec, but it is not listed under 'assets:', so the built app would not have it",
+            f"list it: assets: [{text}]")

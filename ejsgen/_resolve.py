@@ -17,8 +17,9 @@ import ast
 import builtins
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
 
-from ejsgen._assets import ASSET_FUNCTION, asset_call, opens_an_asset
+from ejsgen._assets import ASSET_FUNCTION, asset_call, opens_an_asset, unlisted_file
 from ejsgen._power import power_text
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import CodeSyntaxError, Location, SpecError, UnknownNameError
@@ -65,6 +66,8 @@ class Names:
     extra: set[str] = field(default_factory=set)
     #: the strings that name a listed asset (``ejsgen._assets.asset_names``): each becomes ``asset('...')``
     assets: frozenset[str] = frozenset()
+    #: the spec's folder: a call naming a file there that is not an asset is an error
+    spec_dir: Path | None = None
     #: names that are locals of one block only (a ``preliminary``'s, seen by its page's rates):
     #: name -> (where it is visible, how to share it), said when another block uses the name
     elsewhere: dict[str, tuple[str, str]] = field(default_factory=dict)
@@ -386,6 +389,10 @@ class _Rewriter(ast.NodeTransformer):
                 self._asset_open.add(id(node.func))
             if node.func.id == ASSET_FUNCTION:  # asset('data.csv') written out: already the path
                 self._asset_open.update(id(a) for a in node.args)
+        ours = not (self._is_local(ASSET_FUNCTION) or ASSET_FUNCTION in self.names.variables | self.names.functions)
+        problem = unlisted_file(node, self.names.assets, self.names.spec_dir, asset_is_ours=ours)
+        if problem is not None:
+            self._err(*problem)
         return self.generic_visit(node)
 
     def _shadowing(self, name: str) -> bool:

@@ -55,6 +55,7 @@ class Compiler:
         self.names = Names(variables=set(self.var_decls), functions=set(), controls=set(CONTROL_NAMES), globals={"np", *MATH_NAMES})
         # assets named by their path in code become asset('...'); asset(name) finds any of them
         self.names.assets = asset_names(self.spec.assets)
+        self.names.spec_dir = self.spec_dir
         self.names.globals.add(ASSET_FUNCTION)
 
     # -- helpers ----------------------------------------------------------------------------------

@@ -83,3 +83,18 @@ def test_only_whole_strings_outside_f_string_text_name_an_asset(tmp_path: Path) 
     assert main(["build", str(spec), "-o", str(tmp_path / "dist")]) == 0
     text = (tmp_path / "dist" / "app.py").read_text()
     assert """self.note = f'notes.txt has {len(open(asset("notes.txt")).read())} characters' + ' notes.txt'""" in text
+
+
+def test_a_file_beside_the_spec_read_by_name_must_be_listed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Read without being listed, it would be the working directory's file, not the app's."""
+    spec = _spec(tmp_path, "[]", "note = str(np.loadtxt('data.csv', delimiter=','))")
+    (spec.parent / "data.csv").write_text("1,2\n")
+    assert _error(spec, tmp_path, capsys) == (
+        f"{spec}:9:27: error: 'data.csv' is a file beside the spec, but it is not listed under 'assets:', "
+        "so the built app would not have it; list it: assets: [data.csv]"
+    )
+
+
+def test_asset_of_a_name_not_listed_suggests_the_listed_one(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    spec = _spec(tmp_path, "[notes.txt]", "note = asset('note.txt')")
+    assert _error(spec, tmp_path, capsys) == f"{spec}:9:18: error: 'note.txt' is not listed under 'assets:'; did you mean 'notes.txt'?"
