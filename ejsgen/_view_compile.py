@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 from ejsgen._interpolate import BraceError, split_fields
 from ejsgen._shapes import infer_shape, literal_shape
 from ejsgen._view_compile_plot import compile_plot
+from ejsgen._view_compile3d import check_follows, check_view
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import Location, SpecError
 from ejsgen.plan import Call, Expr, Ref, Src
@@ -367,6 +368,7 @@ class ViewCompiler:
 
     def _scene(self, item: ViewItem, n: int) -> Call:
         kids = [call for call in (self.node3d(ch) for ch in item.children) if call is not None]
+        check_follows(self)
         return Call("E.Scene", [], {"where": self.c.where(item.path), "children": kids}, children="children")
 
     def control(self, item: ViewItem, n: int) -> Call | None:
@@ -470,6 +472,8 @@ class ViewCompiler:
                 kw["bind"] = p.bind
             if p.on_change is not None:
                 kw["on_change"] = self.code(f"_gizmo_{_slug(name)}_dragged", p.on_change, path + ("on_change",), f"the on_change of gizmo '{name}'")
+        if kind == "view":
+            check_view(self, item, name)
         if "visible" in p.model_fields_set:
             kw["visible"] = self.dynamic(path + ("visible",), "", f"the visibility of '{name}'", p.visible) if isinstance(p.visible, str) else bool(p.visible)
         if p.color is not None:
@@ -533,6 +537,7 @@ _PROP_COMPILERS: dict[str, Callable[[ViewCompiler, Any, Path_, str, str], Any]] 
     "files": lambda vc, v, path, base, what: [vc.c.asset(f, path + (i,), "mesh file") for i, f in enumerate(v)],
     "ints2": _ints2,
     "int": lambda vc, v, path, base, what: v,
+    "name": lambda vc, v, path, base, what: v,
     "bool": lambda vc, v, path, base, what: v,
 }
 

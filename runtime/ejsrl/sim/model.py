@@ -651,6 +651,16 @@ class ModelBase:
         """The pairs of named scene objects and robot links that touch now (sorted)."""
         return self._ejs_world.world_functions().collisions()
 
+    @prelude("world")
+    def set_view(self, position: Any = None, target: Any = None, up: Any = None, fov: float | None = None, *,
+                 preset: str | None = None, follow: str | None = None, follow_offset: bool | None = None) -> None:
+        """Point the 3D view's camera (every tab of this simulation): `position`, `target`, `up` ([x, y, z]), `fov` (degrees), `preset` (`front`, `top`, ...), `follow` (an object's name, `""` to stop), `follow_offset`; what is left out stays; Reset view undoes it.
+
+        The arguments are those of the scene's ``view`` element (see ``ejsrl.world.view3d``).
+        """
+        self._ejs_world.world_functions().set_view(position, target, up, fov, preset=preset, follow=follow,
+                                                   follow_offset=follow_offset)
+
     @prelude("program")
     def start_program(self, name: str) -> None:
         """Start the robot program ``name`` (from its first line)."""

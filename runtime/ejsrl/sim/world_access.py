@@ -30,6 +30,10 @@ class WorldFunctionsAccess(Protocol):
 
     def collisions(self) -> list[tuple[str, str]]: ...
 
+    def set_view(self, position: Any = None, target: Any = None, up: Any = None, fov: float | None = None, **kw: Any) -> None:
+        """Ask for a camera of the 3D view (``ejsrl.world.view3d.set_view``)."""
+        ...
+
     def graspable_near(self, robot: Any, point: ArrayLike, reach: float) -> tuple[str, str] | None:
         """The nearest visible graspable object within ``reach`` of ``point`` and the name of
         the scene element that draws ``robot`` (a ``Robot``): ``(object, element)``; None if

@@ -1,8 +1,8 @@
 """The first view of a scene: a camera that frames what the world shows.
 
 :func:`scene_bounds` measures the world's content (and its floors, the grids);
-:func:`framing_view` places the nearest camera, looking from :data:`VIEW_FROM`, that sees
-a set of points; :func:`frame_camera` points a viser camera (a client's, when it connects)
+:func:`framing_view` places the nearest camera, looking from :data:`VIEW_FROM` (or a
+direction of the spec's ``view``: ``ejsrl.view._camera``), that sees a set of points; :func:`frame_camera` points a viser camera (a client's, when it connects)
 at the content, grown by :data:`VIEW_MARGIN` for what moves about.
 """
 
@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["scene_bounds", "framing_view", "frame_camera", "VIEW_FROM", "VIEW_FOV", "VIEW_ASPECT", "VIEW_MARGIN"]
+__all__ = ["scene_bounds", "framing_view", "framed_points", "frame_camera", "VIEW_FROM", "VIEW_FOV", "VIEW_ASPECT", "VIEW_MARGIN"]
 
 #: the direction the initial camera looks from (towards -x, +y, down), and its vertical field of view
 VIEW_FROM = np.array([1.0, -1.0, 0.75])
@@ -71,17 +71,28 @@ def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
 
 
-def framing_view(points: np.ndarray, *, fov: float = VIEW_FOV, aspect: float = VIEW_ASPECT) -> tuple[np.ndarray, np.ndarray]:
+def framing_view(
+    points: np.ndarray,
+    *,
+    fov: float = VIEW_FOV,
+    aspect: float = VIEW_ASPECT,
+    view_from: np.ndarray = VIEW_FROM,
+    up: np.ndarray = np.array([0.0, 0.0, 1.0]),
+    center: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """``(position, look_at)`` of the nearest camera that sees all of ``points`` (N, 3), world, metres.
 
-    The camera looks from :data:`VIEW_FROM` at the centre of the points' box; its distance
-    is the least that keeps every point inside the vertical field of view ``fov`` (radians)
-    and the horizontal one given ``aspect`` (width / height), plus 5 %.
+    The camera looks from the direction ``view_from`` (3,) (default :data:`VIEW_FROM`), with
+    ``up`` (3,) up on screen, at ``center`` (3,) (default: the centre of the points' box); its
+    distance is the least that keeps every point inside the vertical field of view ``fov``
+    (radians) and the horizontal one given ``aspect`` (width / height), plus 5 %.
     """
     pts = np.asarray(points, dtype=float).reshape(-1, 3)
-    center = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
-    f = -VIEW_FROM / np.linalg.norm(VIEW_FROM)  # the viewing direction
-    r = np.cross(f, [0.0, 0.0, 1.0])
+    if center is None:
+        center = (pts.min(axis=0) + pts.max(axis=0)) / 2.0
+    center = np.asarray(center, dtype=float)
+    f = -np.asarray(view_from, dtype=float) / np.linalg.norm(view_from)  # the viewing direction
+    r = np.cross(f, np.asarray(up, dtype=float))
     r /= np.linalg.norm(r)
     u = np.cross(r, f)
     tan_v = np.tan(fov / 2.0)
@@ -93,15 +104,12 @@ def framing_view(points: np.ndarray, *, fov: float = VIEW_FOV, aspect: float = V
     return center - distance * f, center
 
 
-def frame_camera(camera: Any, world: Any, lock: Any = None) -> None:
-    """Point ``camera`` (a viser client's camera, or ``server.initial_camera``) at the world's content.
-
-    The content's box grown by :data:`VIEW_MARGIN` about its centre and the floors' boxes
-    are framed (:func:`framing_view`). ``lock``: the model lock, held while the world is
-    read. A world with nothing to show leaves the camera where it is.
-    """
+def framed_points(world: Any, lock: Any = None) -> np.ndarray | None:
+    """The corners (N, 3) a first view frames: the content's box grown by :data:`VIEW_MARGIN`
+    about its centre, and the floors' boxes; None for a world with nothing to show.
+    ``lock``: the model lock, held while the world is read."""
     if world is None:
-        return
+        return None
     if lock is not None:
         with lock:
             content, floor = scene_bounds(world)
@@ -114,8 +122,18 @@ def frame_camera(camera: Any, world: Any, lock: Any = None) -> None:
         corners.append(_corners(mid - VIEW_MARGIN * half, mid + VIEW_MARGIN * half))
     if floor is not None:
         corners.append(_corners(*floor))
-    if not corners:
+    return np.concatenate(corners) if corners else None
+
+
+def frame_camera(camera: Any, world: Any, lock: Any = None) -> None:
+    """Point ``camera`` (a viser client's camera, or ``server.initial_camera``) at the world's content.
+
+    The points of :func:`framed_points` are framed (:func:`framing_view`). A world with
+    nothing to show leaves the camera where it is.
+    """
+    points = framed_points(world, lock)
+    if points is None:
         return
-    position, look_at = framing_view(np.concatenate(corners))
+    position, look_at = framing_view(points)
     camera.position = tuple(float(v) for v in position)
     camera.look_at = tuple(float(v) for v in look_at)

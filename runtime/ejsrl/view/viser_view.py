@@ -22,6 +22,7 @@ it (see :mod:`ejsrl.view._guard`); the panel checks it again before applying it.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import time
 from collections.abc import Sequence
@@ -31,7 +32,7 @@ import numpy as np
 
 from ejsrl.view._guard import Verdict, guard_of, start_server
 from ejsrl.view._gui import ControlBinding, Panel
-from ejsrl.view._framing import frame_camera
+from ejsrl.view._camera import ViewCamera
 from ejsrl.view._scene_mirror import SceneMirror
 from ejsrl.view._validate import validate_control
 
@@ -121,10 +122,14 @@ class ViserView:
             clock = getattr(app, "clock", time.monotonic)
             self.panel = Panel(app, target.gui, self.notify, clock=clock)
             self.scene = SceneMirror(target.scene, on_gizmo=self._on_gizmo, clock=clock)
+            #: the browser's camera: the spec's ``view``, ``set_view()``, follow (ejsrl.view._camera)
+            self.camera = ViewCamera(app)
+            self.reset_view_button: Any = None
             world = self._world()
             if world is not None:
                 with app.lock:
                     self.scene.sync(world)
+                self._add_reset_view(target.gui)
         self._guard = guard = guard_of(server)
         if guard is not None:
             guard.notify = _notify_red
@@ -142,11 +147,35 @@ class ViserView:
                     p.reshow()
 
     def _frame(self, client: Any) -> None:
-        """A first view that frames the scene's content (metres, z up)."""
+        """The camera of a tab that connects: the spec's ``view`` with what code asked since, or
+        a first view that frames the scene's content (metres, z up)."""
         try:
-            frame_camera(client.camera, self._world(), self.app.lock)
+            with self.app.lock:
+                self.camera.show([client.camera])
         except Exception:
             log.debug("framing the camera failed", exc_info=True)
+
+    def _add_reset_view(self, gui: Any) -> None:
+        """The panel's Reset view button: the camera back where the spec puts it, for every tab
+        of this simulation (what ``set_view()`` asked is forgotten; the simulation goes on)."""
+        self.reset_view_button = button = gui.add_button("Reset view", hint="Put the 3D view's camera back where the lab sets it")
+
+        @button.on_click
+        def _(_e: Any) -> None:
+            from ejsrl.world.view3d import drop_commanded
+
+            with self.app.lock:
+                world = self._world()
+                if world is not None:
+                    drop_commanded(world)
+                with self._target.atomic():
+                    self.camera.show(self._cameras())
+
+    def _cameras(self) -> list[Any]:
+        """The cameras of every tab this view shows the app to."""
+        if self.client is not None:
+            return [] if self._closed else [self.client.camera]
+        return [c.camera for c in self.server.get_clients().values() if hasattr(c, "camera")]
 
     @property
     def closed(self) -> bool:
@@ -171,11 +200,17 @@ class ViserView:
             self._guarded("plots", self._record_plots)
             return
         self.frames += 1
-        with self._target.atomic():
+        with contextlib.ExitStack() as held:
+            held.enter_context(self._target.atomic())
+            if self.client is None:  # a shared view: the tabs' cameras (their own queues) are held with the scene
+                for c in list(self.server.get_clients().values()):
+                    if hasattr(c, "atomic"):
+                        held.enter_context(c.atomic())
             self._guarded("panel", self.panel.refresh)
             world = self._world()
             if world is not None:
                 self._guarded("scene", lambda: self.scene.sync(world))
+                self._guarded("camera", lambda: self.camera.on_frame(self._cameras()))
             self._guarded("alerts", self._show_alerts)
 
     def adopt(self, old: ViserView) -> None:

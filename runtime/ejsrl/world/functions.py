@@ -184,6 +184,12 @@ class WorldFunctions:
         self.refresh()
         return self.collider.pairs(self.world)
 
+    def set_view(self, position: Any = None, target: Any = None, up: Any = None, fov: float | None = None, **kw: Any) -> None:
+        """Ask for a camera of the 3D view (``ejsrl.world.view3d.set_view``)."""
+        from ejsrl.world.view3d import set_view
+
+        set_view(self.world, position, target, up, fov, **kw)
+
     def graspable_near(self, robot: Any, point: ArrayLike, reach: float) -> tuple[str, str] | None:
         """``(object, element)``: the nearest visible graspable object (not a robot or a link)
         within ``reach`` of ``point`` in the world, and the element that draws ``robot`` (a

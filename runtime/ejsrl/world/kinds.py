@@ -232,6 +232,23 @@ _KINDS: tuple[Kind, ...] = (
         Prop("scale", "num", 0.3, "Handle size."),
         Prop("on_change", "code", None, "Code run after a drag (then the fixed relations)."),
     ), draw="gizmo"),
+    Kind("view", "The 3D view's camera (not drawn): where it looks from and at, which way is up, how wide it sees.\n\n"
+         "At most one per scene; every tab of the simulation (and a tab reloaded later) is shown it. Left out, "
+         "`position` stands back along the `preset`'s direction (default `iso`) just far enough to frame the "
+         "scene. Code changes it with `set_view()`; the panel's Reset view button puts it back where the spec "
+         "has it. Between those the user turns and zooms the view freely.", (
+        Prop("target", "vec3", None, "The point looked at, [x, y, z] in metres (left out: the followed object, "
+             "else the centre of what the scene shows)."),
+        Prop("up", "vec3", None, "The direction shown upwards on screen (left out: the preset's, else [0, 0, 1])."),
+        Prop("fov", "num", None, "Vertical field of view in degrees, 1 to 170 (left out: 75)."),
+        Prop("preset", "text", None, "A direction to look from, square-on to a plane: front (from -y: the x-z plane, "
+             "z up; alias xz), back (from +y), right (from +x: the y-z plane; alias yz), left (from -x), top (from +z: "
+             "the x-y plane, y up; alias xy), bottom (from -z), iso (from [1, -1, 0.75], the default). Not with "
+             "`position`."),
+        Prop("follow", "name", None, "A scene object the camera tracks every frame: the target is its position."),
+        Prop("follow_offset", "bool", False, "With `follow`: the camera moves along with the object, keeping its "
+             "offset from it (false: it stays where it is and turns to watch the object)."),
+    ), draw="none", node_extra={"commanded": None}),
 )
 
 #: every 3D element kind by name, in the order of the reference
