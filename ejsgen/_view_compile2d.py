@@ -115,6 +115,15 @@ def _number(vc: ViewCompiler, value: Any, path: Path_, what: str, *, positive: b
     return vc.number(value, path, "", what)
 
 
+def _limits(vc: ViewCompiler, target: str) -> tuple[float | None, float | None]:
+    """The declared ``min`` and ``max`` of the variable a drag writes (of its array, for ``p[0]``)."""
+    decl = vc.c.var_decls.get(target.split("[")[0].strip())
+    if decl is None:
+        return (None, None)
+    lo, hi = getattr(decl.decl, "min", None), getattr(decl.decl, "max", None)
+    return (None if lo is None else float(lo), None if hi is None else float(hi))
+
+
 def _drag(vc: ViewCompiler, kind: str, name: str, d: Any, path: Path_) -> Call | None:
     c = vc.c
     if kind not in _DRAGGABLE:
@@ -126,15 +135,23 @@ def _drag(vc: ViewCompiler, kind: str, name: str, d: Any, path: Path_) -> Call |
         if len(d.bind) != 2:
             c.errors.append(SpecError(c.loc(path + ("bind",)), f"a drag binds [x_variable, y_variable], got {len(d.bind)} names"))
             return None
+        vtypes = []
         for j, target in enumerate(d.bind):
             b = vc.bind(target, path + ("bind", j), "drag")
             if b is None:
                 return None
+            vtypes.append(b[2])
             if b[2] not in ("float", "int"):
                 c.errors.append(SpecError(c.loc(path + ("bind", j)), f"a drag writes numbers, but '{target}' is {b[2]}",
                                           "bind one element of an array, like p[0]" if b[2] == "array" else ""))
                 return None
         kw["bind"] = tuple(d.bind)
+        limits = tuple(_limits(vc, target) for target in d.bind)
+        if any(lim != (None, None) for lim in limits):
+            kw["limits"] = limits
+        ints = tuple(v == "int" for v in vtypes)
+        if any(ints):
+            kw["ints"] = ints
     else:
         b = vc.bind(d.bind, path + ("bind",), "drag")
         if b is None:
@@ -153,6 +170,12 @@ def _drag(vc: ViewCompiler, kind: str, name: str, d: Any, path: Path_) -> Call |
                                       f"or bind both: bind: [{d.bind}, y_variable]"))
             return None
         kw["bind"] = (d.bind,)
+        if b[2] != "array":
+            lim = _limits(vc, d.bind)
+            if lim != (None, None):
+                kw["limits"] = (lim,)
+            if b[2] == "int":
+                kw["ints"] = (True,)
     if along == "curve":
         if d.curve is None:
             c.errors.append(SpecError(c.loc(path + ("along",)), "along: curve needs curve: the name of a custom function f(x, y) -> [x, y]"))

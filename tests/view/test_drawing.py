@@ -265,3 +265,30 @@ def test_images_visibility_colours_grids_and_axes(tmp_path) -> None:
     src = images[0]["src"]
     b.refresh()
     assert [it for it in b.frame["items"] if it["t"] == "image"][0]["src"] is src
+
+
+LIMITS = """ejs: 1
+title: L
+model:
+  variables:
+    x: {value: 0.0, min: -1.0, max: 1.0}
+    n: {value: 0, min: 0, max: 5}
+view:
+  - drawing:
+      x_range: [-10, 10]
+      y_range: [-10, 10]
+      children:
+        - particle: {name: a, position: [x, 0], drag: {bind: x, along: x}}
+        - particle: {name: b, position: [0, n], drag: {bind: [x, n]}}
+"""
+
+
+def test_a_drag_keeps_to_the_variables_declared_min_and_max_and_rounds_integers(tmp_path) -> None:
+    app, b = built(tmp_path, LIMITS)
+    m = app.model
+    b.drag("a", "move", 7.5, 3.0)
+    assert m.x == 1.0
+    b.drag("b", "move", -4.0, 2.6)
+    assert m.x == -1.0 and m.n == 3 and isinstance(m.n, int)
+    b.drag("b", "move", 0.25, 99.0)
+    assert m.x == 0.25 and m.n == 5

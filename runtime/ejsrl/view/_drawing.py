@@ -411,9 +411,17 @@ class DrawingBinding:
             if remember is not None:
                 remember(drag.bind[0], set_it, arr)
             return
-        for set_it, value, target in ((drag.set_x, x, drag.bind[0]), (drag.set_y, y, drag.bind[-1])):
+        for j, (set_it, value, target) in enumerate(((drag.set_x, x, drag.bind[0]), (drag.set_y, y, drag.bind[-1]))):
             if set_it is None:
                 continue
+            k = min(j, len(drag.bind) - 1)  # one bound target: its limits whichever coordinate it is
+            lo, hi = drag.limits[k] if k < len(drag.limits) else (None, None)
+            if lo is not None:
+                value = max(value, lo)
+            if hi is not None:
+                value = min(value, hi)
+            if k < len(drag.ints) and drag.ints[k]:
+                value = int(round(value))
             app.guard(lambda s=set_it, v=value: s(model, v), shape.where)
             remember = getattr(app, "remember_user_value", None)
             if remember is not None:

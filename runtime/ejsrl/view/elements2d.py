@@ -43,7 +43,10 @@ class Drag2D:
     (N, 2) array; ``along``: ``free``, ``x``, ``y``, ``curve`` or ``region``; ``curve(model,
     x, y) -> (x, y)``; ``region``: ``(xmin, xmax, ymin, ymax)``, constants or Dynamic;
     ``handle``: ``start`` or ``end`` (segments, arrows, springs); ``on_drag(model)``,
-    ``on_release(model)``: code run after a move / the release (then the fixed relations).
+    ``on_release(model)``: code run after a move / the release (then the fixed relations);
+    ``limits``: per bound target, the ``(min, max)`` its variable declares (None: none),
+    applied after the constraint; ``ints``: per bound target, True for an integer variable
+    (the value is rounded).
     """
 
     bind: tuple[str, ...]
@@ -53,6 +56,8 @@ class Drag2D:
     handle: str = "start"
     on_drag: Callable[[Any], None] | None = None
     on_release: Callable[[Any], None] | None = None
+    limits: tuple[tuple[float | None, float | None], ...] = ()
+    ints: tuple[bool, ...] = ()
     set_x: Callable[[Any, Any], None] | None = field(default=None, repr=False)
     set_y: Callable[[Any, Any], None] | None = field(default=None, repr=False)
 
