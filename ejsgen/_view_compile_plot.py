@@ -218,16 +218,16 @@ class _PlotCompiler:
         """Build errors for shapes that cannot be drawn (only what is certain now)."""
         x_where = spath + ("x",) if s.x is not None else self.path + ("x",)
         x_text = f"its x '{s.x}'" if s.x is not None else f"the plot's x '{self.p.x}'"
-        for shape, where, text in ((x_shape, x_where, x_text), (y_shape, spath + ("y",), f"its y '{s.y}'")):
+        for shape, where, text, expr, col in ((x_shape, x_where, x_text, s.x if s.x is not None else self.p.x, 0), (y_shape, spath + ("y",), f"its y '{s.y}'", s.y, 1)):
             if shape is not None and len(shape) > 1:
-                hint = f"pick one column, e.g. {text.split(chr(39))[1]}[:, 0]" if len(shape) == 2 else "flatten it, or pick a 1-D slice"
+                hint = f"pick one column, e.g. {str(expr).strip()}[:, {col}]" if len(shape) == 2 else "flatten it, or pick a 1-D slice"
                 self.err(where, f"{name} needs numbers or 1-D arrays, but {text} is {_describe(shape)}", hint)
                 return
         if kind == "histogram" or x_shape is None or y_shape is None:
             return
         if x_shape == () and y_shape != ():
             if s.x is None:
-                self.err(spath + ("y",), f"{name}'s y '{s.y}' is {_describe(y_shape)} but the plot's x '{self.p.x}' is a number", "give the series an x of its own with as many values, e.g. x: \"np.arange(len(...))\"")
+                self.err(spath + ("y",), f"{name}'s y '{s.y}' is {_describe(y_shape)} but the plot's x '{self.p.x}' is a number", f"give the series an x of its own with as many values, e.g. x: \"np.arange(len({str(s.y).strip()}))\"")
             else:
                 self.err(spath + ("y",), f"{name}'s y '{s.y}' is {_describe(y_shape)} but its x '{s.x}' is a number", "give both as numbers (a history) or both as arrays of one length (a curve)")
         elif x_shape != () and y_shape == ():

@@ -95,7 +95,7 @@ def test_one_x_y_series_titles_both_axes_with_their_units(tmp_path: Path):
         ('{x: xs, y: "data[:, 1]"}', '"data', "must have as many values, but its x 'xs' is an array of 5 values and its y 'data[:, 1]' is an array of 3 values"),
         ('{x: "np.linspace(0, 1, 7)", y: "grid*2"}', "np.linspace", None),  # grid's shape is not known: checked when it runs
         ('{x: "data[:, 0]", y: data}', "data}", "needs numbers or 1-D arrays, but its y 'data' is an array of shape (3, 2)"),
-        ('{y: xs}', "xs}", "series 1 of the plot's y 'xs' is an array of 5 values but the plot's x 't' is a number"),
+        ('{y: xs}', "xs}", "series 1 of the plot's y 'xs' is an array of 5 values but the plot's x 't' is a number; give the series an x of its own with as many values, e.g. x: \"np.arange(len(xs))\""),
     ],
 )
 def test_a_series_of_the_wrong_shape_is_an_error_at_its_expression(tmp_path: Path, series: str, needle: str, message: str | None):
@@ -111,7 +111,7 @@ def test_a_series_of_the_wrong_shape_is_an_error_at_its_expression(tmp_path: Pat
 def test_a_2d_y_hints_at_a_column(tmp_path: Path):
     view = "  - plot:\n      series:\n        - {x: \"data[:, 0]\", y: data}\n"
     (err,) = _errors(tmp_path, view)
-    assert "pick one column, e.g. data[:, 0]" in err
+    assert "pick one column, e.g. data[:, 1]" in err
 
 
 @pytest.mark.parametrize(
