@@ -286,3 +286,57 @@ def test_the_panel_survives_its_folder_closed_and_opened(lab, browser_context):
         wait_until(lambda: abs(model.bx - 1.0) < 0.05, what="bx dragged to 1 after the folder opened again")
     finally:
         page.close()
+
+
+@pytest.fixture(scope="module")
+def projectile():
+    """The projectile example built and served a simulation per tab; yields ``(app, url)``."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from testkit import EXAMPLES
+
+    with tempfile.TemporaryDirectory() as tmp:
+        app = load_app(build(EXAMPLES / "projectile_2d.ejs.yaml", Path(tmp) / "app"))
+        server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
+        try:
+            yield app, f"http://127.0.0.1:{server.get_port()}"
+        finally:
+            app.stop()
+            server.stop()
+
+
+@pytest.mark.browser
+def test_the_projectile_lab_moved_by_mouse_and_keys_lands_where_physics_says(projectile, browser_context):
+    from testkit.browser import save_shot
+
+    app, url = projectile
+    page = open_tab(browser_context, url)
+    try:
+        lab = session_model(app, page)
+        m = lab.model
+        # the panel has the window (no 3D scene), x_range [-1, 21], y_range [-1, 11], axes: its plot
+        # area is inset for the tick labels, so points are found through the page's own mapping
+        def css(x: float, y: float) -> tuple[float, float]:
+            return tuple(page.evaluate(f"window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], {x}, {y})"))
+
+        box = canvas_box(page)
+        sx, sy = css(m.x0, m.y0)
+        tx, ty = css(3.0, 2.0)
+        page.mouse.move(box["x"] + sx, box["y"] + sy)
+        page.mouse.down()
+        page.mouse.move(box["x"] + tx, box["y"] + ty, steps=5)
+        page.mouse.up()
+        wait_until(lambda: abs(m.x0 - 3.0) < 0.1 and abs(m.y0 - 2.0) < 0.1, what="the launcher dragged to (3, 2)")
+        assert (m.x, m.y) == (m.x0, m.y0)  # on_drag: rest(): the ball waits on the launcher
+        page.keyboard.press("ArrowUp")  # the panel has the focus since the drag: 51 degrees
+        wait_until(lambda: m.angle == 51.0, what="ArrowUp: the angle up by one degree")
+        page.keyboard.press("Space")  # play
+        wait_until(lambda: not lab.is_playing() and m.t > 0, timeout=60, what="the ball to land")
+        v, a, g = m.v0, np.radians(m.angle), m.g
+        t_land = (v * np.sin(a) + np.sqrt((v * np.sin(a)) ** 2 + 2 * g * m.y0)) / g
+        assert abs(m.x - (m.x0 + v * np.cos(a) * t_land)) < 1e-4
+        # the trace on the page runs from the launcher to the landing point
+        wait_until(lambda: '"t":"polyline"' in page.evaluate("Object.values(window.__ejs2d.panels)[0].text"), what="the trace")
+        save_shot(page, "projectile_2d")
+    finally:
+        page.close()

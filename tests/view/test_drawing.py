@@ -292,3 +292,15 @@ def test_a_drag_keeps_to_the_variables_declared_min_and_max_and_rounds_integers(
     assert m.x == -1.0 and m.n == 3 and isinstance(m.n, int)
     b.drag("b", "move", 0.25, 99.0)
     assert m.x == 0.25 and m.n == 5
+
+
+def test_a_trace_moves_its_last_point_while_time_stands_still(projectile) -> None:
+    app, b = projectile
+    b.refresh()
+    b.drag("launcher", "move", 3.0, 2.0)  # paused at t = 0: the ball moves with the launcher
+    b.drag("launcher", "move", 4.0, 3.0)
+    trace = lambda: [it for it in (b.refresh() or b.frame)["items"] if it["t"] == "polyline"][2]  # noqa: E731
+    assert np.allclose(xy(trace()), [[4.0, 3.0]])  # one point, where the ball is: no line from where it was
+    app.play()
+    app.frame()
+    assert len(xy(trace())) == 2

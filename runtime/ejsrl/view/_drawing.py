@@ -267,8 +267,13 @@ class DrawingBinding:
             now = self._time()
             if now is not None and st.time is not None and now < st.time:
                 st.trace.clear()  # the independent variable went back (a reset, a new launch): a new trace
+            same_instant = now is not None and now == st.time and bool(st.trace)
             st.time = now
-            if np.all(np.isfinite(pt)) and (not st.trace or st.trace[-1] != (pt[0], pt[1])):
+            if not np.all(np.isfinite(pt)):
+                pass
+            elif same_instant:
+                st.trace[-1] = (float(pt[0]), float(pt[1]))  # paused, moved by a drag or a control: the point moves
+            elif not st.trace or st.trace[-1] != (pt[0], pt[1]):
                 st.trace.append((float(pt[0]), float(pt[1])))
                 limit = int(p.get("max_points", 1000))
                 if len(st.trace) > limit:
