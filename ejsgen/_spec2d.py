@@ -44,7 +44,7 @@ class DragEl(Strict):
     """How a 2D element is dragged with the mouse: the variables it writes and its constraint."""
 
     bind: Union[str, list[str]]
-    """The variables the dragged point writes: [x_var, y_var] (variables or array elements, 'p[0]'); one variable with along: x or y; for a set, one (N, 2) array variable whose row the dragged item is."""
+    """The variables the dragged point writes: [x_var, y_var] (variables or array elements, 'p[0]'); one variable with along: x or y; for a set, one (N, 2) array variable whose row the dragged item is. Each is kept within its variable's min and max."""
     along: Literal["free", "x", "y", "curve", "region"] = "free"
     """The constraint: free, along x (y stays), along y, on a curve (curve:), or inside a region (region:)."""
     curve: str | None = None

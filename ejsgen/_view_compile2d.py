@@ -320,7 +320,25 @@ def compile_drawing(vc: ViewCompiler, item: ViewItem, n: int) -> Call | None:
     return Call("E.Drawing", [], kw, children="children")
 
 
+def _has_scene(items: Any) -> bool:
+    """Whether a view's raw list (with folders and tabs) holds a ``scene``."""
+    for it in items if isinstance(items, list) else ():
+        if not isinstance(it, dict):
+            continue
+        if "scene" in it:
+            return True
+        props = next(iter(it.values()), None) if len(it) == 1 else None
+        if isinstance(props, dict):
+            if _has_scene(props.get("children")) or any(_has_scene(ch) for ch in (props.get("tabs") or {}).values()):
+                return True
+    return False
+
+
 def compile_keyboard(vc: ViewCompiler, item: ViewItem, n: int) -> Call | None:
     """``E.SceneKeys(keys={...})`` for a ``keyboard`` element (the 3D view's keys)."""
+    if not _has_scene(vc.c.doc.data.get("view")):
+        vc.c.errors.append(SpecError(vc.c.doc.key_loc(item.path), "a keyboard acts on the 3D view, and this view has no scene",
+                                     "give the keys to a drawing panel instead: drawing: {keys: {...}}"))
+        return None
     keys = _keys(vc, item.props.keys, item.path, f"keyboard{n}")
     return Call("E.SceneKeys", [], {"keys": keys, "where": vc.c.where(item.path)})

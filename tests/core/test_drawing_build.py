@@ -158,3 +158,13 @@ def test_the_panel_engine_loads_from_a_pyz_bundle(tmp_path) -> None:
     assert r.returncode == 0, r.stderr
     size, found = r.stdout.split()
     assert int(size) > 10_000 and found == "True"
+
+
+def test_a_keyboard_needs_a_scene(tmp_path, capsys) -> None:
+    spec = tmp_path / "k.ejs.yaml"
+    spec.write_text("ejs: 1\ntitle: K\nmodel:\n  variables:\n    n: 0\nview:\n  - keyboard: {keys: {ArrowUp: n = n + 1}}\n")
+    assert main(["validate", str(spec)]) == 1
+    err = capsys.readouterr().err
+    assert f"{spec}:7:5: error: a keyboard acts on the 3D view, and this view has no scene; give the keys to a drawing panel" in err
+    spec.write_text(spec.read_text() + "  - folder: {children: [{scene: [{sphere: {radius: 1}}]}]}\n")
+    assert main(["validate", str(spec)]) == 0
