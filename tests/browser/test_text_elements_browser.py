@@ -160,3 +160,40 @@ def test_tables_consoles_and_markdown_tables_per_tab(lab, browser_context) -> No
     finally:
         a.close()
         b.close()
+
+
+@pytest.mark.browser
+def test_the_data_fitting_lab_fits_its_file_and_shows_the_fit(browser_context, tmp_path: Path) -> None:
+    """examples/data_fitting in the browser: its data file read by name, Fit prints the fit in the
+    console and the tables and the Markdown table show the fitted values."""
+    import math
+
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from testkit import EXAMPLES
+
+    app = load_app(build(EXAMPLES / "data_fitting.ejs.yaml", tmp_path / "app"))
+    server = app.serve("127.0.0.1", 0, block=False)
+    page = browser_context.new_page()
+    try:
+        page.set_default_timeout(SLOW)
+        page.goto(f"http://127.0.0.1:{server.get_port()}")
+        page.locator(".ejs-console", has_text="read 81 points from data_fitting/measured.csv").wait_for()
+        page.get_by_role("button", name="Fit").click()
+        page.locator(".ejs-console", has_text="fit 1: A = ").wait_for()
+        wait_until(lambda: app.model.fits == 1, what="the fit")
+        fit = page.locator("table.ejs-table", has_text="The fit")
+        fit.locator("td", has_text=f"{app.model.A:.4g}").first.wait_for()
+        assert fit.locator("tbody tr").nth(0).locator("td").all_inner_texts() == ["A", f"{app.model.A:.4g}", "m"]
+        assert abs(app.model.omega - 2 * math.pi * 0.8) < 3 * app.model.domega  # the value the data were made with
+        residuals = page.locator("table.ejs-table", has_text="Residuals")
+        assert residuals.locator("tbody tr").count() == 13  # 12 rows and the line counting the others
+        assert residuals.locator("tbody tr").last.inner_text().strip() == "… 69 more rows"
+        summary = page.locator("table", has_text="what the fit says")
+        summary.locator("td", has_text=f"{2 * math.pi / app.model.omega:.4f} s").wait_for()
+        ARTIFACTS.mkdir(exist_ok=True)
+        page.screenshot(path=str(ARTIFACTS / "data_fitting.png"))
+    finally:
+        page.close()
+        app.stop()
+        server.stop()
