@@ -211,3 +211,11 @@ def test_frames_at_the_rate_but_jittering_are_all_sent() -> None:
         clock.advance(1 / 120)
         panel.show(dict(FRAME, bounds=[0, 1000 + i, 0, 1]))
     assert 60 <= panel.sent - 120 <= 62
+
+
+def test_an_unlimited_rate_sends_every_new_frame() -> None:
+    clock = FakeClock()
+    panel = Panel2D(FakeGui(), "p", max_rate=float("inf"), clock=clock)
+    for i in range(5):  # the same instant: a caller that rate-limits itself
+        assert panel.show(dict(FRAME, bounds=[0, 1 + i, 0, 1]))
+    assert panel.sent == 5

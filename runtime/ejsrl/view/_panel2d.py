@@ -296,7 +296,8 @@ class Panel2D:
         now = self.clock()
         # a budget of frames refilled at max_rate a second (at most 2 kept): frames that come at
         # the rate but a little early (a 60 frames/s lab's ticks jitter) are not refused
-        self._budget = min(2.0, self._budget + (now - self._last_push) * self.max_rate)
+        refill = math.inf if math.isinf(self.max_rate) else (now - self._last_push) * self.max_rate  # no 0 * inf
+        self._budget = min(2.0, self._budget + refill)
         self._last_push = now
         if self._budget < 1.0:
             return False
