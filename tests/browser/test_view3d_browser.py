@@ -2,7 +2,7 @@
 
 What a user sees: the camera the spec sets (a coloured sphere is where that camera puts it,
 worked out here from the spec's numbers alone), a button whose action calls ``set_view``
-turns the view, Reset view brings the spec's camera back (after the user dragged it too),
+turns the view, Restore view brings the spec's camera back (after the user dragged it too),
 a reloaded tab keeps the camera code asked for, each tab of a class has a camera of its own,
 a followed object stays at the centre while it moves, and a pendulum's rod stays on its bob
 in every screenshot taken while it swings (before the fix: median 8 px, 37 px at worst).
@@ -65,7 +65,7 @@ def open_lab(page, url: str | None) -> None:
     if url is not None:
         page.goto(url)
     page.wait_for_selector("canvas", state="attached", timeout=SLOW)
-    page.get_by_role("button", name="Reset view").first.wait_for(timeout=SLOW)
+    page.get_by_role("button", name="Restore view").first.wait_for(timeout=SLOW)
     # hide the GPU-less browser's notice, which covers part of the scene
     page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
 
@@ -183,15 +183,15 @@ def test_the_spec_camera_set_view_reset_view_and_a_reload(shared, page):
     open_lab(page, None)
     wait_until(looks_down, what="the reloaded tab to look down as set_view asked")
 
-    # the user drags the view about; Reset view puts the spec's camera back
+    # the user drags the view about; Restore view puts the spec's camera back
     box = page.locator("canvas").first.bounding_box()
     cx, cy = box["x"] + box["width"] / 2, box["y"] + box["height"] / 2
     page.mouse.move(cx, cy)
     page.mouse.down()
     page.mouse.move(cx + 150, cy + 60, steps=8)
     page.mouse.up()
-    page.get_by_role("button", name="Reset view").click()
-    wait_until(camera_at(app, SPEC_POSITION, SPEC_TARGET, fov=SPEC_FOV), what="Reset view to bring the spec's camera back")
+    page.get_by_role("button", name="Restore view").click()
+    wait_until(camera_at(app, SPEC_POSITION, SPEC_TARGET, fov=SPEC_FOV), what="Restore view to bring the spec's camera back")
 
 
 @pytest.mark.browser

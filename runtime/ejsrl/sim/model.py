@@ -654,7 +654,7 @@ class ModelBase:
     @prelude("world")
     def set_view(self, position: Any = None, target: Any = None, up: Any = None, fov: float | None = None, *,
                  preset: str | None = None, follow: str | None = None, follow_offset: bool | None = None) -> None:
-        """Point the 3D view's camera (every tab of this simulation): `position`, `target`, `up` ([x, y, z]), `fov` (degrees), `preset` (`front`, `top`, ...), `follow` (an object's name, `""` to stop), `follow_offset`; what is left out stays; Reset view undoes it.
+        """Point the 3D view's camera (every tab of this simulation): `position`, `target`, `up` ([x, y, z]), `fov` (degrees), `preset` (`front`, `top`, ...), `follow` (an object's name, `""` to stop), `follow_offset`; what is left out stays; Restore view undoes it.
 
         The arguments are those of the scene's ``view`` element (see ``ejsrl.world.view3d``).
         """

@@ -9,7 +9,7 @@ pose (:class:`CameraPose`) and sets it on viser client cameras:
   whole pose, for every tab;
 - every frame while following an object: the target (the object's position) and, with
   ``follow_offset``, the position (the object's position plus the offset the camera had);
-- on Reset view: the spec's pose again.
+- on Restore view: the spec's pose again.
 
 Between those the user orbits and zooms freely. A world without a ``view`` node keeps the
 framed oblique first view (:func:`ejsrl.view._framing.frame_camera`).
@@ -166,7 +166,7 @@ class ViewCamera:
         return self.pose
 
     def show(self, cameras: list[Any]) -> None:
-        """Set the whole camera on ``cameras`` (a tab that connects, Reset view); the caller holds the model lock.
+        """Set the whole camera on ``cameras`` (a tab that connects, Restore view); the caller holds the model lock.
 
         Without a ``view`` node: the framed first view."""
         pose = self._resolve()

@@ -156,9 +156,9 @@ class ViserView:
             log.debug("framing the camera failed", exc_info=True)
 
     def _add_reset_view(self, gui: Any) -> None:
-        """The panel's Reset view button: the camera back where the spec puts it, for every tab
+        """The panel's Restore view button: the camera back where the spec puts it, for every tab
         of this simulation (what ``set_view()`` asked is forgotten; the simulation goes on)."""
-        self.reset_view_button = button = gui.add_button("Reset view", hint="Put the 3D view's camera back where the lab sets it")
+        self.reset_view_button = button = gui.add_button("Restore view", hint="Put the 3D view's camera back where the lab sets it")
 
         @button.on_click
         def _(_e: Any) -> None:

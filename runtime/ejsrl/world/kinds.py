@@ -235,7 +235,7 @@ _KINDS: tuple[Kind, ...] = (
     Kind("view", "The 3D view's camera (not drawn): where it looks from and at, which way is up, how wide it sees.\n\n"
          "At most one per scene; every tab of the simulation (and a tab reloaded later) is shown it. Left out, "
          "`position` stands back along the `preset`'s direction (default `iso`) just far enough to frame the "
-         "scene. Code changes it with `set_view()`; the panel's Reset view button puts it back where the spec "
+         "scene. Code changes it with `set_view()`; the panel's Restore view button puts it back where the spec "
          "has it. Between those the user turns and zooms the view freely.", (
         Prop("target", "vec3", None, "The point looked at, [x, y, z] in metres (left out: the followed object, "
              "else the centre of what the scene shows)."),

@@ -4,7 +4,7 @@ A scene's ``view`` element (``ejsrl.world.kinds``: kind ``view``) is a world nod
 drawn. Its properties are what the spec asks for (``target``, ``up``, ``fov``, ``preset``,
 ``follow``, ``follow_offset``; its pose's translation is the camera's ``position``), written
 by the scene binding like any element's. What code asked for with ``set_view()`` is kept
-beside them, in the node's ``commanded`` property (None: nothing), so the panel's Reset view
+beside them, in the node's ``commanded`` property (None: nothing), so the panel's Restore view
 button can drop it and go back to the spec's camera. Everything here belongs to the world,
 and so to one simulation (one session): each tab of a class has its own camera; every tab
 of one simulation, and a tab reloaded later, is shown the same one.
@@ -137,7 +137,7 @@ def set_view(
 
 
 def drop_commanded(world: Any) -> None:
-    """Forget what code asked of the camera (the Reset view button): the spec's camera again."""
+    """Forget what code asked of the camera (the Restore view button): the spec's camera again."""
     node = view_node(world)
     if node is not None and node.props.get("commanded"):
         node.set(commanded=None)
