@@ -268,15 +268,14 @@ def _target(c: Compiler, text: str, where: Location) -> str | None:
 
 
 def _ode_index(c: Compiler, fmu: Fmu, path: tuple[Any, ...]) -> int | None:
+    """The evolution page integrating a model-exchange FMU: ``ode:`` or the first ODE page;
+    -1 when the model has none (the FMU's own solver advances it after each step)."""
     from ejsgen.spec import OdePage
 
     pages = c.spec.model.evolution
     odes = [i for i, p in enumerate(pages) if isinstance(p, OdePage)]
     if fmu.ode is None:
-        if not odes:
-            c.errors.append(SpecError(c.doc.key_loc(path), "a model-exchange FMU is integrated by an ODE page, and the model has none", "add an ode page to model.evolution (its equations may be empty of FMU states)"))
-            return None
-        return odes[0]
+        return odes[0] if odes else -1
     if isinstance(fmu.ode, int) and not isinstance(fmu.ode, bool):
         if fmu.ode in odes:
             return fmu.ode
@@ -336,6 +335,11 @@ def _compile_one(c: Compiler, name: str, fmu: Fmu, f: FmuFile, path: tuple[Any, 
         c.errors.append(SpecError(c.loc(path + ("ode",)), "'ode' names the ODE page integrating a model-exchange FMU; a co-simulation FMU steps itself", "remove 'ode', or use kind: model_exchange"))
         ok = False
     ode = _ode_index(c, fmu, path) if kind == "model_exchange" else None
+    for key in ("method", "tolerance"):
+        if key in fmu.model_fields_set and ode != -1:
+            why = "a co-simulation FMU steps itself" if kind == "co_simulation" else "this FMU's states are integrated by an ODE page, with that page's method and tolerance"
+            c.errors.append(SpecError(c.loc(path + (key,)), f"'{key}' sets the solver of a model-exchange FMU in a model without ODE pages; {why}", f"remove '{key}'"))
+            ok = False
     targets = {var: _target(c, text, c.loc(path + ("outputs", var))) for var, text in fmu.outputs.items()}
     if not ok or (kind == "model_exchange" and ode is None) or None in targets.values():
         return []
@@ -364,8 +368,10 @@ def _compile_one(c: Compiler, name: str, fmu: Fmu, f: FmuFile, path: tuple[Any, 
             m = c.add_method(c.method_name(f"{base}_step"), "self", f"The communication step of FMU '{name}'.", [Line(f"return {float(fmu.step)!r}")])
         if m:
             args.append(f"step=self.{m}")
-    if ode is not None:
+    if ode is not None and ode >= 0:
         args.append(f"ode={ode}")
+    elif ode == -1:
+        args += [f"method={fmu.method!r}", f"tolerance={float(fmu.tolerance)!r}"]
     args.append(f"where={c.where(path, key=True)!r}")
     return [Line("    FmuDef(")] + [Line(f"        {a},") for a in args] + [Line("    ),")]
 

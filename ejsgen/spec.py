@@ -484,6 +484,10 @@ class Fmu(Strict):
     """Co-simulation: the communication step (an expression); default: one doStep per model step."""
     ode: str | int | None = None
     """Model exchange: the ODE page integrating its states (the page's name or its index in evolution); default: the first ODE page."""
+    method: Literal[METHODS] = "dopri5"  # type: ignore[valid-type]
+    """Model exchange in a model without ODE pages: the solver of the FMU's own states, advanced to the model's time after each step."""
+    tolerance: float = Field(default=1e-6, gt=0)
+    """Model exchange with its own solver: the adaptive or implicit method's absolute and relative tolerance."""
     inputs: dict[str, NumOrExpr] = Field(default_factory=dict)
     """FMU input variable: expression giving its value (sent at every communication point, or every evaluation of the rates)."""
     outputs: dict[str, str] = Field(default_factory=dict)

@@ -134,10 +134,15 @@ def test_c_sources_that_do_not_compile_are_reported_at_the_file_line(tmp_path, c
     assert "joint_drives.c" in err and "error" in err.split("drives': ", 1)[1]
 
 
-def test_model_exchange_needs_an_ode_page(tmp_path, capsys):
-    text = ME_SPEC.replace('    - ode:\n        equations:\n          x: "tau[0]"\n', '    - code: t = t + dt\n')
-    spec, err = first_error(tmp_path, text, capsys)
-    assert err.startswith(f"{place(spec, 'drives:')}: error: a model-exchange FMU is integrated by an ODE page, and the model has none")
+def test_a_solver_for_a_model_exchange_fmu_is_refused_where_an_ode_page_integrates_it(tmp_path, capsys):
+    spec, err = first_error(tmp_path, ME_SPEC.replace("    kind: model_exchange\n", "    kind: model_exchange\n    method: rk4\n"), capsys)
+    assert err == (
+        f"{place(spec, 'method: rk4', 'rk4')}: error: 'method' sets the solver of a model-exchange FMU in a model without ODE pages; "
+        "this FMU's states are integrated by an ODE page, with that page's method and tolerance; remove 'method'"
+    )
+    spec, err = first_error(tmp_path, cs_spec().replace("    kind: co_simulation\n", "    kind: co_simulation\n    tolerance: 1.0e-8\n"), capsys)
+    assert err.startswith(f"{place(spec, 'tolerance: 1.0e-8', '1.0e-8')}: error: 'tolerance' sets the solver of a model-exchange FMU")
+    assert "a co-simulation FMU steps itself" in err
 
 
 def test_an_invalid_model_description_is_refused_with_fmpys_reason(tmp_path, capsys):

@@ -17,11 +17,17 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FmuError", "FmuInstance", "load_fmpy", "read_description", "unpacked", "INSTALL_HINT", "PLATFORM_DIRS"]
+__all__ = ["FmuError", "FmuTerminated", "FmuInstance", "load_fmpy", "read_description", "unpacked", "INSTALL_HINT", "PLATFORM_DIRS"]
 
 INSTALL_HINT = "FMUs need FMPy: pip install 'ejsgen[fmu]' (or pip install fmpy)"
 
 _STATUS = ("OK", "warning", "discard", "error", "fatal", "pending")
+
+#: messages of the FMU's log kept (the latest), characters kept of each, messages shown with an error
+LOG_KEEP, LOG_CHARS, LOG_SHOWN = 50, 300, 5
+
+
+_INTEGERS = {"Integer", "Enumeration", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}
 
 
 class FmuError(RuntimeError):
@@ -31,6 +37,17 @@ class FmuError(RuntimeError):
         self.log = list(log)
         text = message + (": " + "; ".join(self.log) if self.log else "")
         super().__init__(text)
+
+
+class FmuTerminated(Exception):
+    """The FMU ended the run itself (``terminateSimulation``): information, not an error.
+
+    ``message``: what to show (the FMU, the time, and its own reason if it logged one)."""
+
+    def __init__(self, name: str, t: float, said: Sequence[str] = ()) -> None:
+        reason = "; ".join(said)
+        self.message = f"FMU '{name}' ended the simulation at t = {t:.6g}" + (f": {reason}" if reason else "")
+        super().__init__(self.message)
 
 
 def load_fmpy() -> Any:
@@ -101,6 +118,9 @@ class FmuInstance:
         self._groups: dict[tuple[str, ...], dict[str, list[tuple[int, int]]]] = {}
         self._buffers: dict[tuple[Any, ...], tuple[Any, Any, Any]] = {}
         self._xbufs: tuple[np.ndarray, Any, np.ndarray, Any] | None = None
+        self._zbuf: tuple[np.ndarray, Any] | None = None
+        #: values of the structural parameters set (they size the FMI 3 arrays)
+        self.structural: dict[str, Any] = {}
         self._instantiate()
 
     # -- calls, each turning a failure into FmuError with the FMU's messages -----------------
@@ -112,16 +132,32 @@ class FmuInstance:
         try:
             return fn(*args)
         except Exception as exc:  # noqa: BLE001 - FMPy raises FMICallException or plain Exception
-            said = [m.split(": ", 1)[1] for m in self.log[start:] if not m.startswith("OK: ")]
+            said = self.said(start)
             status = getattr(exc, "status", None)
             how = f"returned {_STATUS[status]}" if isinstance(status, int) and 0 <= status < len(_STATUS) else f"failed ({exc})"
             raise FmuError(f"FMU '{self.name}': {what} {how}", said) from None
 
     def _logger_text(self, status: int, category: bytes | None, message: bytes | None) -> None:
+        """The FMU's logger: warnings and errors are kept (the latest ``LOG_KEEP``, each cut
+        to ``LOG_CHARS`` characters); the FMU's OK messages (its call trace) are dropped."""
+        if status == 0:
+            return
         label = _STATUS[status] if 0 <= status < len(_STATUS) else str(status)
-        text = (message or b"").decode("utf-8", "replace")
-        self.log.append(f"{label}: {text}" if label != "OK" else f"OK: {text}")
-        del self.log[:-200]  # keep the latest messages only
+        text = " ".join((message or b"").decode("utf-8", "replace").split())
+        if len(text) > LOG_CHARS:
+            text = text[: LOG_CHARS - 1] + "…"
+        self.log.append(f"{label}: {text}")
+        del self.log[:-LOG_KEEP]
+
+    def said(self, start: int = 0, most: int = LOG_SHOWN) -> list[str]:
+        """What the FMU logged since ``start`` (an index into ``log``), the last ``most`` messages."""
+        return [m.split(": ", 1)[1] for m in self.log[start:]][-most:]
+
+    def _log_categories(self) -> list[str]:
+        """The FMU's log categories for warnings and errors (all of them if it names none such)."""
+        names = [c.name for c in getattr(self.md, "logCategories", []) or []]
+        keep = [n for n in names if any(w in n.lower() for w in ("warning", "error", "fatal", "discard", "pending"))]
+        return keep
 
     def _instantiate(self) -> None:
         fmpy = load_fmpy()
@@ -147,7 +183,7 @@ class FmuInstance:
             except Exception:  # noqa: BLE001 - FMPy without its logging shim: messages unformatted
                 pass
             self._callbacks = callbacks
-            self.call("fmi2Instantiate", fmu.instantiate, False, callbacks, False)
+            self.call("fmi2Instantiate", fmu.instantiate, False, callbacks, True)
         else:
             from fmpy import fmi3
 
@@ -155,11 +191,31 @@ class FmuInstance:
             fmu = self.call("loading the binary", lambda: cls(**common))
             self.call(
                 "fmi3Instantiate",
-                lambda: fmu.instantiate(loggingOn=False, logMessage=lambda env, status, cat, msg: self._logger_text(status, cat, msg)),
+                lambda: fmu.instantiate(loggingOn=True, logMessage=lambda env, status, cat, msg: self._logger_text(status, cat, msg)),
             )
         self._fmu = fmu
+        categories = self._log_categories()
+        if categories:  # only the categories of warnings and errors: no call trace through Python
+            try:
+                fmu.setDebugLogging(True, categories)
+            except Exception:  # noqa: BLE001 - an FMU that refuses keeps logging all: filtered by status
+                pass
 
     # -- values by name -----------------------------------------------------------------------
+    def shape(self, name: str) -> tuple[int, ...]:
+        """The shape of variable ``name``: () for a scalar, an FMI 3 array's dimensions otherwise
+        (a dimension given by a structural parameter takes the value set, else its start)."""
+        v = self.vars[name]
+        dims = getattr(v, "dimensions", None) or []
+        out = []
+        for d in dims:
+            if d.start is not None:
+                out.append(int(d.start))
+            else:
+                ref = d.variable
+                out.append(int(self.structural.get(ref.name, ref.start)))
+        return tuple(out)
+
     def _typed(self, names: Sequence[str]) -> dict[str, list[tuple[int, int]]]:
         """Value references grouped by type: type -> [(position in names, value reference)]."""
         key = tuple(names)
@@ -168,7 +224,8 @@ class FmuInstance:
             groups = {}
             for k, n in enumerate(names):
                 v = self.vars[n]
-                groups.setdefault(v.type, []).append((k, v.valueReference))
+                kind = v.type if not self.shape(n) else v.type + "[]"
+                groups.setdefault(kind, []).append((k, v.valueReference))
             self._groups[key] = groups
         return groups
 
@@ -185,8 +242,17 @@ class FmuInstance:
             self._buffers[key] = got
         return got
 
+    def _accessor(self, vtype: str, verb: str) -> Any:
+        """FMPy's ``setX``/``getX`` of an FMI type (FMI 2 Enumerations are Integers, FMI 3's Int64s)."""
+        if self.version == 2:
+            name = {"Enumeration": "Integer"}.get(vtype, vtype)
+        else:
+            name = {"Enumeration": "Int64"}.get(vtype, vtype)
+        return getattr(self._fmu, verb + name)
+
     def set_values(self, names: Sequence[str], values: Sequence[Any], what: str = "setting values") -> None:
-        """Set FMU variables by name (numbers, booleans or text, by the variable's type)."""
+        """Set FMU variables by name: numbers, booleans, text or bytes (Binary) by the variable's
+        type; an FMI 3 array takes an array of its shape (row-major), checked here."""
         f = self._fmu
         for vtype, items in self._typed(names).items():
             if vtype in ("Real", "Float64"):
@@ -198,23 +264,38 @@ class FmuInstance:
                 else:
                     self.call(what, f.fmi3SetFloat64, f.component, vr_array, n, buf, n)
                 continue
+            base = vtype.removesuffix("[]")
             vrs = [vr for _, vr in items]
-            vals = [values[k] for k, _ in items]
-            if vtype in ("Real", "Float64", "Float32"):
-                fn = f.setReal if self.version == 2 else (f.setFloat64 if vtype == "Float64" else f.setFloat32)
-                self.call(what, fn, vrs, [float(x) for x in vals])
-            elif vtype in ("Integer", "Int32", "Int64", "Int16", "Int8", "UInt32", "UInt64", "UInt16", "UInt8", "Enumeration"):
-                fn = f.setInteger if self.version == 2 else getattr(f, f"set{vtype if vtype != 'Enumeration' else 'Int64'}")
-                self.call(what, fn, vrs, [int(x) for x in vals])
-            elif vtype == "Boolean":
-                self.call(what, f.setBoolean, vrs, [bool(x) for x in vals])
-            elif vtype == "String":
-                self.call(what, f.setString, vrs, [str(x) for x in vals])
+            flat: list[Any] = []
+            for k, _ in items:
+                value = values[k]
+                if vtype.endswith("[]"):
+                    want = self.shape(names[k])
+                    arr = np.asarray(value)
+                    if arr.shape != want:
+                        raise FmuError(f"FMU '{self.name}': {what}: '{names[k]}' is an array of shape {want}, not of shape {arr.shape}")
+                    flat.extend(arr.ravel().tolist())
+                else:
+                    if np.ndim(value) != 0 and not isinstance(value, (str, bytes)):
+                        raise FmuError(f"FMU '{self.name}': {what}: '{names[k]}' is a single {base}, not an array of shape {np.shape(value)}")
+                    flat.append(value)
+            if base in ("Real", "Float64", "Float32"):
+                flat = [float(x) for x in flat]
+            elif base == "Boolean":
+                flat = [bool(x) for x in flat]
+            elif base == "String":
+                flat = [x.encode() if isinstance(x, str) else bytes(x) for x in flat]
+            elif base == "Binary":
+                flat = [x.encode() if isinstance(x, str) else bytes(x) for x in flat]
+            elif base in _INTEGERS:
+                flat = [int(x) for x in flat]
             else:
-                raise FmuError(f"FMU '{self.name}': cannot set variables of type {vtype}")
+                raise FmuError(f"FMU '{self.name}': cannot set variables of type {base}")
+            self.call(what, self._accessor(base, "set"), vrs, flat)
 
     def get_values(self, names: Sequence[str], what: str = "reading outputs") -> list[Any]:
-        """The FMU variables' values, in the order of ``names``."""
+        """The FMU variables' values, in the order of ``names`` (an FMI 3 array as a new
+        ndarray of its shape, a Binary as bytes, a String as str)."""
         f = self._fmu
         out: list[Any] = [None] * len(names)
         for vtype, items in self._typed(names).items():
@@ -227,69 +308,101 @@ class FmuInstance:
                 for j, (k, _) in enumerate(items):
                     out[k] = buf[j]
                 continue
+            base = vtype.removesuffix("[]")
             vrs = [vr for _, vr in items]
-            if vtype in ("Real", "Float64", "Float32"):
-                fn = f.getReal if self.version == 2 else (f.getFloat64 if vtype == "Float64" else f.getFloat32)
-            elif vtype == "Boolean":
-                fn = f.getBoolean
-            elif vtype == "String":
-                fn = f.getString
-            else:
-                fn = f.getInteger if self.version == 2 else getattr(f, f"get{vtype if vtype != 'Enumeration' else 'Int64'}")
+            fn = self._accessor(base, "get")
+            if vtype.endswith("[]"):
+                shapes = [self.shape(names[k]) for k, _ in items]
+                sizes = [int(np.prod(sh)) for sh in shapes]
+                got = list(self.call(what, fn, vrs, sum(sizes)))
+                at = 0
+                for (k, _), sh, size in zip(items, shapes, sizes):
+                    out[k] = np.array(got[at : at + size]).reshape(sh)
+                    at += size
+                continue
             got = self.call(what, fn, vrs)
             for (k, _), value in zip(items, got):
-                out[k] = value.decode() if isinstance(value, bytes) else value
+                if base == "String" and isinstance(value, bytes):
+                    value = value.decode("utf-8", "replace")
+                out[k] = value
         return out
 
     # -- lifecycle ----------------------------------------------------------------------------
-    def initialize(self, t0: float, set_before: Any, set_during: Any) -> None:
-        """Set up at ``t0``: ``set_before()`` (parameters, start values) then initialization
-        mode, ``set_during()`` (inputs), and out of it (model exchange: into continuous time)."""
+    def initialize(self, t0: float, set_before: Any, set_during: Any, stop: float | None = None) -> float | None:
+        """Set up at ``t0``: ``set_before()`` (structural parameters, parameters, start values)
+        then initialization mode, ``set_during()`` (inputs), and out of it (model exchange:
+        the event iteration, then continuous-time mode). Returns the next time event the FMU
+        announced (model exchange), or None.
+
+        Raises :class:`FmuTerminated` if the FMU ends the run in its first event iteration."""
         f = self._fmu
         if self.version == 2:
-            self.call("fmi2SetupExperiment", f.setupExperiment, None, t0)
+            self.call("fmi2SetupExperiment", f.setupExperiment, None, t0, stop)
             set_before()
             self.call("fmi2EnterInitializationMode", f.enterInitializationMode)
             set_during()
             self.call("fmi2ExitInitializationMode", f.exitInitializationMode)
         else:
             set_before()
-            self.call("fmi3EnterInitializationMode", f.enterInitializationMode, None, t0)
+            self.call("fmi3EnterInitializationMode", f.enterInitializationMode, None, t0, stop)
             set_during()
             self.call("fmi3ExitInitializationMode", f.exitInitializationMode)
-        if self.kind == "model_exchange":
-            self.event_update()
-            self.call("EnterContinuousTimeMode", f.enterContinuousTimeMode)
+        if self.kind != "model_exchange":
+            return None
+        _changed, next_time, terminate = self.event_update()
+        if terminate:
+            raise FmuTerminated(self.name, t0, self.said(most=3))
+        self.call(self._fn_name("EnterContinuousTimeMode"), f.enterContinuousTimeMode)
+        return next_time
 
-    def event_update(self) -> tuple[bool, float | None]:
-        """Event iteration (model exchange, in event mode): (states changed, next time event or None)."""
+    def _fn_name(self, what: str) -> str:
+        return f"fmi{self.version}{what}"
+
+    def event_update(self) -> tuple[bool, float | None, bool]:
+        """Event iteration (model exchange, in event mode): (continuous states changed, the
+        next time event or None, the FMU asks to terminate the simulation)."""
         f = self._fmu
         changed, next_time = False, None
+        what = "fmi2NewDiscreteStates" if self.version == 2 else "fmi3UpdateDiscreteStates"
+        fn = f.newDiscreteStates if self.version == 2 else f.updateDiscreteStates
         for _ in range(1000):
-            what = "fmi2NewDiscreteStates" if self.version == 2 else "fmi3UpdateDiscreteStates"
-            fn = f.newDiscreteStates if self.version == 2 else f.updateDiscreteStates
             again, terminate, _nominals, values_changed, defined, t_next = self.call(what, fn)
             changed = changed or bool(values_changed)
-            next_time = t_next if defined else None
+            next_time = float(t_next) if defined else None
             if terminate:
-                raise FmuError(f"FMU '{self.name}' asked to terminate the simulation", [m for m in self.log[-5:] if not m.startswith("OK: ")])
+                return changed, next_time, True
             if not again:
-                return changed, next_time
-        raise FmuError(f"FMU '{self.name}': its event iteration did not converge in 1000 rounds")
+                return changed, next_time, False
+        raise FmuError(f"FMU '{self.name}': its event iteration ({what}) did not converge in 1000 rounds")
 
-    def do_step(self, t: float, h: float) -> None:
-        """Co-simulation: advance the FMU from ``t`` by ``h``."""
+    def do_step(self, t: float, h: float) -> bool:
+        """Co-simulation: advance the FMU from ``t`` by ``h``. Returns True if the FMU ended
+        the simulation (FMI 3's ``terminateSimulation``, FMI 2's ``fmi2Discard`` with
+        ``fmi2Terminated``): the caller reports it as information and stops stepping it."""
         f = self._fmu
         if self.version == 2:
-            self.call("fmi2DoStep", f.doStep, t, h)
-        else:
-            _event, terminate, _early, _last = self.call("fmi3DoStep", f.doStep, t, h)
-            if terminate:
-                raise FmuError(f"FMU '{self.name}' asked to terminate the simulation at t = {t + h:g}", [m for m in self.log[-5:] if not m.startswith("OK: ")])
+            try:
+                self.call("fmi2DoStep", f.doStep, t, h)
+            except FmuError as exc:
+                if "returned discard" in str(exc) and self._fmi2_terminated():
+                    return True
+                raise
+            return False
+        _event, terminate, _early, _last = self.call("fmi3DoStep", f.doStep, t, h)
+        return bool(terminate)
 
-    # model exchange
+    def _fmi2_terminated(self) -> bool:
+        """FMI 2: after a discarded doStep, whether the FMU says the simulation is over."""
+        try:
+            return bool(self._fmu.getBooleanStatus(3))  # fmi2Terminated
+        except Exception:  # noqa: BLE001 - the status is optional
+            return False
+
+    # model exchange: the calls of every evaluation go straight to FMPy's ctypes functions
+    # (which raise on an error status), with buffers made once
     def set_time(self, t: float) -> None:
-        self.call("SetTime", self._fmu.setTime, t)
+        f = self._fmu
+        self.call(self._fn_name("SetTime"), f.fmi2SetTime if self.version == 2 else f.fmi3SetTime, f.component, t)
 
     def _state_buffers(self) -> tuple[np.ndarray, Any, np.ndarray, Any]:
         """(x, a pointer to it, dx, a pointer to it): the buffers of the state calls, made once."""
@@ -299,43 +412,47 @@ class FmuInstance:
         return self._xbufs
 
     def set_states(self, x: np.ndarray) -> None:
+        """Give the FMU its continuous states x, shape (nx,)."""
         buf, ptr, _, _ = self._state_buffers()
         buf[:] = x
-        self.call("SetContinuousStates", self._fmu.setContinuousStates, ptr, self.nx)
+        self.call(self._fn_name("SetContinuousStates"), self._fmu.setContinuousStates, ptr, self.nx)
 
     def get_states(self) -> np.ndarray:
+        """The FMU's continuous states, a new array of shape (nx,)."""
         buf, ptr, _, _ = self._state_buffers()
-        self.call("GetContinuousStates", self._fmu.getContinuousStates, ptr, self.nx)
+        self.call(self._fn_name("GetContinuousStates"), self._fmu.getContinuousStates, ptr, self.nx)
         return buf.copy()
 
     def derivatives(self) -> np.ndarray:
+        """dx/dt at the time, states and inputs given last: a new array of shape (nx,)."""
         _, _, buf, ptr = self._state_buffers()
-        fn = self._fmu.getDerivatives if self.version == 2 else self._fmu.getContinuousStateDerivatives
-        self.call("GetDerivatives", fn, ptr, self.nx)
+        if self.version == 2:
+            self.call("fmi2GetDerivatives", self._fmu.getDerivatives, ptr, self.nx)
+        else:
+            self.call("fmi3GetContinuousStateDerivatives", self._fmu.getContinuousStateDerivatives, ptr, self.nx)
         return buf.copy()
 
     def event_indicators(self) -> np.ndarray:
-        z = np.zeros(self.nz)
-        if self.nz:
-            self.call("GetEventIndicators", self._fmu.getEventIndicators, z.ctypes.data_as(_double_p()), self.nz)
-        return z
+        """The event indicators z at the time, states and inputs given last: a new array (nz,)."""
+        if not self.nz:
+            return np.zeros(0)
+        if self._zbuf is None:
+            z = np.zeros(self.nz)
+            self._zbuf = (z, z.ctypes.data_as(_double_p()))
+        z, ptr = self._zbuf
+        self.call(self._fn_name("GetEventIndicators"), self._fmu.getEventIndicators, ptr, self.nz)
+        return z.copy()
 
-    def completed_step(self) -> bool:
-        """Model exchange: tell the FMU a step was accepted; True if it asks for event mode."""
-        f = self._fmu
-        if self.version == 2:
-            enter, terminate = self.call("fmi2CompletedIntegratorStep", f.completedIntegratorStep)
-        else:
-            enter, terminate = self.call("fmi3CompletedIntegratorStep", f.completedIntegratorStep)
-        if terminate:
-            raise FmuError(f"FMU '{self.name}' asked to terminate the simulation", [m for m in self.log[-5:] if not m.startswith("OK: ")])
-        return bool(enter)
+    def completed_step(self) -> tuple[bool, bool]:
+        """Model exchange: tell the FMU a step was accepted; (it asks for event mode, it asks to terminate)."""
+        enter, terminate = self.call(self._fn_name("CompletedIntegratorStep"), self._fmu.completedIntegratorStep)
+        return bool(enter), bool(terminate)
 
     def enter_event_mode(self) -> None:
-        self.call("EnterEventMode", self._fmu.enterEventMode)
+        self.call(self._fn_name("EnterEventMode"), self._fmu.enterEventMode)
 
     def enter_continuous_time_mode(self) -> None:
-        self.call("EnterContinuousTimeMode", self._fmu.enterContinuousTimeMode)
+        self.call(self._fn_name("EnterContinuousTimeMode"), self._fmu.enterContinuousTimeMode)
 
     def free(self) -> None:
         """Terminate and free the instance and unload its binary (once; errors ignored)."""

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from ejsrl.fmi._instance import FmuError, FmuInstance, read_description, unpacked
+from ejsrl.fmi._instance import FmuError, FmuInstance, FmuTerminated, read_description, unpacked
 from ejsrl.sim.model import UserCodeError
 
 __all__ = ["FmuDef", "Fmus", "FmuRun"]
@@ -68,6 +68,8 @@ class FmuDef:
     start: dict[str, Any] = field(default_factory=dict)
     step: Callable[[], float] | None = None
     ode: int | None = None
+    method: str = "dopri5"
+    tolerance: float = 1e-6
     where: str = ""
 
 
@@ -84,10 +86,10 @@ class FmuRun:
         self.held: list[Any] | None = None
         self.params: list[Any] = []
         self.x = np.zeros(0)
-        self.z = np.zeros(0)
-        self.next_event: float | None = None
-        self.page: Any = None
-        self._n_model = 0
+        self.me: Any = None
+        #: the FMU ended the run itself (co-simulation); the message was shown once
+        self.terminated: FmuTerminated | None = None
+        self.reported = False
 
     # -- errors ----------------------------------------------------------------------------
     def _fail(self, exc: FmuError) -> UserCodeError:
@@ -110,22 +112,55 @@ class FmuRun:
         except ImportError as exc:  # FMPy missing: say how to install it, at the FMU's spec line
             raise UserCodeError(f"FMU '{spec.name}': {exc}", spec.where) from None
         self.inst = self.guarded(lambda: FmuInstance(folder, md, spec.kind, spec.name))
+        inst = self.inst
         self.t = float(t0)
         self.params = list(spec.read_parameters()) if spec.read_parameters else []
+        structural = [k for k, p in enumerate(spec.parameters) if inst.vars[p].causality == "structuralParameter"]
+        sent_inputs: list[Any] = []
 
         def before() -> None:
+            for k in structural:  # first: they size the arrays
+                inst.structural[spec.parameters[k]] = self.params[k]
+            if structural:
+                inst.set_values([spec.parameters[k] for k in structural], [self.params[k] for k in structural], "setting structural parameters")
             if spec.start:
-                self.inst.set_values(list(spec.start), list(spec.start.values()), "setting start values")  # type: ignore[union-attr]
-            if spec.parameters:
-                self.inst.set_values(spec.parameters, self.params, "setting parameters")  # type: ignore[union-attr]
+                inst.set_values(list(spec.start), list(spec.start.values()), "setting start values")
+            rest = [k for k in range(len(spec.parameters)) if k not in structural]
+            if rest:
+                inst.set_values([spec.parameters[k] for k in rest], [self.params[k] for k in rest], "setting parameters")
 
-        self.guarded(lambda: self.inst.initialize(self.t, before, self._send_inputs))  # type: ignore[union-attr]
+        def during() -> None:
+            if spec.inputs and spec.read_inputs is not None:
+                values = list(spec.read_inputs())
+                inst.set_values(spec.inputs, values, "setting inputs")
+                sent_inputs.extend(values)
+
+        try:
+            next_event = self.guarded(lambda: inst.initialize(self.t, before, during))
+        except FmuTerminated as exc:
+            raise UserCodeError(exc.message + " (while initializing)", spec.where) from None
         self.calls += 1
         if spec.kind == "model_exchange":
-            self.x = self.guarded(self.inst.get_states)
-            self.z = self.guarded(self.inst.event_indicators)
-            self.page = self._couple(pages)
-        self._receive_outputs()
+            from ejsrl.fmi._me import MeCoupling
+
+            self.x = self.guarded(inst.get_states)
+            self.me = MeCoupling(self, self._page(pages), next_event)
+            if sent_inputs:
+                self.me.sent(sent_inputs)
+        self.receive_outputs()
+
+    def _page(self, pages: Sequence[Any]) -> Any:
+        """The ODE page ``spec.ode`` that integrates a model-exchange FMU's states."""
+        from ejsrl.sim.model import OdePage
+
+        spec = self.spec
+        if spec.ode is None:
+            from ejsrl.fmi._me import OwnPage
+
+            return OwnPage(self.t, spec.method, spec.tolerance, spec.where)
+        if not (0 <= spec.ode < len(pages)) or not isinstance(pages[spec.ode], OdePage):
+            raise UserCodeError(f"FMU '{spec.name}': model exchange needs an ODE page to integrate its states", spec.where)
+        return pages[spec.ode]
 
     def _send_inputs(self) -> None:
         spec = self.spec
@@ -133,7 +168,8 @@ class FmuRun:
             values = spec.read_inputs()
             self.inst.set_values(spec.inputs, values, "setting inputs")  # type: ignore[union-attr]
 
-    def _receive_outputs(self) -> None:
+    def receive_outputs(self) -> None:
+        """Read the FMU's outputs and write them into the model variables."""
         spec = self.spec
         if spec.outputs and spec.write_outputs is not None:
             values = self.guarded(lambda: self.inst.get_values(spec.outputs))  # type: ignore[union-attr]
@@ -145,16 +181,20 @@ class FmuRun:
         if not spec.tunable or spec.read_parameters is None:
             return
         now = list(spec.read_parameters())
-        changed = [k for k, (a, b) in enumerate(zip(now, self.params)) if spec.parameters[k] in spec.tunable and a != b]
+        changed = [k for k, (a, b) in enumerate(zip(now, self.params)) if spec.parameters[k] in spec.tunable and not _same(a, b)]
         if changed:
             self.guarded(lambda: self.inst.set_values([spec.parameters[k] for k in changed], [now[k] for k in changed], "setting parameters"))  # type: ignore[union-attr]
             for k in changed:
                 self.params[k] = now[k]
 
-    # -- co-simulation ------------------------------------------------------------------------
+    # -- around each step -----------------------------------------------------------------------
     def before_step(self, t: float) -> None:
-        """Sample and send the inputs if the model is at a communication point."""
-        if self.spec.kind != "co_simulation" or self.held is not None:
+        """Model exchange: changes go to the FMU in event mode; co-simulation: sample and send
+        the inputs if the model is at a communication point."""
+        if self.me is not None:
+            self.me.before_step(t)
+            return
+        if self.terminated is not None or self.held is not None:
             return
         if t >= self.t - _EPS * max(1.0, abs(self.t)):
             self._send_tunable()
@@ -163,10 +203,10 @@ class FmuRun:
 
     def after_step(self, t_new: float) -> None:
         """Co-simulation: advance the FMU to the model's time; model exchange: finish the step."""
-        if self.spec.kind == "model_exchange":
-            self._me_after_step(t_new)
+        if self.me is not None:
+            self.me.after_step(t_new)
             return
-        if self.held is None:
+        if self.held is None or self.terminated is not None:
             return
         step = self.spec.step
         inst = self.inst
@@ -175,8 +215,7 @@ class FmuRun:
             h = t_new - self.t
             if h <= 0:
                 return
-            self.guarded(lambda: inst.do_step(self.t, h))
-            self.calls += 1
+            self._do_step(inst, h)
             self.t = t_new
         else:
             H = float(step())
@@ -184,105 +223,43 @@ class FmuRun:
                 raise UserCodeError(f"FMU '{self.spec.name}': the communication step must be a positive number, not {H!r}", self.spec.where)
             if t_new < self.t + H - _EPS * max(1.0, abs(t_new)):
                 return  # not yet at the next communication point: inputs stay held
-            while t_new >= self.t + H - _EPS * max(1.0, abs(t_new)):
-                self.guarded(lambda: inst.do_step(self.t, H))
-                self.calls += 1
+            while t_new >= self.t + H - _EPS * max(1.0, abs(t_new)) and self.terminated is None:
+                self._do_step(inst, H)
                 self.t += H
         self.held = None
-        self._receive_outputs()
+        if self.terminated is not None:
+            self._report()
+            return
+        self.receive_outputs()
 
-    # -- model exchange -------------------------------------------------------------------------
-    def _couple(self, pages: Sequence[Any]) -> Any:
-        """Append the FMU's states to the ODE page ``spec.ode``: one solver integrates both."""
-        from ejsrl.sim.model import OdePage
-        from ejsrl.sim.ode import EventDef, OdeIntegrator
-
-        spec = self.spec
-        if spec.ode is None or not (0 <= spec.ode < len(pages)) or not isinstance(pages[spec.ode], OdePage):
-            raise UserCodeError(f"FMU '{spec.name}': model exchange needs an ODE page to integrate its states", spec.where)
-        page = pages[spec.ode]
-        state0, load0, integ = page.state, page.load, page.integrator
-        rates0 = integ.rates
-        inst = self.inst
-        assert inst is not None
-        run = self
-
-        def state() -> tuple[float, np.ndarray]:
-            t, y = state0()
-            run._n_model = len(y)
-            return t, np.concatenate((y, run.x))
-
-        def load(t: float, y: np.ndarray) -> None:
-            n = run._n_model
-            load0(t, y[:n])
-            run.x = np.array(y[n:], dtype=float)
-
-        def rates(t: float, y: np.ndarray) -> np.ndarray:
-            n = run._n_model
-            load0(t, y[:n])
-            run._me_evaluate(t, y[n:])
-            dy = rates0(t, y[:n])
-            dx = run.guarded(inst.derivatives)
-            run.calls += 1
-            return np.concatenate((np.asarray(dy, dtype=float), dx))
-
-        def wrap_event(ev: Any) -> Any:
-            def when(t: float, y: np.ndarray) -> float:
-                return ev.when(t, y[: run._n_model])
-
-            def action(t: float, y: np.ndarray) -> np.ndarray | None:
-                new = ev.action(t, y[: run._n_model].copy())
-                return None if new is None else np.concatenate((np.asarray(new, dtype=float), y[run._n_model :]))
-
-            return EventDef(ev.name, when, ev.direction, action, ev.stop)
-
-        page.state, page.load = state, load
-        page.integrator = OdeIntegrator(
-            rates,
-            integ.method,
-            tolerance=integ.tolerance,
-            max_step=None if math.isinf(integ.max_step) else integ.max_step,
-            events=[wrap_event(e) for e in integ.events],
-        )
-        page.names = tuple(page.names) + (f"the states of FMU '{spec.name}'",)
-        return page
-
-    def _me_evaluate(self, t: float, x: np.ndarray) -> None:
-        """Give the FMU the time, its states and the inputs; write its outputs into the model."""
-        inst = self.inst
-        assert inst is not None
-        self.guarded(lambda: inst.set_time(t))
-        if inst.nx:
-            self.guarded(lambda: inst.set_states(x))
-        self.guarded(self._send_inputs)
-        self._receive_outputs()
-
-    def _me_after_step(self, t_new: float) -> None:
-        inst = self.inst
-        assert inst is not None
-        self._send_tunable()
-        self._me_evaluate(t_new, self.x)
-        enter = self.guarded(inst.completed_step)
+    def _do_step(self, inst: FmuInstance, h: float) -> None:
+        start = len(inst.log)
+        if self.guarded(lambda: inst.do_step(self.t, h)):
+            self.terminated = FmuTerminated(self.spec.name, self.t + h, inst.said(start, 3))
         self.calls += 1
-        z = self.guarded(inst.event_indicators)
-        crossed = bool(np.any(np.sign(z) != np.sign(self.z))) if len(z) else False
-        timed = self.next_event is not None and t_new >= self.next_event - _EPS * max(1.0, abs(t_new))
-        self.z = z
-        if enter or crossed or timed:
-            self.guarded(inst.enter_event_mode)
-            changed, self.next_event = self.guarded(inst.event_update)
-            self.guarded(inst.enter_continuous_time_mode)
-            if changed:
-                self.x = self.guarded(inst.get_states)
-                if self.page is not None:
-                    self.page.restart()
-            self.z = self.guarded(inst.event_indicators)
-            self._receive_outputs()
-        self.t = t_new
+
+    def _report(self) -> None:
+        """The FMU ended the run: its message as information, the model paused, the FMU freed."""
+        if self.reported or self.terminated is None:
+            return
+        self.reported = True
+        try:
+            self.receive_outputs()
+        except UserCodeError:
+            pass  # an FMU that stopped may refuse to be read: the model keeps the last outputs
+        self.model.alert(self.terminated.message)
+        self.model.pause()
+        self.free()
 
     def free(self) -> None:
         if self.inst is not None:
             self.inst.free()
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return bool(np.array_equal(a, b))
+    return bool(a == b)
 
 
 class Fmus:

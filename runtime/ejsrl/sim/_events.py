@@ -46,6 +46,10 @@ class EventDef:
     """Runs the user's action at the located ``(t, y)``; returns the new state or None."""
     stop: bool = False
     """Pause the simulation after the action (``step`` returns at the event time)."""
+    after: bool = False
+    """The action gets the time and state just *past* the crossing (the right end of the
+    final bracket, where ``g`` has changed sign), as CVode's roots are: an FMU's event
+    indicators are checked so (FMI). The step still restarts from the located time."""
 
 
 class ZenoError(RuntimeError):
@@ -64,6 +68,10 @@ class Hit(NamedTuple):
     """State at ``t``."""
     pre: int
     """Sign of g before the crossing (+1 or -1)."""
+    t_after: float | None = None
+    """Time just past the crossing (the bracket's right end, within the tolerance of ``t``)."""
+    y_after: np.ndarray | None = None
+    """State at ``t_after``."""
 
 
 def _sign(x: float) -> int:
@@ -78,14 +86,15 @@ def locate(
     t1: float,
     g1: float,
     tol: float,
-) -> tuple[float, np.ndarray]:
+    y1: np.ndarray | None = None,
+) -> tuple[float, np.ndarray, float, np.ndarray | None]:
     """Bracket the root of g on [t0, t1] to width ``tol``; g0 != 0, g1 == 0 or opposite sign.
 
     Illinois (modified regula falsi) steps, with a bisection whenever a step did not halve
     the bracket. Returns the left end of the final bracket and its state (still strictly
-    on g0's side).
+    on g0's side), and the right end and its state (past the root; ``y1`` if never moved).
     """
-    a, ga, ya, b, gb = t0, g0, y0, t1, g1
+    a, ga, ya, b, gb, yb = t0, g0, y0, t1, g1, y1
     pre = _sign(g0)
     side = 0
     bisect = False
@@ -103,12 +112,12 @@ def locate(
                 gb *= 0.5
             side = -1
         else:
-            b, gb = x, gx
+            b, gb, yb = x, gx, yx
             if side == 1:
                 ga *= 0.5
             side = 1
         bisect = (b - a) > 0.5 * width
-    return a, ya
+    return a, ya, b, yb
 
 
 class EventTracker:
@@ -174,12 +183,12 @@ class EventTracker:
                 yx = state_at(x)
                 return float(when(x, yx)), yx
 
-            a, ya = locate(g_at, t0, self.g[i], y0, t1, g1[i], tol)
-            hits.append(Hit(i, float(a), ya, s0))
+            a, ya, b, yb = locate(g_at, t0, self.g[i], y0, t1, g1[i], tol, y1)
+            hits.append(Hit(i, float(a), ya, s0, float(b), yb))
         if hits:
             first = min(hits, key=lambda h: (h.t, h.index))
             return [
-                Hit(h.index, first.t, first.y, h.pre) for h in hits if h.t <= first.t + tol
+                Hit(h.index, first.t, first.y, h.pre, h.t_after, h.y_after) for h in hits if h.t <= first.t + tol
             ]  # hits are in list order already
         for i in range(len(events)):
             g = g1[i]
@@ -221,7 +230,10 @@ class EventTracker:
                     "Zeno behaviour (e.g. a ball with restitution 0); the simulation was stopped"
                 )
             self.last_time[i] = t
-            out = ev.action(t, y_new)
+            if ev.after and y_new is y and hit.y_after is not None:
+                out = ev.action(hit.t_after, hit.y_after)
+            else:
+                out = ev.action(t, y_new)
             if out is not None:
                 out = np.asarray(out, dtype=float)
                 if out.shape != y.shape:

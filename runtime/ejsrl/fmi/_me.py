@@ -1,0 +1,337 @@
+"""A model-exchange FMU during a run, driven as the FMI 2.0 and 3.0 state machines say.
+
+The FMU's continuous states x (shape (nx,)) are appended to the state of an ODE page, so
+the page's solver integrates both: at each evaluation of the rates the FMU gets the time,
+its states and its *continuous* inputs (continuous-time mode), its outputs go into the
+model variables, and its derivatives join the page's rates.
+
+Everything discrete happens in event mode, as FMI requires (FMPy's ``simulateME`` does
+the same; :mod:`fmpy.simulation` is the reference):
+
+- **changed parameters and discrete inputs** (tunable parameters; Integer, Boolean,
+  String, Binary, Enumeration and discrete Real inputs) are compared with what was sent
+  before every step; a change enters event mode at the step's start, sets them, runs the
+  event iteration and returns to continuous time;
+- **time events** (the next event time the FMU announced) are events of the page's
+  solver whose function crosses zero at exactly that time, so a step ends there and the
+  event iteration runs at the announced time itself;
+- **state events** (an event indicator changing sign) are events of the page's solver,
+  located inside the step like the spec's own ``events:`` (:mod:`ejsrl.sim._events`,
+  Illinois/bisection on the method's own interpolant, to 1e-12 (1 + |t|) s); the FMU
+  sees the state just past the crossing, as CVode's roots give it;
+- **step events** (``completedIntegratorStep`` asking for event mode) after each step;
+- **terminateSimulation** ends the run: the FMU is frozen where it stopped, the model
+  pauses and shows the FMU's message as information (``alert``), not an error.
+
+After each event the states the FMU changed are read back and the solver restarts.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numpy as np
+
+from ejsrl.fmi._instance import FmuTerminated
+
+if TYPE_CHECKING:
+    from ejsrl.fmi.coupling import FmuRun
+
+__all__ = ["MeCoupling", "OwnPage", "continuous_inputs"]
+
+
+class OwnPage:
+    """The solver of a model-exchange FMU in a model without ODE pages: it holds no model
+    state (the FMU's states are appended by :class:`MeCoupling`) and is advanced from the
+    FMU's time to the model's after each step of the model (the inputs read as the model
+    holds them then). ``method``/``tolerance``: as an ODE page's."""
+
+    def __init__(self, t0: float, method: str, tolerance: float, where: str) -> None:
+        from ejsrl.sim.ode import OdeIntegrator
+
+        self.t = float(t0)
+        self.integrator = OdeIntegrator(lambda t, y: np.zeros(0), method, tolerance=tolerance)
+        self.names: tuple[str, ...] = ()
+        self.event_where: dict[str, str] = {}
+        self.where = where
+
+    def state(self) -> tuple[float, np.ndarray]:
+        return self.t, np.zeros(0)
+
+    def load(self, t: float, y: np.ndarray) -> None:
+        self.t = float(t)
+
+    def restart(self) -> None:
+        self.integrator.reset()
+
+    def advance(self, t_new: float) -> None:
+        """Integrate to the model's time ``t_new`` (events located on the way)."""
+        from ejsrl.sim.model import UserCodeError
+        from ejsrl.sim.ode import ZenoError
+
+        t, y = self.state()
+        if not t_new > t:
+            return
+        try:
+            result = self.integrator.step(t, y, t_new - t, t_new)
+        except ZenoError as exc:
+            raise UserCodeError(str(exc), self.where) from None
+        self.load(result.t, result.y)
+
+
+def continuous_inputs(md: Any, names: Sequence[str]) -> list[bool]:
+    """For each input name, whether it is continuous (a Real set in continuous-time mode)."""
+    by_name = {v.name: v for v in md.modelVariables}
+    return [by_name[n].type in ("Real", "Float64", "Float32") and by_name[n].variability == "continuous" for n in names]
+
+
+class MeCoupling:
+    """Couples a started model-exchange :class:`FmuRun` to the ODE page ``page``.
+
+    ``next_event``: the time event announced by the initialization (or None).
+    """
+
+    def __init__(self, run: FmuRun, page: Any, next_event: float | None) -> None:
+        self.run = run
+        self.page = page
+        inst = run.inst
+        assert inst is not None
+        self.inst = inst
+        self.next_event = next_event
+        #: the time event's parity: its function is parity * (t - next_event), so every
+        #: time event crosses zero the other way and the solver arms it afresh
+        self._parity = 1.0
+        self.terminated: FmuTerminated | None = None
+        spec = run.spec
+        cont = continuous_inputs(inst.md, spec.inputs)
+        self._cont_idx = [k for k, c in enumerate(cont) if c]
+        self._disc_idx = [k for k, c in enumerate(cont) if not c]
+        self._cont_names = [spec.inputs[k] for k in self._cont_idx]
+        self._disc_names = [spec.inputs[k] for k in self._disc_idx]
+        self._tunable_idx = [k for k, p in enumerate(spec.parameters) if p in spec.tunable]
+        self.sent_discrete: list[Any] = []
+        self._n_model = 0
+        self._eval_key: tuple[float, bytes] | None = None
+        self._z = np.zeros(inst.nz)
+        self._dx_frozen = np.zeros(inst.nx)
+        self._couple()
+
+    # -- the page's integrator ---------------------------------------------------------------
+    def _couple(self) -> None:
+        from ejsrl.sim.ode import EventDef, OdeIntegrator
+
+        page, run, inst = self.page, self.run, self.inst
+        state0, load0, integ = page.state, page.load, page.integrator
+        rates0 = integ.rates
+        me = self
+
+        def state() -> tuple[float, np.ndarray]:
+            t, y = state0()
+            me._n_model = len(y)
+            return t, np.concatenate((y, run.x))
+
+        def load(t: float, y: np.ndarray) -> None:
+            n = me._n_model
+            load0(t, y[:n])
+            run.x = np.array(y[n:], dtype=float)
+
+        def rates(t: float, y: np.ndarray) -> np.ndarray:
+            n = me._n_model
+            load0(t, y[:n])
+            me.evaluate(t, y[n:])
+            dy = rates0(t, y[:n])
+            if me.terminated is not None:
+                dx = me._dx_frozen
+            else:
+                dx = run.guarded(inst.derivatives)
+            run.calls += 1
+            return np.concatenate((np.asarray(dy, dtype=float), dx))
+
+        def wrap_event(ev: Any) -> Any:
+            def when(t: float, y: np.ndarray) -> float:
+                return ev.when(t, y[: me._n_model])
+
+            def action(t: float, y: np.ndarray) -> np.ndarray | None:
+                new = ev.action(t, y[: me._n_model].copy())
+                return None if new is None else np.concatenate((np.asarray(new, dtype=float), y[me._n_model :]))
+
+            return EventDef(ev.name, when, ev.direction, action, ev.stop)
+
+        events = [wrap_event(e) for e in integ.events]
+        name = run.spec.name
+        for k in range(inst.nz):
+            events.append(EventDef(f"event indicator {k} of FMU '{name}'", self._indicator(k), 0, self._state_event, after=True))
+        events.append(EventDef(f"time event of FMU '{name}'", self._time_function, 0, self._time_event))
+        page.state, page.load = state, load
+        page.integrator = OdeIntegrator(
+            rates,
+            integ.method,
+            tolerance=integ.tolerance,
+            max_step=None if math.isinf(integ.max_step) else integ.max_step,
+            events=events,
+        )
+        page.names = tuple(page.names) + (f"the states of FMU '{name}'",)
+        page.event_where.update({e.name: run.spec.where for e in events[len(integ.events) :]})
+
+    def evaluate(self, t: float, x: np.ndarray) -> None:
+        """Give the FMU the time, its states and the continuous inputs; write its outputs into
+        the model (skipped when the FMU already has exactly this time and state)."""
+        if self.terminated is not None:
+            return
+        key = (t, x.tobytes())
+        if key == self._eval_key:
+            return
+        run, inst = self.run, self.inst
+        self._eval_key = None
+        run.guarded(lambda: inst.set_time(t))
+        if inst.nx:
+            run.guarded(lambda: inst.set_states(x))
+        if self._cont_idx:
+            values = run.spec.read_inputs()  # type: ignore[misc]
+            run.guarded(lambda: inst.set_values(self._cont_names, [values[k] for k in self._cont_idx], "setting inputs"))
+        run.receive_outputs()
+        self._eval_key = key
+
+    def _indicator(self, k: int) -> Any:
+        def when(t: float, y: np.ndarray) -> float:
+            if self.terminated is not None:
+                return float(self._z[k])
+            n = self._n_model
+            key = (t, y[n:].tobytes())
+            if key != self._z_key:
+                self.page.load(t, y)  # the model's part too: the FMU's inputs may read it
+                self.evaluate(t, y[n:])
+                self._z = self.run.guarded(self.inst.event_indicators)
+                self._z_key = key
+            return float(self._z[k])
+
+        return when
+
+    _z_key: tuple[float, bytes] | None = None
+
+    def _time_function(self, t: float, y: np.ndarray) -> float:
+        if self.next_event is None or self.terminated is not None:
+            return -self._parity
+        return self._parity * (t - self.next_event)
+
+    # -- events --------------------------------------------------------------------------------
+    def _state_event(self, t: float, y: np.ndarray) -> np.ndarray:
+        return self._event(t, y)
+
+    def _time_event(self, t: float, y: np.ndarray) -> np.ndarray:
+        at = self.next_event if self.next_event is not None else t
+        return self._event(max(t, at), y)
+
+    def _event(self, t: float, y: np.ndarray, changes: Any = None) -> np.ndarray:
+        """Event mode at (t, y): the FMU gets them, ``changes()`` sets what changed, the event
+        iteration runs, back to continuous time; returns y with the FMU's new states."""
+        if self.terminated is not None:
+            return y
+        run, inst = self.run, self.inst
+        n = self._n_model
+        self.page.load(t, y)
+        self._eval_key = self._z_key = None
+        self.evaluate(t, y[n:])
+        run.guarded(inst.enter_event_mode)
+        if changes is not None:
+            run.guarded(changes)
+        changed, self.next_event, terminate = run.guarded(inst.event_update)
+        self._parity = -self._parity
+        self._eval_key = self._z_key = None
+        if terminate:
+            self._terminate(t)
+            return y
+        run.guarded(inst.enter_continuous_time_mode)
+        x = run.guarded(inst.get_states) if changed else np.asarray(y[n:], dtype=float)
+        run.x = x
+        run.receive_outputs()
+        return np.concatenate((np.asarray(y[:n], dtype=float), x))
+
+    def _terminate(self, t: float) -> None:
+        """The FMU ended the run: freeze it, tell the user, pause (at the end of this step)."""
+        self.terminated = FmuTerminated(self.run.spec.name, t, self.inst.said(most=3))
+        self._dx_frozen = np.zeros(self.inst.nx)
+        try:  # its last values (FMI allows reading them after terminateSimulation)
+            self.run.receive_outputs()
+        except Exception:  # noqa: BLE001 - an FMU that refuses keeps the model's last outputs
+            pass
+
+    def _apply_changes(self, t: float) -> None:
+        """Before a step: changed tunable parameters and discrete inputs go to the FMU in event mode."""
+        run, spec = self.run, self.run.spec
+        params: list[tuple[str, Any]] = []
+        if self._tunable_idx and spec.read_parameters is not None:
+            now = list(spec.read_parameters())
+            params = [(spec.parameters[k], now[k]) for k in self._tunable_idx if not _same(now[k], run.params[k])]
+            if params:
+                for k in self._tunable_idx:
+                    run.params[k] = now[k]
+        discrete: list[tuple[str, Any]] = []
+        if self._disc_idx:
+            values = spec.read_inputs()  # type: ignore[misc]
+            now_d = [values[k] for k in self._disc_idx]
+            discrete = [(nm, v) for nm, v, old in zip(self._disc_names, now_d, self.sent_discrete) if not _same(v, old)]
+            if discrete:
+                self.sent_discrete = [_copy(v) for v in now_d]
+        if not params and not discrete:
+            return
+        inst = self.inst
+
+        def changes() -> None:
+            if params:
+                inst.set_values([p for p, _ in params], [v for _, v in params], "setting parameters")
+            if discrete:
+                inst.set_values([d for d, _ in discrete], [v for _, v in discrete], "setting inputs")
+
+        t0, y = self.page.state()
+        y_new = self._event(t, y, changes)
+        if self.terminated is None:
+            self.page.load(t0, y_new)
+        self.page.restart()
+
+    # -- around each step -----------------------------------------------------------------------
+    def before_step(self, t: float) -> None:
+        if self.terminated is None:
+            self._apply_changes(t)
+
+    def after_step(self, t_new: float) -> None:
+        """Tell the FMU the step was accepted; a step event it asks for runs the event iteration."""
+        run, inst = self.run, self.inst
+        if isinstance(self.page, OwnPage) and self.terminated is None:
+            self.page.advance(t_new)
+        if self.terminated is None:
+            self._eval_key = None
+            self.evaluate(t_new, run.x)
+            enter, terminate = run.guarded(inst.completed_step)
+            run.calls += 1
+            if terminate:
+                self._terminate(t_new)
+            elif enter:
+                t0, y = self.page.state()
+                y_new = self._event(t_new, y)
+                if self.terminated is None:
+                    self.page.load(t0, y_new)
+                self.page.restart()
+        if self.terminated is not None and not run.reported:
+            run.reported = True
+            model = run.model
+            model.alert(self.terminated.message)
+            model.pause()
+            run.free()
+        run.t = t_new
+
+    def sent(self, values: Sequence[Any]) -> None:
+        """Note the discrete inputs sent at initialization (``values``: all the inputs)."""
+        self.sent_discrete = [_copy(values[k]) for k in self._disc_idx]
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return bool(np.array_equal(a, b))
+    return bool(a == b)
+
+
+def _copy(v: Any) -> Any:
+    return v.copy() if isinstance(v, np.ndarray) else v
+
