@@ -272,3 +272,46 @@ def rne_rigid_single(A: Array, qd: Array, qdd: Array, a0: Array, m: list[float],
         v = f if prismatic[i] else nn
         tau[i] = v[0] * z[0] + v[1] * z[1] + v[2] * z[2]
     return np.array(tau)
+
+
+# The largest ratio max(D) / min(D) of the L D L^T pivots of an inertia matrix that
+# forward dynamics accepts: that ratio is a lower bound of the condition number, so past
+# it qdd = M^-1 (tau - bias) has lost at least 12 of its 16 digits.
+MAX_PIVOT_RATIO = 1e12
+
+
+def ldl_pivots(M: Array) -> Array:
+    """The diagonal of D in ``M = L D L^T`` (no pivoting), (..., n) for (..., n, n) M."""
+    A = np.array(M, dtype=float)
+    n = A.shape[-1]
+    d = np.empty(A.shape[:-1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for j in range(n):
+            d[..., j] = A[..., j, j]
+            if j + 1 < n:
+                col = A[..., j + 1:, j]
+                A[..., j + 1:, j + 1:] -= col[..., :, None] * col[..., None, :] / d[..., j, None, None]
+    return d
+
+
+def check_inertia(name: str, Q: Array, pivots: Array) -> None:
+    """Raise ``LinAlgError`` naming the robot and the first configuration of ``Q`` (m, n)
+    whose inertia pivots (m, n) are not all positive or spread more than
+    :data:`MAX_PIVOT_RATIO` (a singular or ill-conditioned inertia matrix)."""
+    pivots = np.atleast_2d(pivots)
+    top = pivots.max(axis=-1)
+    low = pivots.min(axis=-1)
+    bad = ~(low > top / MAX_PIVOT_RATIO)  # nan pivots are refused too
+    if not bad.any():
+        return
+    i = int(np.argmax(bad))
+    q = np.atleast_2d(Q)[i]
+    joint = int(np.nanargmin(pivots[i])) if np.isfinite(pivots[i]).any() else 0
+    qs = np.array2string(q, precision=4, separator=", ", max_line_width=10_000)
+    where = f" (configuration {i} of {len(pivots)})" if len(pivots) > 1 else ""
+    raise np.linalg.LinAlgError(
+        f"{name}: the inertia matrix at q = {qs}{where} is singular or ill-conditioned "
+        f"(L D L^T pivot of joint {joint + 1}: {pivots[i, joint]:.3g}, largest {top[i]:.3g}: "
+        + (f"condition number >= {top[i] / low[i]:.3g}), so " if low[i] > 0 else "not positive definite), so ")
+        + "the joint accelerations are not defined: the links beyond that joint have no mass or inertia "
+        "about its axis; give them mass and inertia, or the motors an armature (Jm, G)")

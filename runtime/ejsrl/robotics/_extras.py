@@ -88,7 +88,10 @@ def fdyn(robot: Any, T: float, q0: ArrayLike, Q: Callable[..., ArrayLike] | None
         tau = np.zeros(n) if Q is None else np.asarray(Q(robot, t, q, qd, **Q_args), dtype=float)
         if tau.shape != (n,) or not np.all(np.isfinite(tau)):
             raise RuntimeError(f"fdyn: the torque function must give {n} finite values, got {tau!r}")
-        return np.concatenate((qd, robot.accel(q, qd, tau)))
+        try:
+            return np.concatenate((qd, robot.accel(q, qd, tau)))
+        except np.linalg.LinAlgError as exc:
+            raise np.linalg.LinAlgError(f"fdyn at t = {t:.6g} s: {exc}") from None
 
     integ = getattr(integrate, solver)(rate, t0=0.0, y0=np.concatenate((q0, qd0)), t_bound=float(T),
                                        **(solver_args or {}))

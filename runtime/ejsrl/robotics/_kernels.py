@@ -360,8 +360,10 @@ def k_inertia(P: Params) -> Callable[[list], list]:
     return fn
 
 
-def ldl_solve(M: list[list[Scalar]], b: Sequence[Scalar]) -> list[Scalar]:
-    """Solve ``M x = b`` for symmetric positive definite M by ``L D L^T`` (no pivoting)."""
+def ldl_solve(M: list[list[Scalar]], b: Sequence[Scalar], pivots: list[Scalar] | None = None) -> list[Scalar]:
+    """Solve ``M x = b`` for symmetric positive definite M by ``L D L^T`` (no pivoting);
+    the diagonal of D is appended to ``pivots`` when given (all > 0 iff M is positive
+    definite, and ``max(D) / min(D)`` is a lower bound of M's condition number)."""
     n = len(b)
     L = [[0.0] * n for _ in range(n)]
     W = [[0.0] * n for _ in range(n)]  # W[i][k] = L[i][k] D[k]
@@ -371,6 +373,8 @@ def ldl_solve(M: list[list[Scalar]], b: Sequence[Scalar]) -> list[Scalar]:
         for k in range(j):
             dj = dj - L[j][k] * W[j][k]
         inv.append(1.0 / dj if isinstance(dj, Var) or dj != 0.0 else math.inf)  # inf: singular, caught later
+        if pivots is not None:
+            pivots.append(dj)
         for i in range(j + 1, n):
             s = M[i][j]
             for k in range(j):
@@ -389,11 +393,14 @@ def ldl_solve(M: list[list[Scalar]], b: Sequence[Scalar]) -> list[Scalar]:
 
 
 def k_accel(P: Params) -> Callable[..., list]:
-    """Inputs q, qd, tau, a0; output qdd."""
+    """Inputs q, qd, tau, a0; outputs qdd (n) then the n pivots of M's ``L D L^T``
+    (the caller refuses a singular or ill-conditioned M from them)."""
 
     def fn(q: list, qd: list, tau: list, a0: list) -> list:
         bias = [b + f for b, f in zip(rne(P, q, qd, [0.0] * P.n, a0), friction(P, qd))]
-        return ldl_solve(inertia(P, q), [t - b for t, b in zip(tau, bias)])
+        pivots: list[Scalar] = []
+        qdd = ldl_solve(inertia(P, q), [t - b for t, b in zip(tau, bias)], pivots)
+        return qdd + pivots
 
     return fn
 

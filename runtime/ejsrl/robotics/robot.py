@@ -555,6 +555,7 @@ class Robot:
         T = np.broadcast_to(np.asarray(tau, float), Q.shape)
         A = self._A(Q)
         M = self._inertia(Q, A)
+        _dynamics.check_inertia(self.name, Q, _dynamics.ldl_pivots(M))
         bias = self._rne_rigid(A, Qd, np.zeros_like(Qd), -self._gravity_base(gravity)) - self.friction(Qd)
         qdd = np.linalg.solve(M, (T - bias)[..., None])[..., 0]
         return qdd[0] if single else qdd
@@ -568,19 +569,18 @@ class Robot:
                 vals = kernel.single(*args)
             except (ValueError, ZeroDivisionError, OverflowError):
                 vals = kernel.fallback(args)
-            out = np.array(vals, dtype=float)
-            if all(map(math.isfinite, vals)):
-                return out
-        else:
-            Q = q.reshape(-1, n)
-            Qd, T = (np.broadcast_to(np.asarray(x, float), q.shape).reshape(-1, n) for x in (qd, tau))
-            a0 = np.broadcast_to(np.array(self._a0(gravity)), (len(Q), 3))
-            with np.errstate(divide="ignore", invalid="ignore"):
-                out = kernel.batch([Q, Qd, T, a0], n).reshape(q.shape)
-        if not np.isfinite(out).all() and all(np.isfinite(x).all() for x in (q, qd, tau)):
-            raise np.linalg.LinAlgError(f"{self.name}: singular inertia matrix (a link chain without mass "
-                                        "or armature); give the links mass or motor inertia")
-        return out
+            piv = vals[n:]
+            if min(piv) > max(piv) / _dynamics.MAX_PIVOT_RATIO:
+                return np.array(vals[:n], dtype=float)
+            _dynamics.check_inertia(self.name, q, np.array(piv, dtype=float))
+            return np.array(vals[:n], dtype=float)  # not reached: check_inertia raised
+        Q = q.reshape(-1, n)
+        Qd, T = (np.broadcast_to(np.asarray(x, float), q.shape).reshape(-1, n) for x in (qd, tau))
+        a0 = np.broadcast_to(np.array(self._a0(gravity)), (len(Q), 3))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out = kernel.batch([Q, Qd, T, a0], 2 * n)
+        _dynamics.check_inertia(self.name, Q, out[:, n:])
+        return out[:, :n].reshape(q.shape)
 
     # ----------------------------------------------------------------- more of the Toolbox
     def hessian0(self, q: ArrayLike, J0: ArrayLike | None = None) -> Array:
