@@ -14,6 +14,8 @@ from dataclasses import dataclass
 
 import yaml
 
+from ejsgen._yaml_bounds import BoundedLoader, HostileYaml
+
 __all__ = ["Explained", "explain"]
 
 _CLOSER = {"[": "]", "{": "}"}
@@ -264,7 +266,9 @@ def _colon_in_value(lines: list[str], pline: int, pcol: int) -> Explained:
 def _parses_past(lines: list[str], line: int) -> bool:
     """Whether ``lines`` parse as YAML, or at least up to and including ``line`` (0-based)."""
     try:
-        list(yaml.compose_all("\n".join(lines), Loader=yaml.SafeLoader))
+        list(yaml.compose_all("\n".join(lines), Loader=BoundedLoader))
+    except HostileYaml:
+        return False
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         return mark is not None and mark.line > line

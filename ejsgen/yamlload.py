@@ -15,6 +15,7 @@ from typing import Any
 
 import yaml
 
+from ejsgen._yaml_bounds import BoundedLoader, HostileYaml
 from ejsgen._yaml_errors import Explained, explain
 from ejsgen.errors import Location, SpecError
 
@@ -165,7 +166,9 @@ def load_yaml(path: str | Path, *, text: str | None = None, display_name: str | 
             raise SpecError(Location(name, 1, 1), f"the file is not UTF-8 text ({exc.reason})") from None
     builder = _Builder(name, text)
     try:
-        nodes = list(yaml.compose_all(text, Loader=yaml.SafeLoader))
+        nodes = list(yaml.compose_all(text, Loader=BoundedLoader))
+    except HostileYaml as exc:
+        raise SpecError(Location(name, exc.mark.line + 1, exc.mark.column + 1), exc.message, exc.hint) from None
     except yaml.MarkedYAMLError as exc:
         try:
             why = explain(exc, text)

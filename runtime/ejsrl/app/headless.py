@@ -7,19 +7,26 @@
 from __future__ import annotations
 
 import csv
+import os
 import signal
+import stat
 import sys
 from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, TextIO
 
 import numpy as np
 
+from ejsrl.app._rowfile import CannotWrite, RowFile
 from ejsrl.sim.model import ModelBase, UserCodeError
 
 if TYPE_CHECKING:
     from ejsrl.app._loop import App
 
 __all__ = ["run_headless", "csv_columns"]
+
+MAX_CSV_COLUMNS = 1_000_000
+"""Most columns a CSV row may have (a 1000x1000 array named in --vars; a 640x480 RGB
+image is 921,600): an array past this is refused in plain words, not spread until memory ends."""
 
 
 def run_headless(
@@ -39,8 +46,24 @@ def run_headless(
     When ``interrupted`` becomes a signal's number (``main`` sets it on SIGINT/SIGTERM),
     the run stops after the step in progress, with every row written so far flushed,
     and returns 128 + that number.
+
+    A CSV in a regular file ends on a whole row whatever happens: when the disk fills (or
+    any write fails) the file is cut back to its last whole row, ``error: cannot write
+    FILE: <reason>`` goes to ``log``, and the status is 1.
     """
     log = log if log is not None else sys.stderr
+    rows = _sink(csv_file)
+    try:
+        status = _run(app, duration, rows, variables, every, log)
+        if rows is not None:
+            rows.flush()
+        return status
+    except CannotWrite as exc:
+        print(exc.line(), file=log)
+        return 1
+
+
+def _run(app: App, duration: float, rows: _Rows | None, variables: Sequence[str] | None, every: int, log: TextIO) -> int:
     model = app.model
     if app.error is not None:
         print(_format_error(app.error), file=log)
@@ -49,10 +72,12 @@ def run_headless(
         print("error: this model has no independent variable (no ODE page and no variable 't')", file=log)
         return 2
     columns = csv_columns(model, variables)
-    writer = csv.writer(csv_file, lineterminator="\n") if csv_file is not None else None
+    writer = rows
     if writer is not None:
-        writer.writerow([name for name, _ in columns])
-        writer.writerow(_row(model, columns))
+        for note in left_out(model) if variables is None else []:
+            print(note, file=log)
+        writer.write_row([name for name, _ in columns])
+        writer.write_row(_row(model, columns))
     t_start = model._ejs_time() or 0.0
     t_end = t_start + duration
     steps = 0
@@ -60,7 +85,7 @@ def run_headless(
     last_t = t_start
     while True:
         if app.interrupted is not None:
-            return _report_interrupt(app, csv_file, log)
+            return _report_interrupt(app, rows, log)
         t = model._ejs_time() or 0.0
         if t >= t_end - 1e-9 * max(1.0, abs(t_end)):
             break
@@ -69,7 +94,7 @@ def run_headless(
         steps += 1
         t_new = model._ejs_time() or 0.0
         if writer is not None and steps % every == 0:
-            writer.writerow(_row(model, columns))
+            writer.write_row(_row(model, columns))
         for text in app.pop_alerts():
             print(f"alert: {text}", file=log)
         if app.error is not None or not app.playing:
@@ -88,7 +113,32 @@ def run_headless(
     return 0
 
 
-def _report_interrupt(app: App, csv_file: TextIO | None, log: TextIO) -> int:
+class _Rows:
+    """CSV rows into a stream that is not a regular file (standard output, a pipe)."""
+
+    def __init__(self, fh: TextIO) -> None:
+        self.fh = fh
+        self.writer = csv.writer(fh, lineterminator="\n")
+
+    def write_row(self, row: Sequence[Any]) -> None:
+        self.writer.writerow(row)
+
+    def flush(self) -> None:
+        self.fh.flush()
+
+
+def _sink(csv_file: TextIO | None) -> _Rows | RowFile | None:
+    """Where rows go: a ``RowFile`` (whole rows only) for a regular file, else the stream."""
+    if csv_file is None:
+        return None
+    try:
+        regular = stat.S_ISREG(os.fstat(csv_file.fileno()).st_mode)
+    except (OSError, ValueError, AttributeError):  # io.StringIO and the like have no descriptor
+        regular = False
+    return RowFile.over(csv_file) if regular else _Rows(csv_file)
+
+
+def _report_interrupt(app: App, csv_file: _Rows | RowFile | None, log: TextIO) -> int:
     signum = app.interrupted or signal.SIGTERM
     if csv_file is not None:
         csv_file.flush()
@@ -112,7 +162,8 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
     """The CSV columns: (header, getter). Arrays are spread as ``q[0]``, ``q[1]``, ...
 
     With no ``names``, every numeric variable (numbers and arrays of numbers, ``expr:``
-    variables included; not booleans, text or images) in declaration order. Named variables may
+    variables included; not booleans, text, images or arrays of more than
+    ``MAX_CSV_COLUMNS`` values: see ``left_out``) in declaration order. Named variables may
     also be booleans (written 0/1), arrays of booleans and text; naming any other kind of
     value (a robot, say) raises ``UserCodeError``.
     """
@@ -122,6 +173,7 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
             n
             for n, kind in types.items()
             if kind in ("float", "int", "array", "auto") and _is_numeric(getattr(model, n)) and not is_image(getattr(model, n))
+            and not _too_wide(getattr(model, n))
         ]
     else:
         for n in names:
@@ -130,9 +182,17 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
 
                 raise UserCodeError(f"--vars: unknown variable '{n}'{did_you_mean(n, types)}")
     columns: list[tuple[str, Callable[[], Any]]] = []
+    count = 0
     for n in names:
         value = getattr(model, n)
         if isinstance(value, np.ndarray) and value.dtype.kind in "biuf":
+            count += value.size
+            if count > MAX_CSV_COLUMNS:
+                raise UserCodeError(
+                    f"'{n}' is an array of {value.size:,} values{_shape(value)}: spread one "
+                    f"value a column, a CSV row would have more than {MAX_CSV_COLUMNS:,} columns; name fewer "
+                    "variables with --vars, or save the array from the spec's code (np.save) and read it with NumPy"
+                )
             for idx in np.ndindex(value.shape):
                 label = f"{n}[{']['.join(str(i) for i in idx)}]"
                 columns.append((label, (lambda n=n, idx=idx: getattr(model, n)[idx])))
@@ -144,6 +204,24 @@ def csv_columns(model: ModelBase, names: Sequence[str] | None = None) -> list[tu
                 f"--vars: '{n}' holds {what}; the CSV takes numbers, booleans, text and arrays of numbers"
             )
     return columns
+
+
+def left_out(model: ModelBase) -> list[str]:
+    """The numeric arrays the default CSV leaves out for their size, as notes for the user."""
+    return [
+        f"note: '{n}' ({getattr(model, n).size:,} values) is left out of the CSV: one value a column, a row "
+        f"would have more than {MAX_CSV_COLUMNS:,} columns; save it from the spec's code (np.save) instead"
+        for n, kind in model.VARIABLES.items()
+        if kind in ("array", "auto") and _is_numeric(getattr(model, n)) and _too_wide(getattr(model, n))
+    ]
+
+
+def _shape(value: np.ndarray) -> str:
+    return f" ({' x '.join(map(str, value.shape))})" if value.ndim > 1 else ""
+
+
+def _too_wide(value: Any) -> bool:
+    return isinstance(value, np.ndarray) and value.size > MAX_CSV_COLUMNS
 
 
 def is_image(value: Any) -> bool:
