@@ -195,9 +195,14 @@ def test_keys_act_only_while_their_panel_or_the_3d_view_has_the_focus(lab, brows
         # the 3D view: click it, and its own keys act (the panel's do not)
         scene = page.locator("canvas[data-engine]").first.bounding_box()
         page.mouse.click(scene["x"] + scene["width"] / 3, scene["y"] + scene["height"] / 2)
+        page.evaluate("window.__reached = []; window.addEventListener('keydown', e => window.__reached.push(e.key))")
         page.keyboard.press("ArrowUp")
         wait_until(lambda: model.count3 == 1, what="ArrowUp on the 3D view: count3 = 1")
         assert model.count == 11
+        # a key the lab does not map is left to the page (the 3D camera's keys), a mapped one is taken
+        page.keyboard.press("w")
+        wait_until(lambda: page.evaluate("window.__reached").count("w") == 1, what="'w' to reach the page")
+        assert "ArrowUp" not in page.evaluate("window.__reached")
     finally:
         page.close()
 

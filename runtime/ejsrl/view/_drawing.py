@@ -124,13 +124,11 @@ class DrawingBinding:
     """One ``Drawing`` element shown by a :class:`Panel2D` in ``gui``; ``app``: the running app
     (``lock``, ``model``, ``safe_value``, ``guard``, ``fail``, ``_after_change``, ``_wake``)."""
 
-    def __init__(self, gui: Any, drawing: Drawing, app: Any, *, key: str, clock: Callable[[], float] | None = None,
-                 title: str = "") -> None:
+    def __init__(self, gui: Any, drawing: Drawing, app: Any, *, key: str, clock: Callable[[], float] | None = None) -> None:
         self.drawing = drawing
         self.app = app
         kw = {"clock": clock} if clock is not None else {}
         self.panel = Panel2D(gui, key, height=drawing.height, on_event=self.on_event, **kw)
-        self.title = title
         self.shapes: dict[str, Shape2D] = {s.name: s for s in drawing.children}
         self.states: dict[str, _ShapeState] = {s.name: _ShapeState() for s in drawing.children}
         self.base_dir = getattr(app, "base_dir", None)
@@ -352,7 +350,7 @@ class DrawingBinding:
         """Run the action mapped to ``browser_key`` (the browser's name); True if there was one."""
         return run_key(self.app, self.drawing.keys, browser_key, self.drawing.where)
 
-    def constrained(self, shape: Shape2D, x: float, y: float, row: int = 0) -> tuple[float, float] | None:
+    def constrained(self, shape: Shape2D, x: float, y: float) -> tuple[float, float] | None:
         """Where the dragged point of ``shape`` goes for the pointer at (x, y) (the caller holds
         the app lock): along x, along y, on the curve, then inside the region; None if not finite."""
         drag, app = shape.drag, self.app
@@ -387,7 +385,7 @@ class DrawingBinding:
         with app.lock:
             if app.error is not None and phase != "release":
                 return False
-            point = self.constrained(shape, float(x), float(y), row)
+            point = self.constrained(shape, float(x), float(y))
             if point is not None:
                 self._write(shape, point, row)
             code = drag.on_release if phase == "release" else drag.on_drag
@@ -453,7 +451,8 @@ class SceneKeysBinding:
     def __init__(self, gui: Any, element: SceneKeys, app: Any, *, key: str) -> None:
         self.element = element
         self.app = app
-        self.panel = Panel2D(gui, key, height=0, on_event=self.on_event, scene_keys=True)
+        browser_keys = [" " if k == "Space" else k for k in element.keys]  # the others stay the 3D camera's
+        self.panel = Panel2D(gui, key, height=0, on_event=self.on_event, scene_keys=True, keys=browser_keys)
 
     def refresh(self) -> None:
         """Nothing to draw."""

@@ -58,6 +58,7 @@
     var c = root.querySelector("canvas");
     p.root = root;
     p.input = root.getAttribute("data-ev");
+    p.only = root.getAttribute("data-keys") ? JSON.parse(root.getAttribute("data-keys")) : null;
     if (p.canvas === c) return;
     p.canvas = c;
     c.addEventListener("pointerdown", function (e) { down(p, e); });
@@ -428,12 +429,12 @@
   // -- keys -----------------------------------------------------------------------------------
   function key(p, e, phase) {
     if (e.ctrlKey || e.metaKey || e.altKey || !KEYS.test(e.key)) return;
+    if (p.only && p.only.indexOf(e.key) < 0) return;   // not one of its keys: left to the page
     e.preventDefault();       // no page scroll, no 3D camera move
     e.stopPropagation();
     if (phase === "down" && e.repeat && p.queue.length > MAX_QUEUE / 2) return;
     send(p, { k: "key", key: e.key, phase: phase }, true);
   }
-  E.focusKeys = KEYS;
 
   // -- to the server: the panel's hidden text input --------------------------------------------
   function send(p, ev, keep) {

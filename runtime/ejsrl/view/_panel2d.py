@@ -200,15 +200,18 @@ def parse_events(raw: Any) -> tuple[int, list[dict[str, Any]]] | None:
     return seq, out
 
 
-def _canvas_html(dom_id: str, key: str, input_uuid: str, height: int, scene_keys: bool = False) -> str:
+def _canvas_html(dom_id: str, key: str, input_uuid: str, height: int, scene_keys: bool = False,
+                 keys: list[str] | None = None) -> str:
     """The canvas (and the engine, installed once per page), never changed afterwards;
-    ``scene_keys``: no canvas to see (height 0), the keys of the 3D view instead."""
+    ``scene_keys``: no canvas to see (height 0), the keys of the 3D view instead; ``keys``:
+    the only keys reported (browser names), None for all of :data:`ALLOWED_KEYS`."""
+    only = "" if keys is None else f' data-keys="{html.escape(json.dumps(sorted(k for k in keys if k in ALLOWED_KEYS)))}"'
     engine = html.escape(engine_js() + ";window.__ejs2d.mount(this);", quote=True)
     hide = f'div:has(> div > div > p > label[for="{input_uuid}"]){{display:none!important}}'
     return (
         f"<style>{hide}.ejs2d-c:focus{{outline:2px solid #4dabf7;outline-offset:-2px}}</style>"
         f'<div data-ejs2d="{html.escape(dom_id)}" data-key="{html.escape(key)}" data-ev="{html.escape(input_uuid)}"'
-        f'{" data-scene-keys=1" if scene_keys else ""} '
+        f'{" data-scene-keys=1" if scene_keys else ""}{only} '
         f'style="width:100%;height:{int(height)}px;position:relative">'
         f'<canvas class="{"ejs2d-k" if scene_keys else "ejs2d-c"}" tabindex="{-1 if scene_keys else 0}" '
         f'style="width:100%;height:100%;display:block;touch-action:none"></canvas></div>'
@@ -236,7 +239,9 @@ class Panel2D:
     ``max_rate``: the most frames a second sent, on average (a frame refused by the rate is
     kept and sent by the next :meth:`show` or :meth:`flush`); ``clock``: monotonic seconds;
     ``scene_keys``: a panel of height 0 that reports the keys pressed while the 3D view has
-    the focus (the 3D view was clicked last) instead of its own.
+    the focus (the 3D view was clicked last) instead of its own; ``keys``: the only keys the
+    browser reports and takes from the page (browser names, ``" "`` for Space; None: every
+    allowed key), so that the 3D view's own keys (its camera's) keep working.
     """
 
     def __init__(
@@ -249,6 +254,7 @@ class Panel2D:
         max_rate: float = 60.0,
         clock: Callable[[], float] = time.monotonic,
         scene_keys: bool = False,
+        keys: list[str] | None = None,
     ) -> None:
         self.gui = gui
         self.key = str(key)
@@ -273,7 +279,7 @@ class Panel2D:
         # the events input first: the canvas names its uuid (the engine writes it, a style hides it)
         self.events = gui.add_text("ejs2d events", "")
         self.dom_id = f"{_slug(self.key)}-{self.events._impl.uuid[:8]}"
-        self.canvas = gui.add_html(_canvas_html(self.dom_id, self.key, self.events._impl.uuid, self.height, scene_keys))
+        self.canvas = gui.add_html(_canvas_html(self.dom_id, self.key, self.events._impl.uuid, self.height, scene_keys, keys))
         self.frame = gui.add_html(_frame_html(self.dom_id, "null"))
         self.events.on_update(self._on_message)
 
