@@ -23,6 +23,7 @@ from typing import Any, TextIO
 import numpy as np
 
 from ejsrl.app._front import WorkerRole
+from ejsrl.app._slow import watch_slow
 from ejsrl.sim.model import Controller, ModelBase, SetValueError, UserCodeError, describe_error
 from ejsrl.sim.world_access import WorldFunctionsAccess
 from ejsrl.view.elements import Button, Control, Dynamic
@@ -106,7 +107,8 @@ class App(Controller):
         self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
         self.model = model_cls(self, overrides, start=False)
         try:
-            self.model._ejs_reset()
+            with watch_slow(model_cls, "init:"):  # an endless init: is named with its spec line
+                self.model._ejs_reset()
         except SetValueError:
             raise  # a --set value that does not fit its variable: the command line's error
         except Exception as exc:  # noqa: BLE001 - user code may raise anything
@@ -199,7 +201,8 @@ class App(Controller):
             self.error = None
             self.error_rev += 1
             self.scene.reset()
-            self.guard(self.model._ejs_reset if what == "reset" else self.model._ejs_initialize)
+            with watch_slow(self.model_cls, "init:"):
+                self.guard(self.model._ejs_reset if what == "reset" else self.model._ejs_initialize)
             self._wall0 = None  # realtime pacing starts again from the new time
             for v in self.views:
                 if hasattr(v, "on_reset"):
