@@ -128,7 +128,8 @@ class DrawingBinding:
         self.drawing = drawing
         self.app = app
         kw = {"clock": clock} if clock is not None else {}
-        self.panel = Panel2D(gui, key, height=drawing.height, on_event=self.on_event, **kw)
+        keys = [" " if k == "Space" else k for k in drawing.keys]  # the others scroll the page, as ever
+        self.panel = Panel2D(gui, key, height=drawing.height, on_event=self.on_event, keys=keys, **kw)
         self.shapes: dict[str, Shape2D] = {s.name: s for s in drawing.children}
         self.states: dict[str, _ShapeState] = {s.name: _ShapeState() for s in drawing.children}
         self.base_dir = getattr(app, "base_dir", None)
