@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from ejsrl.robotics.transforms import q2r, rpy2r
-from ejsrl.view._scene_mirror import ROOT, SceneMirror, rigid_fit
+from ejsrl.view._lines import rigid_fit
+from ejsrl.view._scene_mirror import ROOT, SceneMirror
 from ejsrl.view.viser_view import make_server
 from ejsrl.world.scene import Line, Sphere, World
 
@@ -36,14 +37,41 @@ def mirrored():
     server.stop()
 
 
+def segments(mirror: SceneMirror, name: str) -> list[np.ndarray]:
+    """The line's segments (2, 3) as the browser places them: each handle's points under its pose."""
+    out = []
+    for g in mirror._nodes[name].geoms:
+        R = q2r(np.asarray(g.wxyz, dtype=float))
+        for seg in np.asarray(g.points, dtype=float):
+            out.append(seg @ R.T + np.asarray(g.position, dtype=float))
+    return out
+
+
 def drawn(mirror: SceneMirror, name: str) -> np.ndarray:
-    """The line's points as the browser places them: its segments' points under the geometry's pose, (N, 3)."""
-    m = mirror._nodes[name]
-    g = m.geoms[0]
-    segs = np.asarray(g.points, dtype=float)
-    local = np.vstack([segs[:, 0], segs[-1:, 1]])
-    R = q2r(np.asarray(g.wxyz, dtype=float))
-    return local @ R.T + np.asarray(g.position, dtype=float)
+    """The points (N, 3) of a line drawn as one segment set (a polyline), as the browser places them."""
+    segs = segments(mirror, name)
+    return np.vstack([np.array([s[0] for s in segs]), segs[-1][1:]])
+
+
+def covers_exactly(mirror: SceneMirror, name: str, p0: np.ndarray, p1: np.ndarray) -> bool:
+    """Whether the drawn pieces of a two-point line lie on the segment p0-p1 and cover all of it, no more."""
+    length = float(np.linalg.norm(p1 - p0))
+    d = (p1 - p0) / length
+    spans = []
+    for seg in segments(mirror, name):
+        rel = seg - p0
+        if np.abs(rel - np.outer(rel @ d, d)).max() > 1e-6:  # off the line
+            return False
+        spans.append(sorted(rel @ d))
+    spans.sort()
+    if spans[0][0] < -1e-6 or max(s[1] for s in spans) > length + 1e-6 or abs(spans[0][0]) > 1e-6:
+        return False
+    reach = spans[0][1]
+    for lo, hi in spans[1:]:
+        if lo > reach + 1e-6:
+            return False  # a gap
+        reach = max(reach, hi)
+    return abs(reach - length) < 1e-6
 
 
 def kinds(sent: list, name: str) -> set[str]:
@@ -64,7 +92,7 @@ def test_rigid_fit_finds_a_known_motion_and_refuses_a_stretch():
     assert rigid_fit(ref[:1], ref[:1]) is None  # one point has no shape to fit
 
 
-def test_a_swinging_rod_is_sent_as_a_pose_in_step_with_its_bob(mirrored):
+def test_a_swinging_rod_is_sent_as_poses_in_step_with_its_bob(mirrored):
     world, mirror, sent = mirrored
     rod = world.add(Line("rod", points=np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -1.0]])))
     bob = world.add(Sphere("bob", radius=0.05, T_parent_local=np.eye(4)))
@@ -77,21 +105,56 @@ def test_a_swinging_rod_is_sent_as_a_pose_in_step_with_its_bob(mirrored):
         bob.set(T_parent_local=T)
         sent.clear()
         mirror.sync(world)
-        # the rod's geometry is moved by a pose, as the bob is: no points are sent
-        assert kinds(sent, f"{ROOT}/rod/g0") <= {"SetPositionMessage", "SetOrientationMessage"}
-        assert "SetOrientationMessage" in kinds(sent, f"{ROOT}/rod/g0")
+        # the rod's pieces are moved by poses, as the bob is: no points are sent
+        for piece in ("g0", "g1"):
+            assert kinds(sent, f"{ROOT}/rod/{piece}") <= {"SetPositionMessage", "SetOrientationMessage"}
+        assert "SetOrientationMessage" in kinds(sent, f"{ROOT}/rod/g1")
         assert "SetPositionMessage" in kinds(sent, f"{ROOT}/bob")
-        assert np.allclose(drawn(mirror, "rod"), [[0.0, 0.0, 0.0], end], atol=1e-6)
+        assert covers_exactly(mirror, "rod", np.zeros(3), end)
+
+
+def test_a_stretching_spring_is_sent_as_poses_until_its_length_leaves_the_pieces_band(mirrored):
+    world, mirror, sent = mirrored
+    spring = world.add(Line("spring", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])))
+    mirror.sync(world)
+    sent_points = 0
+    for k, length in enumerate(np.linspace(1.0, 3.0, 21)[1:]):  # stretches threefold while turning
+        a = 0.1 * k
+        end = length * np.array([np.cos(a), np.sin(a), 0.0])
+        spring.set(points=np.array([[0.0, 0.0, 0.0], end]))
+        sent.clear()
+        mirror.sync(world)
+        got = kinds(sent, f"{ROOT}/spring/g0") | kinds(sent, f"{ROOT}/spring/g1")
+        assert "RemoveSceneNodeMessage" not in got and "LineSegmentsMessage" not in got  # never rebuilt
+        sent_points += "SceneNodeUpdateMessage" in got
+        if "SceneNodeUpdateMessage" not in got:  # a pose frame: exactly the new segment
+            assert covers_exactly(mirror, "spring", np.zeros(3), end)
+    # points only when the length leaves [h, 2h] (h = length / 1.4 when sent): 1.43x, then 2.04x of 1
+    assert sent_points == 2, sent_points
 
 
 def test_a_line_whose_shape_changes_is_sent_as_points(mirrored):
     world, mirror, sent = mirrored
-    spring = world.add(Line("spring", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])))
+    zigzag = world.add(Line("zigzag", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]])))
     mirror.sync(world)
-    spring.set(points=np.array([[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]))  # turned: a pose
-    mirror.sync(world)
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    zigzag.set(points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]) @ R.T + [0.5, 0.0, 0.0])  # turned: a pose
     sent.clear()
-    spring.set(points=np.array([[0.0, 0.0, 0.0], [0.0, 1.5, 0.0], [0.3, 1.5, 0.0]]))  # grown: points
     mirror.sync(world)
-    assert kinds(sent, f"{ROOT}/spring/g0") == {"SceneNodeUpdateMessage"}
-    assert np.allclose(drawn(mirror, "spring"), [[0.0, 0.0, 0.0], [0.0, 1.5, 0.0], [0.3, 1.5, 0.0]], atol=1e-6)
+    assert kinds(sent, f"{ROOT}/zigzag/g0") == {"SetPositionMessage", "SetOrientationMessage"}
+    new = np.array([[0.0, 0.0, 0.0], [0.0, 1.5, 0.0], [0.3, 1.5, 0.0], [0.3, 2.0, 1.0]])
+    zigzag.set(points=new)  # grown: points
+    sent.clear()
+    mirror.sync(world)
+    assert kinds(sent, f"{ROOT}/zigzag/g0") == {"SceneNodeUpdateMessage"}
+    assert np.allclose(drawn(mirror, "zigzag"), new, atol=1e-6)
+
+
+def test_a_two_point_line_that_gets_a_third_point_is_drawn_anew(mirrored):
+    world, mirror, sent = mirrored
+    line = world.add(Line("l", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])))
+    mirror.sync(world)
+    line.set(points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]))
+    mirror.sync(world)
+    assert len(mirror._nodes["l"].geoms) == 1
+    assert np.allclose(drawn(mirror, "l"), [[0, 0, 0], [1, 0, 0], [1, 1, 0]], atol=1e-6)

@@ -11,14 +11,8 @@ the node frame. Each frame :meth:`SceneMirror.sync` compares, per node:
 - ``rev``: any other change (colour, opacity, points of a line, text) updates those props;
 - the visibility of the node and its ancestors.
 
-Poses and props reach the browser's picture by two paths: viser's client applies a pose
-(``SetPositionMessage``, ``SetOrientationMessage``) to its three.js object in the same
-animation frame that receives it, while a prop (a line's ``points``) goes through a React
-re-render that commits after that frame is drawn, so it shows one browser frame later. A
-pendulum's rod drawn from new points therefore trailed its bob (a pose) by a frame: 5-20 px
-while playing. A line whose points moved rigidly (a rod, a link, a turning polygon: every
-distance kept) is therefore moved by the pose of its geometry (fitted by Kabsch's method to
-the points last sent) and its points are sent only when its shape changes.
+Lines are moved by poses wherever their shape allows, so that they are drawn in the same
+browser frame as the solids beside them (``ejsrl.view._lines``).
 
 Everything is sent inside one ``server.atomic()`` block by the caller.
 Gizmo nodes become transform controls; a drag calls ``on_gizmo(name, T_world (4, 4))``.
@@ -34,19 +28,16 @@ from typing import Any
 import numpy as np
 
 from ejsrl.robotics.transforms import q2r, r2q
-from ejsrl.view._wire import set_position, set_prop, set_wxyz
+from ejsrl.view._lines import LineDraw
+from ejsrl.view._wire import set_position, set_wxyz
 from ejsrl.world.kinds import KINDS
 
-__all__ = ["SceneMirror", "ROOT", "rigid_fit"]
+__all__ = ["SceneMirror", "ROOT"]
 
 #: the viser scene path under which every world node is placed
 ROOT = "/ejs"
 
 GizmoCallback = Callable[[str, np.ndarray], None]
-
-#: a line moved rigidly is moved by its geometry's pose (see above); False sends its points
-#: every time, as before (the browser tests measure both)
-RIGID_LINES = True
 
 
 def _rgb255(rgb: Any) -> tuple[int, int, int]:
@@ -68,40 +59,9 @@ def _opacity(x: float) -> float | None:
     return None if x >= 1.0 else max(0.0, float(x))
 
 
-def _polyline_segments(points: Any) -> np.ndarray:
-    p = np.asarray(points, dtype=np.float32).reshape(-1, 3)
-    if len(p) < 2:
-        return np.zeros((1, 2, 3), dtype=np.float32)
-    return np.ascontiguousarray(np.stack([p[:-1], p[1:]], axis=1))
-
-
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
     """``np.array_equal`` for two small float arrays of one shape, at a fraction of its cost."""
     return a.shape == b.shape and a.tolist() == b.tolist()
-
-
-def rigid_fit(ref: np.ndarray, pts: np.ndarray) -> np.ndarray | None:
-    """The rigid motion (4, 4) that takes the points ``ref`` (N, 3) onto ``pts`` (N, 3), if one does.
-
-    Kabsch's method (the rotation from the SVD of the points' cross-covariance, no
-    reflection); None when the counts differ, there are fewer than 2 points, a point is
-    not finite, or a point lands farther than 1e-9 m + 1e-7 of the points' extent from
-    its target (the shape changed: a spring stretched, a line grew).
-    """
-    if ref.shape != pts.shape or len(pts) < 2 or not np.all(np.isfinite(pts)):
-        return None
-    ca, cb = ref.mean(axis=0), pts.mean(axis=0)
-    a, b = ref - ca, pts - cb
-    u, _s, vt = np.linalg.svd(a.T @ b)
-    d = np.sign(np.linalg.det(vt.T @ u.T)) or 1.0
-    R = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
-    extent = float(np.abs(b).max()) if b.size else 0.0
-    if float(np.abs(a @ R.T - b).max()) > 1e-9 + 1e-7 * extent:
-        return None
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = cb - R @ ca
-    return T
 
 
 def _snapshot(node: Any) -> tuple:
@@ -124,7 +84,7 @@ def _snapshot(node: Any) -> tuple:
 class _Mirror:
     """What has been sent for one world node."""
 
-    __slots__ = ("kind", "style", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref", "sent", "line_ref", "line_T")
+    __slots__ = ("kind", "style", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref", "line")
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
@@ -142,12 +102,8 @@ class _Mirror:
         self.part_keys: list[tuple] | None = None
         self.part_handles: list[list[Any]] = []
         self.parts_ref: list[Any] = []  # keeps the keyed arrays alive, so their ids stay unique
-        #: the line style last set on the first geometry (colour, width, shown): set again only when it changes
-        self.sent: tuple | None = None
-        #: for lines: the points (N, 3) last sent, in the frame of their geometry handle, and
-        #: that handle's pose (4, 4) in the node frame (a rigid motion of the line moves only it)
-        self.line_ref: np.ndarray | None = None
-        self.line_T: np.ndarray = np.eye(4)
+        #: for lines and trails: how they are drawn (ejsrl.view._lines)
+        self.line: LineDraw | None = None
 
 
 class SceneMirror:
@@ -269,7 +225,7 @@ class SceneMirror:
         color = _rgb255(node.color)
         opacity = _opacity(node.opacity)
         m.geoms = []
-        m.sent = None
+        m.line = None
         m.mesh_parts_rgb = []
         _BUILDERS[_style(node.kind)](self, node, m, base, color, opacity)
 
@@ -434,13 +390,8 @@ def _build_sphere(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: 
 
 
 def _build_polyline(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
-    props = node.props
-    segs = _polyline_segments(props["points"])
-    h = mirror.scene.add_line_segments(f"{base}/g0", segs, colors=color, thickness=float(props["width"]), thickness_units="screen")
-    h.visible = len(np.asarray(props["points"]).reshape(-1, 3)) >= 2
-    m.geoms.append(h)
-    m.line_ref = np.asarray(props["points"], dtype=float).reshape(-1, 3).copy()
-    m.line_T = np.eye(4)
+    m.line = LineDraw.build(mirror.scene, node, base, color)
+    m.geoms.extend(m.line.geoms)
 
 
 def _build_points(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
@@ -524,28 +475,8 @@ def _props_solid(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opaci
 
 
 def _props_polyline(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
-    g = m.geoms[0]
-    pts = np.asarray(node.props["points"], dtype=float).reshape(-1, 3)
-    T = rigid_fit(m.line_ref, pts) if m.line_ref is not None and RIGID_LINES else None
-    if T is not None:  # moved as a whole: the pose of its geometry, drawn in the same frame as the others'
-        if not _same(T, m.line_T):
-            if not _same(T[:3, 3], m.line_T[:3, 3]):
-                set_position(g, T[:3, 3])
-            if not _same(T[:3, :3], m.line_T[:3, :3]):
-                set_wxyz(g, r2q(T))
-            m.line_T = T
-    else:  # a new shape: its points, in the frame its geometry is now posed in
-        local = (pts - m.line_T[:3, 3]) @ m.line_T[:3, :3]
-        set_prop(g, "points", _polyline_segments(local))
-        m.line_ref = local
-    style = (tuple(color), float(node.props["width"]), len(pts) >= 2)
-    if style != m.sent:  # a moving line (a pendulum's rod) changes its points only: each set costs
-        # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
-        # means; per-vertex colours would be read as linear and shown washed out
-        g.colors = np.array(color, dtype=np.uint8)
-        g.thickness = style[1]
-        g.visible = style[2]
-        m.sent = style
+    if m.line is None or not m.line.update(node, color):  # drawn another way now (two points became three)
+        _props_rebuild(mirror, node, m, color, opacity)
 
 
 def _props_points(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
