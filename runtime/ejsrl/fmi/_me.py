@@ -10,8 +10,8 @@ the same; :mod:`fmpy.simulation` is the reference):
 
 - **changed parameters and discrete inputs** (tunable parameters; Integer, Boolean,
   String, Binary, Enumeration and discrete Real inputs) are compared with what was sent
-  before every step; a change enters event mode at the step's start, sets them, runs the
-  event iteration and returns to continuous time;
+  after every step and before the next (a slider moved in between); a change enters event
+  mode at that time, sets them, runs the event iteration and returns to continuous time;
 - **time events** (the next event time the FMU announced) are events of the page's
   solver whose function crosses zero at exactly that time, so a step ends there and the
   event iteration runs at the announced time itself;
@@ -52,6 +52,8 @@ class OwnPage:
 
         self.t = float(t0)
         self.integrator = OdeIntegrator(lambda t, y: np.zeros(0), method, tolerance=tolerance)
+
+
         self.names: tuple[str, ...] = ()
         self.event_where: dict[str, str] = {}
         self.where = where
@@ -164,9 +166,10 @@ class MeCoupling:
             events.append(EventDef(f"event indicator {k} of FMU '{name}'", self._indicator(k), 0, self._state_event, after=True))
         events.append(EventDef(f"time event of FMU '{name}'", self._time_function, 0, self._time_event))
         page.state, page.load = state, load
+        method = integ.method if inst.nx or not isinstance(page, OwnPage) else "euler"  # nothing to measure an error on
         page.integrator = OdeIntegrator(
             rates,
-            integ.method,
+            method,
             tolerance=integ.tolerance,
             max_step=None if math.isinf(integ.max_step) else integ.max_step,
             events=events,
@@ -257,16 +260,16 @@ class MeCoupling:
         except Exception:  # noqa: BLE001 - an FMU that refuses keeps the model's last outputs
             pass
 
-    def _apply_changes(self, t: float) -> None:
-        """Before a step: changed tunable parameters and discrete inputs go to the FMU in event mode."""
+    def _pending(self) -> Any:
+        """What changed since it was last sent: tunable parameters and discrete inputs, as a
+        function setting them (to call in event mode), or None."""
         run, spec = self.run, self.run.spec
         params: list[tuple[str, Any]] = []
         if self._tunable_idx and spec.read_parameters is not None:
             now = list(spec.read_parameters())
             params = [(spec.parameters[k], now[k]) for k in self._tunable_idx if not _same(now[k], run.params[k])]
-            if params:
-                for k in self._tunable_idx:
-                    run.params[k] = now[k]
+            for k in self._tunable_idx:
+                run.params[k] = now[k]
         discrete: list[tuple[str, Any]] = []
         if self._disc_idx:
             values = spec.read_inputs()  # type: ignore[misc]
@@ -275,7 +278,7 @@ class MeCoupling:
             if discrete:
                 self.sent_discrete = [_copy(v) for v in now_d]
         if not params and not discrete:
-            return
+            return None
         inst = self.inst
 
         def changes() -> None:
@@ -284,6 +287,10 @@ class MeCoupling:
             if discrete:
                 inst.set_values([d for d, _ in discrete], [v for _, v in discrete], "setting inputs")
 
+        return changes
+
+    def _event_now(self, t: float, changes: Any = None) -> None:
+        """An event at the model's time t (between steps): the page's state updated, its solver restarted."""
         t0, y = self.page.state()
         y_new = self._event(t, y, changes)
         if self.terminated is None:
@@ -292,11 +299,15 @@ class MeCoupling:
 
     # -- around each step -----------------------------------------------------------------------
     def before_step(self, t: float) -> None:
+        """Values changed between steps (by the user: a slider, a field) go to the FMU in event mode."""
         if self.terminated is None:
-            self._apply_changes(t)
+            changes = self._pending()
+            if changes is not None:
+                self._event_now(t, changes)
 
     def after_step(self, t_new: float) -> None:
-        """Tell the FMU the step was accepted; a step event it asks for runs the event iteration."""
+        """Tell the FMU the step was accepted; a step event it asks for, or parameters and
+        discrete inputs the step changed, run the event iteration at the step's end."""
         run, inst = self.run, self.inst
         if isinstance(self.page, OwnPage) and self.terminated is None:
             self.page.advance(t_new)
@@ -307,12 +318,10 @@ class MeCoupling:
             run.calls += 1
             if terminate:
                 self._terminate(t_new)
-            elif enter:
-                t0, y = self.page.state()
-                y_new = self._event(t_new, y)
-                if self.terminated is None:
-                    self.page.load(t0, y_new)
-                self.page.restart()
+            else:
+                changes = self._pending()
+                if enter or changes is not None:
+                    self._event_now(t_new, changes)
         if self.terminated is not None and not run.reported:
             run.reported = True
             model = run.model
