@@ -27,7 +27,12 @@ is the plain one, bit for bit): supersampling, smooth (Gouraud) shading, lens di
 through the camera's own ``CameraModel.distort``, defocus blur and Gaussian sensor noise,
 on both back ends (see ``ejsrl.world._realism``). A solid node whose ``texture`` is
 ``"checker"`` shows a checkerboard of ``texture_size`` squares in its own frame (see
-``texture_coords``). ``render_depth`` is the depth image alone.
+``texture_coords``). A solid node whose ``texture`` is ``"<dictionary>:<id>"`` (say
+``"aruco_4x4_50:7"``, ``"apriltag_36h11:0"``; see ``ejsrl.vision.markers``) shows that fiducial
+marker, ``texture_size`` metres a side, centred on its origin, on its faces that look along
+its +z axis (see ``marker_coords``); a render with a marker in view is drawn by the NumPy
+back end (the GL shaders have no marker bitmaps), so it is the same on every machine.
+``render_depth`` is the depth image alone.
 """
 
 from __future__ import annotations
@@ -64,6 +69,8 @@ TEXTURES: tuple[str, ...] = ("checker",)
 DEFAULT_TEXTURE_SIZE: float = 0.05
 #: the dark squares of a checker texture: the face's colour times this
 CHECKER_DARK: float = 0.4
+#: the black cells of a marker texture: the face's colour times this (printed black is not quite black)
+MARKER_DARK: float = 0.08
 
 
 def _shade(n: NDArray[np.float64], rgb: NDArray[np.float64], ambient: float) -> NDArray[np.uint8]:
@@ -146,6 +153,7 @@ def render_triangles(
     realism: Realism | None = None,
     rng: np.random.Generator | None = None,
     texture: NDArray[np.float64] | None = None,
+    markers: tuple[NDArray[np.float64], list[NDArray[np.bool_]]] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """Render world triangles (F, 3, 3) with colours (F, 3) in [0, 1] seen by ``camera``.
 
@@ -154,7 +162,8 @@ def render_triangles(
     distortion, blur and noise (``Realism``; None or all off: the plain pinhole render);
     ``rng``: the generator of the noise (default: a fresh one). ``texture`` (F, 3 corners,
     3): checker coordinates (s, t), in squares, and 1 on textured faces, 0 elsewhere (see
-    ``texture_coords``); the dark squares are ``CHECKER_DARK`` times as bright. Returns ``rgb`` (H, W, 3)
+    ``texture_coords``); the dark squares are ``CHECKER_DARK`` times as bright. ``markers``:
+    what ``marker_coords`` gives (drawn by the NumPy back end whatever ``backend`` says). Returns ``rgb`` (H, W, 3)
     uint8 and ``depth`` (H, W) float32 (metres along the optical axis, inf where nothing is seen).
     """
     be = _pick_backend(backend)
@@ -167,11 +176,15 @@ def render_triangles(
     front = front_faces(P, n) if cull_backfaces else None
     if texture is not None and not np.any(np.asarray(texture)[:, :, 2] > 0.5):
         texture = None
-    if texture is not None or (realism is not None and not realism.plain):
+    if markers is not None and not np.any(markers[0][:, 0, 2] > 0.5):
+        markers = None
+    if texture is not None or markers is not None or (realism is not None and not realism.plain):
         realism = realism or Realism()
         cn = _world_corner_normals(tris, T[:3, :3]) if realism.shading == "smooth" else None
         tex = None if texture is None else np.asarray(texture, dtype=np.float64).reshape(-1, 3, 3)
-        return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng, cn, tex)
+        if markers is not None:
+            be = "numpy"
+        return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng, cn, tex, markers)
     if be == "gl":
         from ejsrl.world import _gl
 
@@ -227,11 +240,14 @@ def texture_coords(world: Any, exclude: Sequence[str], tris: NDArray[np.float64]
             continue
         count = sum(len(p.faces) for p in parts)
         tex = node.props.get("texture")
-        if tex in (None, "", "none"):
+        if tex in (None, "", "none") or _marker_of(node) is not None:
             entries.append((count, None, 0.0))
             continue
         if tex not in TEXTURES:
-            raise ValueError(f"'{node.name}': texture {tex!r} is not one of {', '.join(map(repr, TEXTURES))} (or leave it out)")
+            raise ValueError(
+                f"'{node.name}': texture {tex!r} is not one of {', '.join(map(repr, TEXTURES))} (or a marker "
+                "'<dictionary>:<id>' such as 'aruco_4x4_50:7', or leave it out)"
+            )
         raw = node.props.get("texture_size")
         size = DEFAULT_TEXTURE_SIZE if raw is None else float(raw)
         if not (math.isfinite(size) and size > 0):
@@ -254,6 +270,91 @@ def texture_coords(world: Any, exclude: Sequence[str], tris: NDArray[np.float64]
     return out
 
 
+def _marker_of(node: Any) -> tuple[str, int] | None:
+    """(dictionary, id) of a node's marker texture, None if it has none (ValueError if it is malformed)."""
+    tex = node.props.get("texture")
+    if not isinstance(tex, str) or ":" not in tex:
+        return None
+    from ejsrl.vision.markers import parse_marker_texture
+
+    try:
+        return parse_marker_texture(tex)
+    except ValueError as e:
+        raise ValueError(f"'{node.name}': {e}") from None
+
+
+def marker_coords(
+    world: Any, exclude: Sequence[str], tris: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], list[NDArray[np.bool_]]] | None:
+    """Marker coordinates of ``world.triangles(exclude)`` = ``tris``; None if no node has a marker texture.
+
+    Returns ``(coords, bitmaps)``: ``coords`` (F, 3 corners, 3) holds, on the faces of a
+    marker node that look along its +z axis, the corner's (u, v) = (x, y) / side + 1/2 in the
+    node's frame (the marker fills 0 <= u, v < 1) and k + 1, where ``bitmaps[k]`` (n + 2,
+    n + 2) bool (True = black, row 0 at the top, i.e. +y) is that node's marker; 0 elsewhere.
+    """
+    skip = set(exclude)
+    entries: list[tuple[int, Any, float, int]] = []
+    bitmaps: list[NDArray[np.bool_]] = []
+    for node in world.walk():  # the walk of World.triangles
+        if node.name in skip or not world.is_visible(node) or node.opacity <= 0.0:
+            continue
+        parts = node.parts()
+        if not parts:
+            continue
+        count = sum(len(p.faces) for p in parts)
+        mk = _marker_of(node)
+        if mk is None:
+            entries.append((count, None, 0.0, -1))
+            continue
+        from ejsrl.vision.markers import marker_bits
+
+        raw = node.props.get("texture_size")
+        side = DEFAULT_TEXTURE_SIZE if raw is None else float(raw)
+        if not (math.isfinite(side) and side > 0):
+            raise ValueError(f"'{node.name}': texture_size is the marker's side, a length > 0 in metres, got {raw!r}")
+        bitmaps.append(marker_bits(*mk))
+        entries.append((count, node.T_world(), side, len(bitmaps) - 1))
+    if not bitmaps or sum(e[0] for e in entries) != len(tris):
+        return None
+    out = np.zeros((len(tris), 3, 3))
+    i = 0
+    for count, T, side, k in entries:
+        if T is not None:
+            local = (tris[i : i + count] - T[:3, 3]) @ T[:3, :3]  # (count, 3 corners, 3) in the node frame
+            nrm = np.cross(local[:, 1] - local[:, 0], local[:, 2] - local[:, 0])
+            up = (nrm[:, 2] > 0) & (np.abs(nrm[:, 2]) >= np.abs(nrm[:, :2]).max(axis=1))
+            out[i : i + count, :, :2] = np.where(up[:, None, None], local[:, :, :2] / side + 0.5, 0.0)
+            out[i : i + count, :, 2] = np.where(up, float(k + 1), 0.0)[:, None]
+        i += count
+    return out, bitmaps
+
+
+def _paint_markers(
+    col: NDArray[np.float64], f: NDArray[np.int64], b: NDArray[np.float64],
+    markers: tuple[NDArray[np.float64], list[NDArray[np.bool_]]],
+) -> None:
+    """Darken, in place, the pixels (colours ``col`` (N, 3) of faces ``f`` at barycentrics ``b``) on black marker cells."""
+    coords, bitmaps = markers
+    t = coords[f]  # (N, 3 corners, 3)
+    k = np.rint(t[:, 0, 2]).astype(np.int64) - 1
+    on = np.flatnonzero(k >= 0)
+    if not len(on):
+        return
+    uv = np.einsum("nv,nvc->nc", b[on], t[on, :, :2])
+    for j, bits in enumerate(bitmaps):
+        sel = k[on] == j
+        if not sel.any():
+            continue
+        u, v = uv[sel, 0], uv[sel, 1]
+        inside = (u >= 0) & (u < 1) & (v >= 0) & (v < 1)
+        cells = bits.shape[0]
+        c = np.clip(np.floor(u * cells).astype(np.int64), 0, cells - 1)
+        r = np.clip(np.floor((1.0 - v) * cells).astype(np.int64), 0, cells - 1)
+        dark = inside & bits[r, c]
+        col[on[sel][dark]] *= MARKER_DARK
+
+
 def _barycentric_planes(P: NDArray[np.float64], n: NDArray[np.float64]) -> NDArray[np.float64]:
     """Per face (12, F): n (3), d = n.V0, then c0, g0 (3), c1, g1 (3) of ``_render_per_pixel_numpy``."""
     V0, V1, V2 = P[0], P[1], P[2]
@@ -270,9 +371,11 @@ def _barycentric_planes(P: NDArray[np.float64], n: NDArray[np.float64]) -> NDArr
 def _render_per_pixel_numpy(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
     camera: CameraModel, bg: NDArray[np.uint8], cn: NDArray[np.float64] | None, tex: NDArray[np.float64] | None,
+    markers: tuple[NDArray[np.float64], list[NDArray[np.bool_]]] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """NumPy render with per-pixel colours: Gouraud shading (corner colours interpolated with
-    perspective-correct barycentrics) when ``cn`` is given, else flat; a checker where ``tex`` says."""
+    perspective-correct barycentrics) when ``cn`` is given, else flat; a checker where ``tex``
+    says, a marker where ``markers`` says."""
     W, H = camera.width, camera.height
     zb = zbuffer(P, camera.K, W, H, near=camera.near, far=camera.far, front=front)
     depth = zb.depth()
@@ -308,6 +411,8 @@ def _render_per_pixel_numpy(
             st = np.einsum("nv,nvc->nc", b, t[:, :, :2])
             odd = (t[:, 0, 2] > 0.5) & (np.mod(np.floor(st[:, 0]) + np.floor(st[:, 1]), 2.0) > 0.5)
             col[odd] *= np.float32(CHECKER_DARK)  # the GL shader multiplies in float32
+        if markers is not None:
+            _paint_markers(col, f, b, markers)
         out[pix] = np.clip(np.rint(col), 0, 255).astype(np.uint8)
     return out.reshape(H, W, 3), depth
 
@@ -316,11 +421,12 @@ def _render_pinhole(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
     camera: CameraModel, bg: NDArray[np.uint8], be: str, cn: NDArray[np.float64] | None,
     tex: NDArray[np.float64] | None = None,
+    markers: tuple[NDArray[np.float64], list[NDArray[np.bool_]]] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """The pinhole render of camera-frame faces on back end ``be``: flat, or smooth with corner
-    normals ``cn``; a checker texture where ``tex`` says."""
+    normals ``cn``; a checker texture where ``tex`` says; markers (NumPy back end only)."""
     smooth = cn is not None
-    if be == "gl":
+    if be == "gl" and markers is None:
         from ejsrl.world import _gl
 
         keep = np.flatnonzero(front) if front is not None else np.arange(P.shape[2])
@@ -329,8 +435,8 @@ def _render_pinhole(
         else:
             shaded = _shade(n.take(keep, axis=1), cols[keep], AMBIENT)
         return _gl.render_faces(P.take(keep, axis=2), shaded, camera, bg, None if tex is None else tex[keep], CHECKER_DARK)
-    if smooth or tex is not None:
-        return _render_per_pixel_numpy(P, n, cols, front, camera, bg, cn, tex)
+    if smooth or tex is not None or markers is not None:
+        return _render_per_pixel_numpy(P, n, cols, front, camera, bg, cn, tex, markers)
     zb = zbuffer(P, camera.K, camera.width, camera.height, near=camera.near, far=camera.far, front=front)
     shaded = _shade(n.take(zb.ids, axis=1), cols[zb.ids], AMBIENT)
     return zb.lookup(shaded, bg), zb.depth()
@@ -340,6 +446,7 @@ def _render_realistic(
     P: NDArray[np.float64], n: NDArray[np.float64], cols: NDArray[np.float64], front: NDArray[np.bool_] | None,
     camera: CameraModel, bg: NDArray[np.uint8], be: str, realism: Realism, rng: np.random.Generator | None,
     cn: NDArray[np.float64] | None, tex: NDArray[np.float64] | None = None,
+    markers: tuple[NDArray[np.float64], list[NDArray[np.bool_]]] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """The pipeline of ``ejsrl.world._realism``: render finer and wider, average, distort, blur, add noise."""
     s = int(realism.antialias)
@@ -349,7 +456,7 @@ def _render_realistic(
         lens = CameraModel(W, H, K=camera.K, distortion=realism.distortion, near=camera.near, far=camera.far)
     m = margin_for(lens) if lens is not None else 0
     fine = CameraModel(s * (W + 2 * m), s * (H + 2 * m), K=supersampled_K(camera.K, s, m), near=camera.near, far=camera.far)
-    rgb, depth = _render_pinhole(P, n, cols, front, fine, bg, be, cn, tex)
+    rgb, depth = _render_pinhole(P, n, cols, front, fine, bg, be, cn, tex, markers)
     img = block_mean(rgb, s)
     depth = centre_depth(depth, s)
     if lens is not None:
@@ -434,7 +541,7 @@ def render(
     tris, rgb = world.triangles(exclude=tuple(exclude))
     return render_triangles(
         tris, rgb, cam, T, background=background, cull_backfaces=cull_backfaces, backend=backend, realism=realism, rng=rng,
-        texture=texture_coords(world, tuple(exclude), tris),
+        texture=texture_coords(world, tuple(exclude), tris), markers=marker_coords(world, tuple(exclude), tris),
     )
 
 
