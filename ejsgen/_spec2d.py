@@ -48,7 +48,7 @@ class DragEl(Strict):
     along: Literal["free", "x", "y", "curve", "region"] = "free"
     """The constraint: free, along x (y stays), along y, on a curve (curve:), or inside a region (region:)."""
     curve: str | None = None
-    """For along: curve, a function of custom code, f(x, y) -> [x, y]: the point of the curve for the pointer at (x, y)."""
+    """For along: curve, the point of the curve for the pointer at (x, y): the name of a custom function f(x, y) -> [x, y], or a lambda, 'lambda px, py: [px, 0.1*px**2]'."""
     region: list[NumOrExpr] | None = None
     """[xmin, xmax, ymin, ymax]: the point is kept inside (any constraint; needed by along: region)."""
     handle: Literal["start", "end"] = "start"

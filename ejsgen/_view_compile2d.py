@@ -124,6 +124,33 @@ def _limits(vc: ViewCompiler, target: str) -> tuple[float | None, float | None]:
     return (None if lo is None else float(lo), None if hi is None else float(hi))
 
 
+def _curve(vc: ViewCompiler, text: str, path: Path_) -> Src | None:
+    """``curve(model, x, y)``: a custom function's name, or a lambda of the pointer's (x, y)
+    (``lambda px, py: [px, 0.1*px**2]``), giving the point of the curve."""
+    import ast
+
+    c = vc.c
+    fn = text.removesuffix("()")
+    if fn.isidentifier():
+        if fn not in c.names.functions:
+            c.errors.append(SpecError(c.loc(path), f"the curve '{text}' is not a function of custom code",
+                                      did_you_mean(fn, c.names.functions) or "define def on_curve(x, y): ... return [x, y] under model: custom:"))
+            return None
+        return Src(f"lambda self, x, y: self.{fn}(x, y)")
+    try:
+        node = ast.parse(text, mode="eval").body
+    except SyntaxError:
+        node = None
+    if not (isinstance(node, ast.Lambda) and len(node.args.args) == 2 and not node.args.defaults):
+        c.errors.append(SpecError(c.loc(path), f"a curve is the name of a custom function, or a lambda of the pointer's x and y, got '{text}'",
+                                  "e.g. curve: 'lambda px, py: [px, 0.1*px**2]' (the parabola under the pointer)"))
+        return None
+    res = c.expr_source(path, "the drag's curve")
+    if res is None:
+        return None
+    return Src(f"lambda self, x, y: ({res[0]})(x, y)")
+
+
 def _drag(vc: ViewCompiler, kind: str, name: str, d: Any, path: Path_) -> Call | None:
     c = vc.c
     if kind not in _DRAGGABLE:
@@ -180,12 +207,10 @@ def _drag(vc: ViewCompiler, kind: str, name: str, d: Any, path: Path_) -> Call |
         if d.curve is None:
             c.errors.append(SpecError(c.loc(path + ("along",)), "along: curve needs curve: the name of a custom function f(x, y) -> [x, y]"))
             return None
-        fn = d.curve.strip().removesuffix("()")
-        if fn not in c.names.functions:
-            c.errors.append(SpecError(c.loc(path + ("curve",)), f"the curve '{d.curve}' is not a function of custom code",
-                                      did_you_mean(fn, c.names.functions) or "define def on_curve(x, y): ... return [x, y] under model: custom:"))
+        curve = _curve(vc, d.curve.strip(), path + ("curve",))
+        if curve is None:
             return None
-        kw["curve"] = Src(f"lambda self, x, y: self.{fn}(x, y)")
+        kw["curve"] = curve
     elif d.curve is not None:
         c.errors.append(SpecError(c.loc(path + ("curve",)), "curve: is used with along: curve", "add along: curve"))
         return None

@@ -78,6 +78,8 @@ def test_drag_mistakes(tmp_path, capsys) -> None:
         "        - particle: {position: [x, y], drag: {bind: [x, y], along: region}}\n"
         "        - polyline: {points: P, drag: {bind: P}}\n"
         "        - particle: {position: [x, y], drag: {bind: [x, y], region: [1, 0, 0, 1]}}\n"
+        "        - particle: {position: [x, y], drag: {bind: [x, y], along: curve, curve: 'x**2'}}\n"
+        "        - particle: {position: [x, y], drag: {bind: [x, y], along: curve, curve: 'lambda px, py: [px, qq]'}}\n"
     )
     assert _errors(tmp_path, capsys, body) == [
         "18:57: error: unknown name 'z'",
@@ -86,6 +88,9 @@ def test_drag_mistakes(tmp_path, capsys) -> None:
         "21:68: error: along: region needs region: [xmin, xmax, ymin, ymax]",
         "22:39: error: a polyline cannot be dragged; draggable: point, particle, circle, segment, arrow, spring, text, image",
         "23:69: error: a region is [xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax",
+        "24:82: error: a curve is the name of a custom function, or a lambda of the pointer's x and y, got 'x**2'; "
+        "e.g. curve: 'lambda px, py: [px, 0.1*px**2]' (the parabola under the pointer)",
+        "25:103: error: unknown name 'qq'",
     ]
 
 

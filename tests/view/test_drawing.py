@@ -143,6 +143,8 @@ view:
         - segment: {name: s, start: [0, 0], end: [x, y], drag: {bind: y, along: y, handle: end}}
         - particle: {name: bad, position: "np.zeros((2, 5))"}
 """
+PARABOLA = """        - point: {name: para, position: [x, y], drag: {bind: [x, y], along: curve, curve: "lambda px, py: [px, 0.5*px**2]"}}
+"""
 
 
 def test_a_drag_on_a_curve_a_set_row_and_along_y(tmp_path) -> None:
@@ -304,3 +306,10 @@ def test_a_trace_moves_its_last_point_while_time_stands_still(projectile) -> Non
     app.play()
     app.frame()
     assert len(xy(trace())) == 2
+
+
+def test_a_curve_given_as_a_lambda(tmp_path) -> None:
+    spec = CURVE.replace('        - particle: {name: bad, position: "np.zeros((2, 5))"}\n', PARABOLA)
+    app, b = built(tmp_path, spec)
+    b.drag("para", "move", 1.5, -7.0)  # on the parabola y = x^2 / 2, under the pointer
+    assert (app.model.x, app.model.y) == (1.5, 1.125)
