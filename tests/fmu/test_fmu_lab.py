@@ -81,3 +81,62 @@ def test_a_failing_fmu_call_stops_a_headless_run_with_the_fmus_message_and_the_s
     assert "exceeds the amplifier's limit i_max = 20 A" in r.stderr  # the FMU's own log message
     rows = r.stdout.strip().splitlines()
     assert 2 <= len(rows) < 250  # it ran until the current grew past the limit, then stopped
+
+
+def test_the_labs_fmu_refuses_the_calls_the_fmi_state_machine_forbids(lab, capfd):
+    """As the Reference FMUs do: a lenient FMU would hide an importer's wrong call order."""
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Model
+
+    fmu = lab / "fmu_motor_control" / "joint_drives.fmu"
+    md = read_model_description(str(fmu))
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    model = FMU2Model(guid=md.guid, unzipDirectory=extract(str(fmu)), modelIdentifier=md.modelExchange.modelIdentifier, instanceName="order")
+    model.instantiate(loggingOn=False)
+    from fmpy.fmi1 import FMICallException
+
+    model.setReal([vr["G1"]], [80.0])  # a fixed parameter before initialization: fine
+    model.setupExperiment(startTime=0.0)
+    model.enterInitializationMode()
+    model.exitInitializationMode()  # -> event mode
+    model.setReal([vr["Kd"]], [0.2])  # a tunable parameter in event mode: fine
+    model.newDiscreteStates()
+    model.enterContinuousTimeMode()
+    model.setReal([vr["q_ref1"]], [1.0])  # a continuous input in continuous time: fine
+    with pytest.raises(FMICallException):
+        model.setReal([vr["Kd"]], [0.0])  # a tunable parameter in continuous time: refused
+    with pytest.raises(FMICallException):
+        model.newDiscreteStates()  # outside event mode: refused
+    with pytest.raises(FMICallException):
+        model.setReal([vr["G1"]], [50.0])  # a fixed parameter after initialization: refused
+    model.enterEventMode()
+    model.setReal([vr["Kd"]], [0.0])
+    model.terminate()
+    model.freeInstance()
+    said = capfd.readouterr().out
+    assert "value reference 29 is a tunable parameter and cannot be set in continuous-time mode" in said
+    assert "fmi2NewDiscreteStates: Illegal call sequence (the FMU is in continuous-time mode)" in said
+    assert "value reference 36 is a fixed parameter and cannot be set in continuous-time mode" in said
+
+
+def test_gains_changed_while_the_lab_runs_reach_the_fmu_as_in_the_plain_ode_model(lab, reference):
+    """A slider moving Kd and Ki mid-run: the FMU gets them in event mode (model exchange), and
+    the arm follows the plain ODE model given the same change at the same step."""
+    from ejsrl.app import load_app
+
+    runs = []
+    for folder in (lab, reference):
+        app = load_app(folder)
+        try:
+            for _ in range(200):
+                app.step_once()
+            app.model.Kd, app.model.Ki = 0.0, 25.0  # as the sliders do, between two steps
+            for _ in range(300):
+                app.step_once()
+            assert app.error is None, app.error
+            runs.append((float(app.model.t), np.array(app.model.q, dtype=float)))
+        finally:
+            app.stop()
+    (t_a, q_a), (t_b, q_b) = runs
+    assert t_a == pytest.approx(2.0) and t_b == pytest.approx(2.0)
+    np.testing.assert_allclose(q_a, q_b, rtol=0, atol=1e-6)

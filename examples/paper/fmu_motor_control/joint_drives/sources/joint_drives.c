@@ -3,8 +3,14 @@
  * system's C compiler); no binary is stored in the repository.
  *
  * A failing call logs why through the environment's logger and returns fmi2Error:
- * an armature current above i_max (the amplifier's current limit), or setting a fixed
- * parameter after initialization.
+ * an armature current above i_max (the amplifier's current limit), or a call the FMI 2.0
+ * state machine forbids in the FMU's current state, with the masks of the Modelica
+ * Association's Reference FMUs (fmi2Functions.c): a tunable parameter is set only before
+ * initialization, in initialization mode, in event mode (model exchange) or between steps
+ * (co-simulation); a fixed parameter or a start value only before initialization ends;
+ * setTime only in event or continuous-time mode, setContinuousStates and
+ * completedIntegratorStep only in continuous-time mode, newDiscreteStates only in event
+ * mode, doStep only between steps. So an importer calling in the wrong order is caught.
  */
 #include <stdarg.h>
 #include <stdio.h>
@@ -17,6 +23,15 @@
 #define GUID "{6d1f3a52-4c1e-4f0b-9a57-3e5d2c0b7a12}"
 
 typedef enum { MODE_INSTANTIATED, MODE_INIT, MODE_EVENT, MODE_CONTINUOUS, MODE_STEP, MODE_TERMINATED, MODE_ERROR } Mode;
+static const char *MODE_NAMES[] = {"the instantiated state", "initialization mode", "event mode", "continuous-time mode", "step mode", "the terminated state", "an error state"};
+
+/* the states a call is allowed in (bits of Mode), as the Reference FMUs' MASK_fmi2... */
+#define IN(m) (1 << (m))
+#define MASK_GET (IN(MODE_INIT) | IN(MODE_EVENT) | IN(MODE_CONTINUOUS) | IN(MODE_STEP) | IN(MODE_TERMINATED) | IN(MODE_ERROR))
+#define MASK_SET_CONTINUOUS_INPUT (IN(MODE_INSTANTIATED) | IN(MODE_INIT) | IN(MODE_EVENT) | IN(MODE_CONTINUOUS) | IN(MODE_STEP))
+#define MASK_SET_TUNABLE (IN(MODE_INSTANTIATED) | IN(MODE_INIT) | IN(MODE_EVENT) | IN(MODE_STEP))
+#define MASK_SET_FIXED (IN(MODE_INSTANTIATED) | IN(MODE_INIT))
+#define MASK_TERMINATE (IN(MODE_EVENT) | IN(MODE_CONTINUOUS) | IN(MODE_STEP) | IN(MODE_ERROR))
 
 typedef struct {
     fmi2CallbackFunctions cb;
@@ -45,8 +60,26 @@ static fmi2Status fail(Drives *c, const char *fmt, const char *what) {
     return fmi2Error;
 }
 
-static int is_fixed_parameter(fmi2ValueReference vr) {
-    return vr == VR_R || vr == VR_LA || vr == VR_KT || vr == VR_KB || (vr >= VR_G && vr < VR_G + N_JOINTS);
+/* a call the FMU's state forbids: logged, fmi2Error (the state is kept, as the Reference FMUs do) */
+static int allowed(Drives *c, const char *fn, int mask) {
+    if (c == NULL) return 0;
+    if (mask & IN(c->mode)) return 1;
+    say(c, fmi2Error, "logStatusError", "%s: Illegal call sequence (the FMU is in %s)", fn, MODE_NAMES[c->mode]);
+    return 0;
+}
+
+static const char *role(fmi2ValueReference vr) {
+    if (vr < VR_TAU) return "an input";
+    if (vr >= VR_I && vr < VR_DER_I) return "a state (its start value)";
+    if (vr == VR_KP || vr == VR_KI || vr == VR_KD || vr == VR_KA || vr == VR_VMAX || vr == VR_IMAX) return "a tunable parameter";
+    return "a fixed parameter";
+}
+
+static int set_mask(fmi2ValueReference vr) {
+    if (vr < VR_TAU) return MASK_SET_CONTINUOUS_INPUT;
+    if (vr >= VR_I && vr < VR_DER_I) return MASK_SET_FIXED;
+    if (vr == VR_KP || vr == VR_KI || vr == VR_KD || vr == VR_KA || vr == VR_VMAX || vr == VR_IMAX) return MASK_SET_TUNABLE;
+    return MASK_SET_FIXED;
 }
 
 static int is_settable(fmi2ValueReference vr) {
@@ -106,23 +139,27 @@ void fmi2FreeInstance(fmi2Component c) {
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean tolDefined, fmi2Real tol, fmi2Real start, fmi2Boolean stopDefined, fmi2Real stop) {
     (void)tolDefined; (void)tol; (void)stopDefined; (void)stop;
+    if (!allowed((Drives *)c, "fmi2SetupExperiment", IN(MODE_INSTANTIATED))) return fmi2Error;
     ((Drives *)c)->time = start;
     return fmi2OK;
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    if (!allowed((Drives *)c, "fmi2EnterInitializationMode", IN(MODE_INSTANTIATED))) return fmi2Error;
     ((Drives *)c)->mode = MODE_INIT;
     return fmi2OK;
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
     Drives *d = (Drives *)c;
+    if (!allowed(d, "fmi2ExitInitializationMode", IN(MODE_INIT))) return fmi2Error;
     drives_compute(d->r);
     d->mode = d->kind == fmi2ModelExchange ? MODE_EVENT : MODE_STEP;
     return check_current(d);
 }
 
 fmi2Status fmi2Terminate(fmi2Component c) {
+    if (!allowed((Drives *)c, "fmi2Terminate", MASK_TERMINATE)) return fmi2Error;
     ((Drives *)c)->mode = MODE_TERMINATED;
     return fmi2OK;
 }
@@ -139,6 +176,7 @@ fmi2Status fmi2Reset(fmi2Component c) {
 fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
     Drives *d = (Drives *)c;
     size_t k;
+    if (!allowed(d, "fmi2GetReal", MASK_GET)) return fmi2Error;
     drives_compute(d->r);
     for (k = 0; k < nvr; k++) {
         if (vr[k] >= N_VARS) return fail(d, "%s", "fmi2GetReal: unknown value reference");
@@ -152,8 +190,8 @@ fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nv
     size_t k;
     for (k = 0; k < nvr; k++) {
         if (vr[k] >= N_VARS || !is_settable(vr[k])) return fail(d, "%s", "fmi2SetReal: the variable cannot be set");
-        if (is_fixed_parameter(vr[k]) && d->mode != MODE_INSTANTIATED && d->mode != MODE_INIT) {
-            say(d, fmi2Error, "logStatusError", "fmi2SetReal: value reference %u is a fixed parameter: set it before initialization", (unsigned)vr[k]);
+        if (!(set_mask(vr[k]) & IN(d->mode))) {
+            say(d, fmi2Error, "logStatusError", "fmi2SetReal: value reference %u is %s and cannot be set in %s", (unsigned)vr[k], role(vr[k]), MODE_NAMES[d->mode]);
             return fmi2Error;
         }
         d->r[vr[k]] = value[k];
@@ -208,12 +246,13 @@ fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *
 /* -- model exchange ---------------------------------------------------------------------- */
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    if (!allowed((Drives *)c, "fmi2EnterEventMode", IN(MODE_EVENT) | IN(MODE_CONTINUOUS))) return fmi2Error;
     ((Drives *)c)->mode = MODE_EVENT;
     return fmi2OK;
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
-    (void)c;
+    if (!allowed((Drives *)c, "fmi2NewDiscreteStates", IN(MODE_EVENT))) return fmi2Error;
     info->newDiscreteStatesNeeded = fmi2False;
     info->terminateSimulation = fmi2False;
     info->nominalsOfContinuousStatesChanged = fmi2False;
@@ -224,6 +263,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *info) {
 }
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    if (!allowed((Drives *)c, "fmi2EnterContinuousTimeMode", IN(MODE_EVENT))) return fmi2Error;
     ((Drives *)c)->mode = MODE_CONTINUOUS;
     return fmi2OK;
 }
@@ -232,10 +272,12 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetPrior, 
     (void)noSetPrior;
     *enterEventMode = fmi2False;
     *terminate = fmi2False;
+    if (!allowed((Drives *)c, "fmi2CompletedIntegratorStep", IN(MODE_CONTINUOUS))) return fmi2Error;
     return check_current((Drives *)c);
 }
 
 fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    if (!allowed((Drives *)c, "fmi2SetTime", IN(MODE_EVENT) | IN(MODE_CONTINUOUS))) return fmi2Error;
     ((Drives *)c)->time = time;
     return fmi2OK;
 }
@@ -243,6 +285,7 @@ fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
 fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
     Drives *d = (Drives *)c;
     size_t k;
+    if (!allowed(d, "fmi2SetContinuousStates", IN(MODE_CONTINUOUS))) return fmi2Error;
     if (nx != N_STATES) return fail(d, "%s", "fmi2SetContinuousStates: this FMU has 6 continuous states");
     for (k = 0; k < nx; k++) d->r[drives_state_vr[k]] = x[k];
     return fmi2OK;
@@ -251,6 +294,7 @@ fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t n
 fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real dx[], size_t nx) {
     Drives *d = (Drives *)c;
     size_t k;
+    if (!allowed(d, "fmi2GetDerivatives", IN(MODE_EVENT) | IN(MODE_CONTINUOUS) | IN(MODE_TERMINATED))) return fmi2Error;
     if (nx != N_STATES) return fail(d, "%s", "fmi2GetDerivatives: this FMU has 6 continuous states");
     drives_compute(d->r);
     for (k = 0; k < nx; k++) dx[k] = d->r[drives_der_vr[k]];
@@ -265,6 +309,7 @@ fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real z[], size_t nz) {
 fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
     Drives *d = (Drives *)c;
     size_t k;
+    if (!allowed(d, "fmi2GetContinuousStates", IN(MODE_INIT) | IN(MODE_EVENT) | IN(MODE_CONTINUOUS) | IN(MODE_TERMINATED))) return fmi2Error;
     if (nx != N_STATES) return fail(d, "%s", "fmi2GetContinuousStates: this FMU has 6 continuous states");
     for (k = 0; k < nx; k++) x[k] = d->r[drives_state_vr[k]];
     return fmi2OK;
@@ -282,6 +327,7 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x[], size
 fmi2Status fmi2DoStep(fmi2Component c, fmi2Real t, fmi2Real h, fmi2Boolean noSetPrior) {
     Drives *d = (Drives *)c;
     (void)noSetPrior;
+    if (!allowed(d, "fmi2DoStep", IN(MODE_STEP))) return fmi2Error;
     if (h < 0.0) return fail(d, "%s", "fmi2DoStep: negative communication step");
     drives_advance(d->r, h);
     d->time = t + h;
