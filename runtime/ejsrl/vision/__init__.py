@@ -27,6 +27,11 @@ compiled, 3x faster on one thread (5x on two) and outside the GIL, when numba is
 is importable from here:
 
     from ejsrl.vision import Pipeline, susan, CameraModel, interaction_matrix, ibvs_velocity
+
+Fiducial markers (``detect_markers``, ``marker_pose``; ``ejsrl.vision.markers``), point clouds
+from depth images and ICP (``depth_to_points``, ``icp``; ``ejsrl.vision.pointcloud``) and real
+image sources (``ImageSource``: a camera, a stream, a video or images; ``ejsrl.vision.sources``)
+are here too.
 """
 
 from __future__ import annotations
@@ -109,6 +114,9 @@ from ejsrl.vision.filters import (
 )
 from ejsrl.vision.geometry import affine_matrix, crop, flip, perspective_matrix, resize, rotate, warp_affine, warp_perspective
 from ejsrl.vision.pipeline import STEPS, Pipeline, PipelineResult
+from ejsrl.vision.markers import MARKER_DICTIONARIES, Marker, detect_markers, marker_bits, marker_image, marker_pose
+from ejsrl.vision.pointcloud import IcpResult, best_rigid_transform, depth_to_points, estimate_normals, icp, transform_points, voxel_downsample
+from ejsrl.vision.sources import ImageSource
 from ejsrl.vision import servo as _servo
 from ejsrl.vision.servo import (
     ServoMonitor,
@@ -175,4 +183,7 @@ __all__ = [
     "StereoRectification", "stereo_rectify", "disparity", "depth_from_disparity", "triangulate",
     "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "draw_chessboard", "find_chessboard",
     *_servo.__all__,
+    "MARKER_DICTIONARIES", "Marker", "detect_markers", "marker_bits", "marker_image", "marker_pose",
+    "IcpResult", "best_rigid_transform", "depth_to_points", "estimate_normals", "icp", "transform_points", "voxel_downsample",
+    "ImageSource",
 ]
