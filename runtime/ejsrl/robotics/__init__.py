@@ -6,7 +6,8 @@ Everything takes and returns NumPy arrays, SI units and radians.
 - :class:`Link`, :class:`Robot`: models and their kinematics and dynamics.
 - :class:`SE3`, :class:`SO3`: pose and rotation values (composition ``*``, ``inv``, ``interp``...).
 - :func:`load_urdf`: a ``Robot`` from a URDF file (:class:`ETSLink` links, meshes to draw).
-- :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``ur5_urdf``, ``planar``, ``rrr``, ``scara``.
+- :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``ur5_urdf``, ``planar``, ``rrr``, ``scara``,
+  ``panda``, ``kr5``, ``irb140``, ``lbr_iiwa``, ``ur10``, ``random_arm``.
 - :mod:`trajectory`: cubic, quintic, LSPB, synchronous/asynchronous, splines, 4-3-4, Cartesian,
   :func:`mstraj` (multi-segment with blends, as the Toolbox's).
 - :mod:`transforms`: rotations, transforms, RPY/Euler, angle-axis, quaternions (wxyz).

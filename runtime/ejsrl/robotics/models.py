@@ -11,11 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .link import Link, PrismaticDH, RevoluteDH
+from .link import Link, PrismaticDH, RevoluteDH, RevoluteMDH
 from .robot import Robot
-from .transforms import trotx
+from .transforms import transl, trotx, trotz
 
-__all__ = ["puma560", "stanford", "pa10", "ur5", "ur5_urdf", "UR5_URDF", "planar", "rrr", "scara"]
+__all__ = ["puma560", "stanford", "pa10", "ur5", "ur5_urdf", "UR5_URDF", "planar", "rrr", "scara",
+           "panda", "kr5", "irb140", "lbr_iiwa", "ur10", "random_arm"]
 
 #: the UR5 URDF file shipped with ejsrl (with its STL meshes; see NOTICE.md beside it)
 UR5_URDF = Path(__file__).resolve().parent / "data" / "ur5" / "ur5.urdf"
@@ -188,6 +189,87 @@ def scara() -> Robot:
                    qlim=[-2 * pi, 2 * pi]),
     ]
     return Robot(L, name="SCARA", poses={"qz": np.zeros(4), "qr": [pi / 6, -pi / 3, 0.1, 0]})
+
+
+def _arm(name: str, maker: str, a: list[float], d: list[float], alpha: list[float], lim_deg: np.ndarray,
+         mass: list[float], *, mdh: bool = False, tool: np.ndarray | None = None,
+         qr: list[float] | None = None) -> Robot:
+    """An arm from its DH table, joint limits (degrees, symmetric when one row), and
+    approximate masses: each link a uniform cylinder of radius 0.06 m along its longer
+    DH offset, centre of mass halfway along it."""
+    n = len(a)
+    lim = np.asarray(lim_deg, dtype=float) * deg
+    lim = np.vstack((-lim, lim)) if lim.ndim == 1 else lim
+    links = []
+    for j in range(n):
+        along_x = abs(a[j]) >= abs(d[j])
+        length = max(abs(a[j]), abs(d[j]), 0.05)
+        r = [-a[j] / 2, 0.0, 0.0] if along_x else [0.0, 0.0, -d[j] / 2] if not mdh else [0.0, 0.0, d[j] / 2]
+        cls = RevoluteMDH if mdh else RevoluteDH
+        links.append(cls(d=d[j], a=a[j], alpha=alpha[j], m=mass[j], r=r,
+                         I=_rod(mass[j], length, 0 if along_x else 2, radius=0.06), qlim=lim[:, j]))
+    return Robot(links, name=name, manufacturer=maker, tool=tool,
+                 poses={"qz": np.zeros(n), "qr": np.zeros(n) if qr is None else np.asarray(qr, dtype=float)})
+
+
+def panda() -> Robot:
+    """Franka Emika Panda (7R), modified DH from Franka's documentation (as the Toolbox's
+    ``models.DH.Panda``), with the hand as the tool (0.103 m along the flange z, turned
+    -45 deg); masses from Franka's published dynamics, link inertias approximate."""
+    return _arm("Panda", "Franka Emika", a=[0, 0, 0, 0.0825, -0.0825, 0, 0.088],
+                d=[0.333, 0, 0.316, 0, 0.384, 0, 0.107], alpha=[0, -pi / 2, pi / 2, pi / 2, -pi / 2, pi / 2, pi / 2],
+                lim_deg=np.array([[-2.8973, -1.7628, -2.8973, -3.0718, -2.8973, -0.0175, -2.8973],
+                                  [2.8973, 1.7628, 2.8973, -0.0698, 2.8973, 3.7525, 2.8973]]) / deg,
+                mass=[4.970684, 0.646926, 3.228604, 3.587895, 1.225946, 1.666555, 0.735522], mdh=True,
+                tool=transl(0, 0, 0.103) @ trotz(-pi / 4), qr=[0, -0.3, 0, -2.2, 0, 2.0, pi / 4])
+
+
+def kr5() -> Robot:
+    """KUKA KR5 (6R, shoulder offset 0.18 m), standard DH from KUKA's data sheet (as the
+    Toolbox's ``models.DH.KR5``); masses approximate (total about 28 kg)."""
+    return _arm("KR5", "KUKA", a=[0.18, 0.6, 0.12, 0, 0, 0], d=[0.4, 0, 0, -0.62, 0, -0.115],
+                alpha=[-pi / 2, 0, pi / 2, -pi / 2, pi / 2, pi],
+                lim_deg=np.array([[-155, -180, -15, -350, -130, -350], [155, 65, 158, 350, 130, 350]]),
+                mass=[10.0, 8.0, 5.0, 2.5, 1.5, 0.5], qr=[0, -pi / 2, pi / 2, 0, pi / 2, 0])
+
+
+def irb140() -> Robot:
+    """ABB IRB 140 (6R, shoulder offset 0.07 m), standard DH from ABB's product manual (as
+    the Toolbox's ``models.DH.IRB140``); masses of the first three links from the Toolbox,
+    of the wrist approximate."""
+    return _arm("IRB140", "ABB", a=[0.07, 0.36, 0, 0, 0, 0], d=[0.352, 0, 0, 0.38, 0, 0.065],
+                alpha=[-pi / 2, 0, -pi / 2, pi / 2, -pi / 2, 0],
+                lim_deg=np.array([[-180, -100, -220, -200, -120, -400], [180, 100, 60, 200, 120, 400]]),
+                mass=[34.65536, 15.99459, 20.86205, 3.0, 1.5, 0.3], qr=[0, 0, 0, 0, -pi / 2, 0])
+
+
+def lbr_iiwa() -> Robot:
+    """KUKA LBR iiwa 14 R820 (7R), standard DH from KUKA's specification (shoulder 0.36 m,
+    upper arm 0.42 m, forearm 0.4 m, flange 0.126 m) and its joint limits; masses approximate
+    (total about 30 kg)."""
+    return _arm("LBR iiwa 14", "KUKA", a=[0.0] * 7, d=[0.36, 0, 0.42, 0, 0.4, 0, 0.126],
+                alpha=[-pi / 2, pi / 2, pi / 2, -pi / 2, -pi / 2, pi / 2, 0],
+                lim_deg=np.array([170, 120, 170, 120, 170, 120, 175]),
+                mass=[6.4, 7.0, 3.4, 3.5, 3.5, 2.1, 0.8], qr=[0, pi / 6, 0, -pi / 3, 0, pi / 3, 0])
+
+
+def ur10() -> Robot:
+    """Universal Robots UR10 (CB3), standard DH and masses from Universal Robots (as the
+    Toolbox's ``models.DH.UR10``); link inertias approximate (cylinders)."""
+    return _arm("UR10", "Universal Robots", a=[0, -0.612, -0.5723, 0, 0, 0],
+                d=[0.1273, 0, 0, 0.163941, 0.1157, 0.0922], alpha=[pi / 2, 0, 0, pi / 2, -pi / 2, 0],
+                lim_deg=np.full(6, 360.0), mass=[7.1, 12.7, 4.27, 2.0, 2.0, 0.365],
+                qr=[pi, 0, 0, 0, pi / 2, 0])
+
+
+def random_arm(n: int = 6, seed: int = 0) -> Robot:
+    """A random n-joint revolute arm (a test of the general IK): standard DH with ``a``, ``d``
+    uniform in [0, 0.4] m, twists uniform in [-pi, pi], limits +-170 deg; point-like unit masses."""
+    rng = np.random.default_rng(seed)
+    a, d = rng.uniform(0, 0.4, n), rng.uniform(0, 0.4, n)
+    alpha = rng.uniform(-pi, pi, n)
+    return _arm(f"random {n}R (seed {seed})", "", a=a.tolist(), d=d.tolist(), alpha=alpha.tolist(),
+                lim_deg=np.full(n, 170.0), mass=[1.0] * n)
 
 
 _ = Link  # re-exported for model authors: ``models.Link``
