@@ -39,7 +39,7 @@ if TYPE_CHECKING:
 __all__ = ["compile_fmus", "prepare_fmu", "FmuFile", "cache_dir"]
 
 #: the FMI types whose values the runtime exchanges
-_TYPES = {"Real", "Integer", "Boolean", "String", "Enumeration", "Float64", "Float32", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}
+_TYPES = {"Real", "Integer", "Boolean", "String", "Binary", "Enumeration", "Float64", "Float32", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}
 
 
 class FmuFile:
@@ -219,6 +219,10 @@ def _check_variable(c: Compiler, f: FmuFile, name: str, fname: str, var: str, ro
         hint = did_you_mean(var, f.vars) or f"its variables: {', '.join(list(f.vars)[:12])}"
         c.errors.append(SpecError(where, f"the FMU '{fname}' has no variable '{var}'", hint))
         return False
+    if v.type == "Clock" or getattr(v, "clocks", None):
+        what = "an FMI 3 clock" if v.type == "Clock" else "clocked (it changes only when a clock ticks)"
+        c.errors.append(SpecError(where, f"'{var}' of the FMU '{fname}' is {what}: FMI 3 clocks are not supported (they need scheduled execution or co-simulation event mode)", "use the FMU's variables that no clock drives"))
+        return False
     if v.type not in _TYPES:
         c.errors.append(SpecError(where, f"'{var}' of the FMU '{fname}' is of type {v.type}, which ejsgen does not exchange"))
         return False
@@ -315,8 +319,50 @@ def compile_fmus(c: Compiler) -> None:
         c.add_method(c.method_name("_fmus"), "self", "The spec's FMUs (fmus:), instantiated afresh at every reset.", lines)
 
 
+def fmu_shape(f: FmuFile, fmu: Fmu, var: str) -> tuple[int, ...]:
+    """The shape of FMU variable ``var``: () for a scalar, an FMI 3 array's dimensions (a
+    dimension set by a structural parameter takes the spec's number for it, else its start)."""
+    out = []
+    for d in getattr(f.vars[var], "dimensions", None) or []:
+        if d.start is not None:
+            out.append(int(d.start))
+        else:
+            given = fmu.parameters.get(d.variable.name)
+            out.append(int(given) if isinstance(given, (int, float)) and not isinstance(given, bool) else int(d.variable.start))
+    return tuple(out)
+
+
+def _shape_words(shape: tuple[int, ...]) -> str:
+    return "a number" if not shape else f"an array of shape ({', '.join(map(str, shape))}{',' if len(shape) == 1 else ''})"
+
+
+def _check_capabilities(c: Compiler, fmu: Fmu, f: FmuFile, kind: str, path: tuple[Any, ...]) -> bool:
+    """Capability flags the spec needs: a communication step that may change needs
+    ``canHandleVariableCommunicationStepSize``."""
+    cs = f.md.coSimulation
+    if kind == "co_simulation" and cs is not None and not getattr(cs, "canHandleVariableCommunicationStepSize", True) and isinstance(fmu.step, str):
+        c.errors.append(
+            SpecError(
+                c.loc(path + ("step",)),
+                f"the FMU '{fmu.file}' cannot take a communication step that changes (canHandleVariableCommunicationStepSize is false), and 'step' is an expression",
+                "give 'step' a number",
+            )
+        )
+        return False
+    return True
+
+
 def _compile_one(c: Compiler, name: str, fmu: Fmu, f: FmuFile, path: tuple[Any, ...]) -> list[Line]:
     md = f.md
+    if md.coSimulation is None and md.modelExchange is None:
+        c.errors.append(
+            SpecError(
+                c.loc(path + ("file",)),
+                f"the FMU '{fmu.file}' has neither a co-simulation nor a model-exchange interface; FMI 3 scheduled execution, the only one it offers, is not supported",
+                "export the model as a co-simulation or model-exchange FMU",
+            )
+        )
+        return []
     kind = fmu.kind or ("co_simulation" if md.coSimulation is not None else "model_exchange")
     offered = {"co_simulation": md.coSimulation, "model_exchange": md.modelExchange}
     if offered[kind] is None:
@@ -334,6 +380,9 @@ def _compile_one(c: Compiler, name: str, fmu: Fmu, f: FmuFile, path: tuple[Any, 
     if fmu.ode is not None and kind == "co_simulation":
         c.errors.append(SpecError(c.loc(path + ("ode",)), "'ode' names the ODE page integrating a model-exchange FMU; a co-simulation FMU steps itself", "remove 'ode', or use kind: model_exchange"))
         ok = False
+    ok = _check_capabilities(c, fmu, f, kind, path) and ok
+    if ok:
+        ok = _check_shapes(c, fmu, f, path) and ok
     ode = _ode_index(c, fmu, path) if kind == "model_exchange" else None
     for key in ("method", "tolerance"):
         if key in fmu.model_fields_set and ode != -1:
@@ -374,6 +423,58 @@ def _compile_one(c: Compiler, name: str, fmu: Fmu, f: FmuFile, path: tuple[Any, 
         args += [f"method={fmu.method!r}", f"tolerance={float(fmu.tolerance)!r}"]
     args.append(f"where={c.where(path, key=True)!r}")
     return [Line("    FmuDef(")] + [Line(f"        {a},") for a in args] + [Line("    ),")]
+
+
+def _check_shapes(c: Compiler, fmu: Fmu, f: FmuFile, path: tuple[Any, ...]) -> bool:
+    """FMI 3 arrays against the spec: an output goes to a whole model variable of its shape; an
+    input's or parameter's value, when its shape is certain, has the variable's shape."""
+    from ejsgen._shapes import infer_shape
+
+    ok = True
+    for var, text in fmu.outputs.items():
+        want = fmu_shape(f, fmu, var)
+        if not want:
+            continue
+        node = _parse(text)
+        where = c.loc(path + ("outputs", var))
+        if not isinstance(node, ast.Name):
+            c.errors.append(SpecError(where, f"'{var}' of the FMU '{fmu.file}' is {_shape_words(want)}: it goes to a whole model variable, not '{text}'"))
+            ok = False
+            continue
+        have = c.var_shapes.get(node.id)
+        if have is not None and have != want:
+            example = "[" + ", ".join(["0.0"] * want[0]) + "]" if len(want) == 1 else f"{{expr: 'np.zeros({want})'}}"
+            c.errors.append(SpecError(where, f"'{var}' of the FMU '{fmu.file}' is {_shape_words(want)}, and '{node.id}' is {_shape_words(have)}", f"declare it so, e.g. '{node.id}: {example}'"))
+            ok = False
+    for role in ("inputs", "parameters"):
+        for var, value in getattr(fmu, role).items():
+            want = fmu_shape(f, fmu, var)
+            if isinstance(value, str):
+                node = _parse(value)
+                have = infer_shape(_selfed(node), c.var_shapes) if node is not None else None
+            else:
+                have = ()
+            if have is not None and have != want:
+                c.errors.append(SpecError(c.loc(path + (role, var)), f"'{var}' of the FMU '{fmu.file}' is {_shape_words(want)}, and its value here is {_shape_words(have)}"))
+                ok = False
+    return ok
+
+
+def _parse(text: str) -> ast.AST | None:
+    try:
+        return ast.parse(text.strip(), mode="eval").body
+    except SyntaxError:
+        return None
+
+
+def _selfed(node: ast.AST) -> ast.AST:
+    """``node`` with the model's variable names read as ``self.name`` (as the rewriter does)."""
+
+    class _Self(ast.NodeTransformer):
+        def visit_Name(self, n: ast.Name) -> ast.AST:
+            return ast.Attribute(value=ast.Name("self", ast.Load()), attr=n.id, ctx=ast.Load())
+
+    return _Self().visit(ast.parse(ast.unparse(node), mode="eval").body)
 
 
 def _values_method(c: Compiler, base: str, role: str, values: dict[str, Any], path: tuple[Any, ...], doc: str) -> str:

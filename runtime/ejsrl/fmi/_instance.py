@@ -110,7 +110,7 @@ class FmuInstance:
         self.version = 3 if description.fmiVersion.startswith("3") else 2
         self.log: list[str] = []
         self.vars = {v.name: v for v in description.modelVariables}
-        self.nx = len(description.derivatives)
+        self.nx = int(getattr(description, "numberOfContinuousStates", None) or len(description.derivatives))  # FMI 3 arrays count each element
         self.nz = int(description.numberOfEventIndicators or 0)
         self._fmu: Any = None
         self._callbacks: Any = None
@@ -121,7 +121,19 @@ class FmuInstance:
         self._zbuf: tuple[np.ndarray, Any] | None = None
         #: values of the structural parameters set (they size the FMI 3 arrays)
         self.structural: dict[str, Any] = {}
-        self._instantiate()
+        interface = description.coSimulation if kind == "co_simulation" else description.modelExchange
+        #: capability flags: a changing communication step; completedIntegratorStep needed
+        self.variable_step = bool(getattr(interface, "canHandleVariableCommunicationStepSize", True)) if kind == "co_simulation" else True
+        self.needs_completed_step = bool(getattr(interface, "needsCompletedIntegratorStep", True)) if kind == "model_exchange" else False
+        self._once = bool(getattr(interface, "canBeInstantiatedOnlyOncePerProcess", False))
+        if self._once:
+            _claim_once(self.folder, name)
+        try:
+            self._instantiate()
+        except BaseException:
+            if self._once:
+                _release_once(self.folder)
+            raise
 
     # -- calls, each turning a failure into FmuError with the FMU's messages -----------------
     def call(self, what: str, fn: Any, *args: Any) -> Any:
@@ -283,8 +295,8 @@ class FmuInstance:
                 flat = [float(x) for x in flat]
             elif base == "Boolean":
                 flat = [bool(x) for x in flat]
-            elif base == "String":
-                flat = [x.encode() if isinstance(x, str) else bytes(x) for x in flat]
+            elif base == "String":  # FMPy encodes the text
+                flat = [x.decode("utf-8") if isinstance(x, bytes) else str(x) for x in flat]
             elif base == "Binary":
                 flat = [x.encode() if isinstance(x, str) else bytes(x) for x in flat]
             elif base in _INTEGERS:
@@ -444,7 +456,10 @@ class FmuInstance:
         return z.copy()
 
     def completed_step(self) -> tuple[bool, bool]:
-        """Model exchange: tell the FMU a step was accepted; (it asks for event mode, it asks to terminate)."""
+        """Model exchange: tell the FMU a step was accepted; (it asks for event mode, it asks to
+        terminate). Not called for an FMU that does not need it (needsCompletedIntegratorStep)."""
+        if not self.needs_completed_step:
+            return False, False
         enter, terminate = self.call(self._fn_name("CompletedIntegratorStep"), self._fmu.completedIntegratorStep)
         return bool(enter), bool(terminate)
 
@@ -467,10 +482,33 @@ class FmuInstance:
             self._fmu.freeInstance()
         except Exception:  # noqa: BLE001
             pass
+        if self._once:
+            _release_once(self.folder)
 
     @property
     def freed(self) -> bool:
         return self._freed
+
+
+#: FMUs that may be instantiated only once per process (canBeInstantiatedOnlyOncePerProcess),
+#: by unpacked folder, while an instance of them lives: the FMU's own limit is the process's
+_ONCE: dict[str, str] = {}
+
+
+def _claim_once(folder: Path, name: str) -> None:
+    with _lock:
+        holder = _ONCE.get(str(folder))
+        if holder is not None:
+            raise FmuError(
+                f"FMU '{name}' can be instantiated only once per process (canBeInstantiatedOnlyOncePerProcess), and it already runs "
+                "(the lab open in another tab?); close the other tab, or export the FMU without that restriction"
+            )
+        _ONCE[str(folder)] = name
+
+
+def _release_once(folder: Path) -> None:
+    with _lock:
+        _ONCE.pop(str(folder), None)
 
 
 def _double_p() -> Any:

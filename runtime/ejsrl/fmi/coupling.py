@@ -90,6 +90,7 @@ class FmuRun:
         #: the FMU ended the run itself (co-simulation); the message was shown once
         self.terminated: FmuTerminated | None = None
         self.reported = False
+        self._h: float | None = None
 
     # -- errors ----------------------------------------------------------------------------
     def _fail(self, exc: FmuError) -> UserCodeError:
@@ -233,6 +234,15 @@ class FmuRun:
         self.receive_outputs()
 
     def _do_step(self, inst: FmuInstance, h: float) -> None:
+        if not inst.variable_step:
+            if self._h is None:
+                self._h = h
+            elif abs(h - self._h) > 1e-9 * self._h:
+                raise UserCodeError(
+                    f"FMU '{self.spec.name}' cannot take a communication step that changes (canHandleVariableCommunicationStepSize is false): "
+                    f"it stepped by {self._h:.6g}, now by {h:.6g} at t = {self.t:.6g}",
+                    self.spec.where,
+                )
         start = len(inst.log)
         if self.guarded(lambda: inst.do_step(self.t, h)):
             self.terminated = FmuTerminated(self.spec.name, self.t + h, inst.said(start, 3))
