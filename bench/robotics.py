@@ -398,6 +398,10 @@ def ik_bench(args: argparse.Namespace, rtb) -> None:  # type: ignore[no-untyped-
                   f"Python ikine_LM {py / med:.2f}x (on its {len(py_t) if py == py else 0} targets)")
             targets_met.append((med < cpp, f"{robot.name}: median ikine below the Toolbox's C++ ik_LM: "
                                            f"{fmt(med)} vs {fmt(cpp)} ({cpp / med:.2f}x)"))
+            mean_o = float(np.mean(ours["cpu"]))
+            mean_c = float(np.mean(res["RTB C++ ETS.ik_LM"]["cpu"]))
+            targets_met.append((mean_o < mean_c, f"{robot.name}: mean ikine CPU time below the Toolbox's C++ ik_LM: "
+                                                 f"{fmt(mean_o)} vs {fmt(mean_c)} ({mean_c / mean_o:.2f}x)"))
         rate = ours["ok"] / ours["n"]
         targets_met.append((rate >= 0.999, f"{robot.name}: success >= 99.9 % (verified): {rate * 100:.1f} %"))
         targets_met.append((ours["inside"] == ours["claimed"],
