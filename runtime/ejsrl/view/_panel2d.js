@@ -68,7 +68,13 @@
     c.addEventListener("keydown", function (e) { key(p, e, "down"); });
     c.addEventListener("keyup", function (e) { key(p, e, "up"); });
     c.addEventListener("blur", function () { p.held = {}; });
-    if (window.ResizeObserver) new ResizeObserver(function () { request(p); }).observe(c);
+    p.size = null;
+    // the canvas's CSS size, kept from the observer: reading it in every draw forced a layout
+    if (window.ResizeObserver) new ResizeObserver(function (es) {
+      var r = es[es.length - 1].contentRect;
+      p.size = [r.width, r.height];
+      request(p);
+    }).observe(c);
     if (root.getAttribute("data-scene-keys")) sceneKeys(p);
     request(p);
   };
@@ -143,7 +149,8 @@
     var c = p.canvas, f = p.frame;
     if (!c || !c.isConnected) return;
     var dpr = window.devicePixelRatio || 1;
-    var rect = c.getBoundingClientRect(), w = rect.width, h = rect.height;   // fractional CSS px
+    if (!p.size) { var rect = c.getBoundingClientRect(); p.size = [rect.width, rect.height]; }
+    var w = p.size[0], h = p.size[1];   // fractional CSS px
     if (w <= 0 || h <= 0) return;
     var W = Math.round(w * dpr), H = Math.round(h * dpr);
     if (c.width !== W || c.height !== H) { c.width = W; c.height = H; }

@@ -209,7 +209,9 @@ def _canvas_html(dom_id: str, key: str, input_uuid: str, height: int, scene_keys
     engine = html.escape(engine_js() + ";window.__ejs2d.mount(this);", quote=True)
     hide = f'div:has(> div > div > p > label[for="{input_uuid}"]){{display:none!important}}'
     return (
-        f"<style>{hide}.ejs2d-c:focus{{outline:2px solid #4dabf7;outline-offset:-2px}}</style>"
+        # the frame's element changes every frame: contained, so the panel around it is not laid out again
+        f"<style>{hide}.ejs2d-c:focus{{outline:2px solid #4dabf7;outline-offset:-2px}}"
+        "div:has(> script[data-ejs2d-frame]){contain:strict;height:0;overflow:hidden}</style>"
         f'<div data-ejs2d="{html.escape(dom_id)}" data-key="{html.escape(key)}" data-ev="{html.escape(input_uuid)}"'
         f'{" data-scene-keys=1" if scene_keys else ""}{only} '
         f'style="width:100%;height:{int(height)}px;position:relative">'
