@@ -17,7 +17,7 @@ from ejsgen._shapes import infer_shape
 from ejsgen._spec2d import CHILD_MODELS, KEY_ALIASES, KEY_NAMES, key_schema_note
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError
-from ejsgen.plan import Call, Ref, Src
+from ejsgen.plan import Call, Src
 from ejsgen.validate import ViewItem, _validate_model
 from ejsgen.yamlload import Path_
 
