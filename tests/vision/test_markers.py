@@ -91,6 +91,12 @@ def test_marker_pose_of_known_corners_is_exact() -> None:
     px = CAM.project_camera(P)
     T = marker_pose(px, 0.08, CAM)
     np.testing.assert_allclose(T, T_true, atol=1e-6)
+    # seen exactly square-on (OpenCV's IPPE_SQUARE alone returns no rotation and a 90 px error here)
+    T_on = transl(0.0, 0.0, 0.4) @ trotx(math.pi)
+    P = (T_on @ np.column_stack([marker_corners_3d(0.2), np.ones(4)]).T).T[:, :3]
+    px = CAM.project_camera(P)
+    np.testing.assert_allclose(marker_pose(px, 0.2, CAM), T_on, atol=1e-6)
+    np.testing.assert_allclose(marker_pose(px, 0.2, CAM, previous=T_on), T_on, atol=1e-6)
 
 
 def test_bad_marker_textures_and_arguments_say_what_is_wrong() -> None:

@@ -141,9 +141,9 @@ class Marker:
             return p.mean(axis=0)
         return a + s * (b - a)
 
-    def pose(self, side: float, camera: Any) -> NDArray[np.float64]:
+    def pose(self, side: float, camera: Any, previous: ArrayLike | None = None) -> NDArray[np.float64]:
         """``T_camera_marker`` (4, 4) for a marker of side ``side`` metres (``marker_pose``)."""
-        return marker_pose(self.corners, side, camera)
+        return marker_pose(self.corners, side, camera, previous=previous)
 
 
 def detect_markers(img: ArrayLike, dictionary: str = "aruco_4x4_50", *, refine: bool = True) -> list[Marker]:
@@ -170,13 +170,31 @@ def marker_corners_3d(side: float) -> NDArray[np.float64]:
     return np.array([[-h, h, 0.0], [h, h, 0.0], [h, -h, 0.0], [-h, -h, 0.0]])
 
 
-def marker_pose(corners: ArrayLike, side: float, camera: Any) -> NDArray[np.float64]:
+def _T(rvec: Any, tvec: Any) -> NDArray[np.float64]:
+    R, _ = cv2.Rodrigues(np.asarray(rvec, dtype=np.float64))
+    T = np.eye(4)
+    T[:3, :3] = R
+    T[:3, 3] = np.asarray(tvec, dtype=np.float64).reshape(3)
+    return T
+
+
+def _angle(Ra: NDArray[np.float64], Rb: NDArray[np.float64]) -> float:
+    return float(np.arccos(np.clip((np.trace(Ra.T @ Rb) - 1.0) / 2.0, -1.0, 1.0)))
+
+
+def marker_pose(corners: ArrayLike, side: float, camera: Any, *, previous: ArrayLike | None = None) -> NDArray[np.float64]:
     """``T_camera_marker`` (4, 4): the marker's pose in the camera frame from its 4 corners.
 
     ``corners`` (4, 2): as ``detect_markers`` gives them; ``side``: the marker's side in
     metres (border included); ``camera``: a ``CameraModel`` (its K and distortion are
-    used). OpenCV's ``SOLVEPNP_IPPE_SQUARE`` (the planar square's two solutions, the better
-    kept) refined by Levenberg-Marquardt.
+    used). Candidates: OpenCV's planar ``SOLVEPNP_IPPE`` (its two solutions: mirror tilts
+    that fit the corners almost equally well when the marker is seen nearly square-on or
+    small) and ``SOLVEPNP_SQPNP``, each refined by Levenberg-Marquardt; the one with the
+    smallest reprojection error is kept. (``SOLVEPNP_IPPE_SQUARE`` alone fails on a square
+    seen exactly square-on: it returns no rotation and a 90 px error.) ``previous`` (4, 4):
+    the pose of the last frame; then, of the candidates that fit to within 0.5 px (or twice
+    the best error), the one turned least from it is kept, so a tracked marker does not
+    flip from frame to frame.
     """
     side = float(side)
     if not (np.isfinite(side) and side > 0):
@@ -187,12 +205,25 @@ def marker_pose(corners: ArrayLike, side: float, camera: Any) -> NDArray[np.floa
     P = marker_corners_3d(side)
     K = np.asarray(camera.K, dtype=np.float64)
     dist = np.asarray(getattr(camera, "distortion", np.zeros(5)), dtype=np.float64)
-    ok, rvec, tvec = cv2.solvePnP(P, px, K, dist, flags=cv2.SOLVEPNP_IPPE_SQUARE)
-    if not ok:
+    cands: list[tuple[float, NDArray[np.float64]]] = []
+    for flag in (cv2.SOLVEPNP_IPPE, cv2.SOLVEPNP_SQPNP):
+        try:
+            n, rvecs, tvecs, _ = cv2.solvePnPGeneric(P, px, K, dist, flags=flag)
+        except cv2.error:
+            continue
+        for i in range(int(n)):
+            rvec, tvec = cv2.solvePnPRefineLM(P, px, K, dist, rvecs[i], tvecs[i])
+            proj, _ = cv2.projectPoints(P, rvec, tvec, K, dist)
+            err = float(np.sqrt(np.mean(np.sum((proj.reshape(-1, 2) - px) ** 2, axis=1))))
+            T = _T(rvec, tvec)
+            if np.isfinite(err) and np.all(np.isfinite(T)) and T[2, 3] > 0:
+                cands.append((err, T))
+    if not cands:
         raise ValueError("no pose fits these corners (is the quadrilateral degenerate?)")
-    rvec, tvec = cv2.solvePnPRefineLM(P, px, K, dist, rvec, tvec)
-    R, _ = cv2.Rodrigues(rvec)
-    T = np.eye(4)
-    T[:3, :3] = R
-    T[:3, 3] = np.asarray(tvec, dtype=np.float64).reshape(3)
-    return T
+    best_err = min(e for e, _ in cands)
+    if previous is not None:
+        Tp = np.asarray(previous, dtype=np.float64).reshape(4, 4)
+        if np.all(np.isfinite(Tp)):
+            fits = [T for e, T in cands if e <= max(0.5, 2.0 * best_err)]
+            return min(fits, key=lambda T: _angle(T[:3, :3], Tp[:3, :3]))
+    return min(cands, key=lambda c: c[0])[1]
