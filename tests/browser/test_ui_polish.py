@@ -184,9 +184,10 @@ def server_of(app):
 
 def content_points(name: str, world) -> np.ndarray:
     """What each example's scene shows at start, from the world's own data (N, 3)."""
-    if name == "pendulum":
+    if name == "pendulum":  # its view looks at the middle of the swing: the bob at either side of it
         bob = world["bob"].T_world()[:3, 3]
-        return np.array([[0.0, 0.0, 0.0], bob + 0.08, bob - 0.08])
+        other = bob * [-1.0, 1.0, 1.0]
+        return np.array([[0.0, 0.0, 0.0], bob + 0.08, bob - 0.08, other + 0.08, other - 0.08])
     if name == "van_der_pol":
         dot = world["dot"].T_world()[:3, 3]
         return np.array([dot + 0.1, dot - 0.1, [2.5, 2.5, 0.0], [-2.5, -2.5, 0.0]])
