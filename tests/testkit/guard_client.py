@@ -76,12 +76,15 @@ class Client:
 
     @classmethod
     async def open(cls, port: int, *, origin: str | None = None, host: str | None = None,
-                   camera: bool = True, server: Any = None, path: str = "") -> "Client":
+                   camera: bool = True, server: Any = None, path: str = "", cookie: str | None = None,
+                   address: str = "127.0.0.1") -> "Client":
         # with ``host``, the Host header names it while the TCP connection still goes to 127.0.0.1;
-        # ``path``: the websocket's path (a classroom session's address, /s/<token>)
+        # ``path``: the websocket's path (a classroom session's address, /s/<token>); ``cookie``:
+        # the browser cookie a page would have set (ejsrl_browser=...); ``address``: where to connect
         uri = f"ws://{host or f'127.0.0.1:{port}'}{path}"
-        ws = await connect(uri, subprotocols=[SUBPROTOCOL], origin=origin, host="127.0.0.1", port=port,
-                           max_size=None, open_timeout=10)
+        headers = {"Cookie": f"ejsrl_browser={cookie}"} if cookie is not None else None
+        ws = await connect(uri, subprotocols=[SUBPROTOCOL], origin=origin, host=address, port=port,
+                           max_size=None, open_timeout=10, additional_headers=headers)
         client = cls(ws)
         if camera:
             before = len(server.get_clients()) if server is not None else 0

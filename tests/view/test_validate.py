@@ -107,3 +107,13 @@ def test_a_refusal_names_a_control_whose_label_changes_by_its_variable():
     message = validate_control(s, "abc").message
     assert message.startswith("q[2]: ") and "Dynamic" not in message
     assert validate_control(slider(), "abc").message.startswith("Length: ")
+
+
+def test_a_slider_takes_no_text_and_clamps_the_largest_floats():
+    """Issue #30: "2.0" was cast by a slider, and 1e308 refused (its distance to min over the
+    step overflowed) instead of clamped like 1e300."""
+    s = slider(min=0.0, max=2.0, step=0.01)
+    assert not validate_control(s, "2.0").ok
+    for huge, end in ((1e308, 2.0), (-1.7976931348623157e308, 0.0), (1e300, 2.0)):
+        out = validate_control(s, huge)
+        assert out.ok and out.value == end and "clamped" in out.message

@@ -12,6 +12,14 @@ per-client API (``client.gui``, ``client.scene``). :class:`Classroom` keeps the 
   lab's page; its websocket connects to the same path, where the server reads the token.
   A tab closed for longer than ``grace`` seconds loses its session: it is freed.
   A copy of the address opened while its tab is still open gets a session of its own.
+  Waiting for a reloading tab's old connection to close holds no thread (the tab is
+  settled when the old one goes, or after :data:`RELOAD_WAIT_SECONDS`).
+- **A session is bound to its browser.** The page sets a cookie naming the browser
+  (:data:`ejsrl.view._guard.BROWSER_COOKIE`, HttpOnly, SameSite=Strict); a session
+  resumes only on a websocket carrying the cookie of the browser that created it.
+  Another browser opening the address (a projector, a shared screen) gets a lab of its
+  own, and is told so. An address whose session is gone (freed after the grace period,
+  or the process that held it was restarted) gets a new lab with a note saying why.
 - **Idle costs nothing.** A session is stepped by the shared :class:`Scheduler` at the
   lab's frame rate while it plays, and for a moment after each change a user makes
   (to show it); a paused session, or one whose tab is gone, is not stepped at all.
@@ -23,6 +31,7 @@ per-client API (``client.gui``, ``client.scene``). :class:`Classroom` keeps the 
 from __future__ import annotations
 
 import asyncio
+import collections
 import gc
 import logging
 import math
@@ -34,6 +43,7 @@ from collections.abc import Callable
 from typing import Any
 
 from ejsrl.app._scheduler import Scheduler, default_workers
+from ejsrl.view._fair import QuietLog
 
 __all__ = ["Classroom", "Session", "default_max_sessions", "measure_frame_cost", "GRACE_SECONDS"]
 
@@ -60,6 +70,8 @@ VISER_WINDOW = 1.0 / 60.0 + 0.004
 #: a tab reloading may connect before its old connection is seen to close: how long the
 #: new one waits for the old one to go before it is given a session of its own (seconds)
 RELOAD_WAIT_SECONDS = 2.0
+#: how many addresses of freed sessions are remembered (to tell their tabs why the lab is new)
+FREED_MEMORY = 4096
 #: the share of the machine's cores that sessions may use when the default limit is derived
 CPU_SHARE = 0.8
 #: CPU seconds viser's event loop spends on a tab's frame whatever the lab (serialising,
@@ -101,9 +113,11 @@ class Session:
     """One tab's simulation: its ``app``, the ``view`` showing it (None while the tab is
     gone) and the ``token`` its address carries."""
 
-    def __init__(self, classroom: Classroom, token: str, client_id: int) -> None:
+    def __init__(self, classroom: Classroom, token: str, client_id: int, browser: str | None = None) -> None:
         self.classroom = classroom
         self.token = token
+        #: the browser that created it (its cookie; None: a client without one, a script)
+        self.browser = browser
         self.client_id: int | None = client_id
         self.app: Any = None
         self.view: Any = None
@@ -177,11 +191,18 @@ class Classroom:
         #: the tabs that were told the lab is full
         self.turned_away: set[int] = set()
         self.dropped_clients = 0
-        self._lock = threading.Lock()
+        self._lock = threading.RLock()
         self._stopped = threading.Event()
+        self._full_log = QuietLog(log, "tabs turned away (the lab is full)")
         #: asked first about every tab that connects: False leaves the tab to the caller (a lab
         #: served with ``ejsgen run --watch`` shows a build error instead, :mod:`ejsrl.app._reload`)
         self.admit: Callable[[Any], bool] | None = None
+        #: tabs waiting for their session's old connection to close: token -> [(client, browser, until)]
+        self._waiting: dict[str, list[tuple[Any, str | None, float]]] = {}
+        #: tokens of sessions freed after the grace period (the latest FREED_MEMORY)
+        self._freed_tokens: collections.OrderedDict[str, None] = collections.OrderedDict()
+        #: how many tabs were given a new lab for another browser's address (for tests and logs)
+        self.other_browser = 0
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
         self._reaper = threading.Thread(target=self._reap_loop, name="ejsrl-sessions", daemon=True)
@@ -208,20 +229,30 @@ class Classroom:
 
     # -- connecting and leaving -------------------------------------------------------------------
     def _connect(self, client: Any) -> None:
-        from ejsrl.view._guard import session_token
+        from ejsrl.view._guard import browser_of, session_token
 
         if self.admit is not None and not self.admit(client):
             return
         token = session_token(self.server, client.client_id)
+        browser = browser_of(self.server, client.client_id)
         with self._lock:
             old = self.sessions.get(token) if token else None
-        if old is not None and old.client_id is not None:
-            # a reload whose old connection is still closing, or a copy of an open tab's address
-            deadline = self.clock() + RELOAD_WAIT_SECONDS
-            while old.client_id is not None and self.clock() < deadline:
-                time.sleep(0.05)
+            if old is not None and old.client_id is not None and not old.freed and old.browser == browser:
+                # a reload whose old connection is still closing (or a copy of the address in the
+                # same browser): settled when the old connection goes, or by the reaper
+                self._waiting.setdefault(old.token, []).append((client, browser, self.clock() + RELOAD_WAIT_SECONDS))
+                return
+        self._settle(client, token, browser)
+
+    def _settle(self, client: Any, token: str | None, browser: str | None) -> None:
+        """Give ``client`` the session of address ``token`` if it is free and this browser's,
+        else a new one (or tell it the lab is full)."""
+        note: tuple[str, str] | None = None
         with self._lock:
-            if old is not None and old.client_id is None and not old.freed:
+            if client.client_id not in self._live_clients():
+                return  # it left while it waited
+            old = self.sessions.get(token) if token else None
+            if old is not None and old.client_id is None and not old.freed and old.browser == browser:
                 old.client_id = client.client_id
                 old.detached_at = None
                 self._by_client[client.client_id] = old
@@ -230,13 +261,16 @@ class Classroom:
                 self.turned_away.add(client.client_id)
                 session = None
             else:
-                token = self.token_prefix + secrets.token_urlsafe(12)
-                session = Session(self, token, client.client_id)
-                self.sessions[token] = session
+                if token:
+                    note = self._why_new(token, old)
+                new_token = self.token_prefix + secrets.token_urlsafe(12)
+                session = Session(self, new_token, client.client_id, browser)
+                self.sessions[new_token] = session
                 self._by_client[client.client_id] = session
                 fresh = True
         if session is None:
-            log.warning("ejsrl: the lab is full (%s); a new tab was turned away", _places(self.class_places))
+            self._full_log(logging.WARNING, "full", "ejsrl: the lab is full (%s); a new tab was turned away",
+                           _places(self.class_places))
             self._show_full(client)
             return
         try:
@@ -248,6 +282,43 @@ class Classroom:
                 if fresh:
                     self.sessions.pop(session.token, None)
             self._free(session)
+            return
+        if note is not None:
+            try:
+                client.add_notification(note[0], note[1], color="yellow", auto_close_seconds=None)
+            except Exception:  # noqa: BLE001
+                log.debug("telling a client why its lab is new failed", exc_info=True)
+
+    def _live_clients(self) -> Any:
+        """The ids of the clients viser has connected now."""
+        return getattr(self.server, "_connected_clients", {})
+
+    def _why_new(self, token: str, old: Session | None) -> tuple[str, str]:
+        """What to tell a tab that opened address ``token`` and gets a new lab (lock held)."""
+        if old is not None:
+            self.other_browser += 1
+            return ("A simulation of your own", "This address belongs to a simulation open in another browser; "
+                    "this tab has a new simulation of its own.")
+        if token in self._freed_tokens:
+            return ("Your earlier simulation ended", f"Its tab was closed for more than {self.grace:.0f} s, so it "
+                    "was freed. This is a new simulation.")
+        return ("This lab was restarted", "The simulation this address had is gone: the lab (or the copy of it "
+                "that ran your simulation) was restarted. This is a new simulation.")
+
+    def _settle_waiting(self, token: str, *, expired_only: bool) -> None:
+        """Settle the tabs waiting for session ``token``: all of them (its old connection has
+        closed: the first gets it), or those whose wait is over."""
+        now = self.clock()
+        with self._lock:
+            queue = self._waiting.get(token, [])
+            ready = [w for w in queue if not expired_only or w[2] <= now]
+            rest = [w for w in queue if w not in ready]
+            if rest:
+                self._waiting[token] = rest
+            else:
+                self._waiting.pop(token, None)
+        for client, browser, _until in ready:
+            self._settle(client, token, browser)
 
     def _attach(self, session: Session, client: Any, fresh: bool) -> None:
         from ejsrl.view.viser_view import ViserView
@@ -285,6 +356,13 @@ class Classroom:
     def _disconnect(self, client: Any) -> None:
         with self._lock:
             self.turned_away.discard(client.client_id)
+            for token, queue in list(self._waiting.items()):
+                kept = [w for w in queue if w[0].client_id != client.client_id]
+                if len(kept) != len(queue):
+                    if kept:
+                        self._waiting[token] = kept
+                    else:
+                        del self._waiting[token]
             session = self._by_client.pop(client.client_id, None)
             if session is None:
                 return
@@ -292,6 +370,8 @@ class Classroom:
                 session.client_id = None
                 session.detached_at = self.clock()
         self._detach(session, client.client_id)
+        if session.token in self._waiting:  # a reload of this tab waits for it: settle it now
+            self._settle_waiting(session.token, expired_only=False)
 
     def _detach(self, session: Session, client_id: int) -> None:
         """Client ``client_id`` is gone: stop stepping its session, keep it for a reload."""
@@ -347,7 +427,7 @@ class Classroom:
                 app.views = []
 
     def _reap_loop(self) -> None:
-        while not self._stopped.wait(0.5):
+        while not self._stopped.wait(0.25):
             try:
                 self.reap()
             except Exception:  # noqa: BLE001
@@ -362,7 +442,13 @@ class Classroom:
                        if s.client_id is None and s.detached_at is not None and now - s.detached_at > self.grace]
             for s in expired:
                 self.sessions.pop(s.token, None)
+                self._freed_tokens[s.token] = None
+            while len(self._freed_tokens) > FREED_MEMORY:
+                self._freed_tokens.popitem(last=False)
             live = [s for s in self.sessions.values() if s.client_id is not None]
+            waited = [t for t, q in self._waiting.items() if any(w[2] <= now for w in q)]
+        for token in waited:
+            self._settle_waiting(token, expired_only=True)
         for s in expired:
             self._free(s)
         if expired:

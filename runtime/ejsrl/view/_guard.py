@@ -23,6 +23,12 @@ viser server with three guards in front of it:
   shows the server's value again. Everything else (file uploads, scene clicks, other
   properties of a control, requests for a public share link, whose button is hidden) is
   dropped.
+- **How much.** Each client's messages are paced and coalesced (:mod:`ejsrl.view._fair`):
+  a flood of values costs the server what a student dragging a slider costs. At most
+  :data:`ejsrl.view._fair.MAX_PER_ADDRESS` websockets are open from one address (more get
+  HTTP 429), and a websocket that has not registered within
+  :data:`ejsrl.view._fair.REGISTER_SECONDS` is closed. Refusals and dropped messages are
+  logged once per kind (:class:`ejsrl.view._fair.QuietLog`), never a line per message.
 
 This relies on viser internals (see :data:`VISER_TESTED`); :func:`start_server` raises
 if the hooks are not where it expects them, rather than serving without the guards.
@@ -30,6 +36,7 @@ if the hooks are not where it expects them, rather than serving without the guar
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import http
 import io
@@ -39,11 +46,14 @@ import math
 import re
 import socket
 import threading
+import time
 import weakref
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 from urllib.parse import urlsplit
+
+from ejsrl.view import _fair
 
 __all__ = [
     "MAX_MESSAGE_BYTES",
@@ -57,6 +67,8 @@ __all__ = [
     "is_loopback",
     "SESSION_PATH",
     "session_token",
+    "browser_of",
+    "BROWSER_COOKIE",
 ]
 
 log = logging.getLogger("ejsrl.serve")
@@ -80,6 +92,11 @@ _WILDCARD_HOSTS = ("0.0.0.0", "", "::")
 #: lab's page, and its websocket's path carries the token, so that a reload of the tab
 #: finds its simulation again
 SESSION_PATH = re.compile(r"/s/([A-Za-z0-9_-]{8,64})/?")
+
+#: the cookie that names a browser (random, HttpOnly, SameSite=Strict): a session resumes
+#: only in the browser that created it (see :mod:`ejsrl.app._sessions`)
+BROWSER_COOKIE = "ejsrl_browser"
+_COOKIE_VALUE = re.compile(r"[A-Za-z0-9_-]{16,64}")
 
 
 # -- who may connect ---------------------------------------------------------------------------
@@ -292,6 +309,7 @@ def _gizmo(msg: dict[str, Any]) -> dict[str, Any] | None:
 
 _GIZMO_MESSAGES = ("TransformControlsUpdateMessage", "TransformControlsDragStartMessage",
                    "TransformControlsDragEndMessage")
+_KNOWN = ("ViewerCameraMessage", "GuiUpdateMessage", *_GIZMO_MESSAGES)
 
 
 def generic_check(handle: Any) -> Check:
@@ -353,6 +371,21 @@ class MessageGuard:
         #: how many messages were dropped, by reason (for tests and logs)
         self.dropped: dict[str, int] = {}
         self._ready: weakref.WeakSet[Any] = weakref.WeakSet()
+        self._log = _fair.QuietLog(log, "dropped client messages")
+        #: per connection and control: when its sender was last told of a refusal (time.monotonic())
+        self._notified: weakref.WeakKeyDictionary[Any, dict[str, float]] = weakref.WeakKeyDictionary()
+        self._clients: weakref.WeakKeyDictionary[Any, Any] = weakref.WeakKeyDictionary()
+
+    def forget(self, connection: Any) -> None:
+        """``connection`` has closed: drop what was kept about it (its client handle holds
+        the connection, so a weak key alone would never go)."""
+        self._clients.pop(connection, None)
+        self._notified.pop(connection, None)
+        self._ready.discard(connection)
+
+    def registered(self, connection: Any) -> bool:
+        """True once ``connection`` has sent its first camera message."""
+        return connection in self._ready
 
     def watch(self, handle: Any, check: Check) -> None:
         """Validate values sent for ``handle`` (a viser GUI input) with ``check``."""
@@ -366,13 +399,19 @@ class MessageGuard:
     # -- called on viser's event loop, for every message ---------------------------------------
     def filter(self, connection: Any, raw: Any) -> bytes | None:
         """The message to hand to viser (possibly rewritten), or None to drop it."""
+        checked = self.check(connection, raw)
+        return None if checked is None else checked[0]
+
+    def check(self, connection: Any, raw: Any) -> tuple[bytes, dict[str, Any]] | None:
+        """The message to hand to viser as ``(bytes, message)`` (possibly rewritten), or None
+        to drop it."""
         import msgspec
 
         if not isinstance(raw, (bytes, bytearray, memoryview)):
             return self._drop("not binary")
         try:
             msg = msgspec.msgpack.decode(raw)
-        except (msgspec.DecodeError, RecursionError):  # garbage, or 64 kB of nested arrays
+        except (msgspec.DecodeError, RecursionError, ValueError):  # garbage, bad UTF-8, 64 kB of nested arrays
             return self._drop("not msgpack")
         if not isinstance(msg, dict) or not isinstance(msg.get("type"), str):
             return self._drop("no type")
@@ -391,15 +430,17 @@ class MessageGuard:
                 return self._drop("before the first camera message")
             out = _gizmo(msg)
         else:
-            return self._drop(f"kind {kind[:60]}")
+            return self._drop(f"kind {kind[:60]}", kind="kind")
         if out is None:
-            return self._drop(kind)
-        return msgspec.msgpack.encode(out)
+            return self._drop(kind if kind in _KNOWN else "kind")
+        return msgspec.msgpack.encode(out), out
 
-    def _drop(self, why: str) -> None:
-        if why not in self.dropped:
-            log.info("ejsrl: dropped a client message (%s)", why)
-        self.dropped[why] = self.dropped.get(why, 0) + 1
+    def _drop(self, why: str, *, kind: str | None = None) -> None:
+        """Count a dropped message by ``why``; the first of each ``kind`` of reason (default
+        ``why``) is logged, escaped (``why`` may carry a client's text)."""
+        self._log(logging.INFO, kind or why, "ejsrl: dropped a client message (%s)", ascii(why))
+        if why in self.dropped or len(self.dropped) < 256:
+            self.dropped[why] = self.dropped.get(why, 0) + 1
         return None
 
     def _gui_update(self, connection: Any, msg: dict[str, Any]) -> dict[str, Any] | None:
@@ -417,16 +458,19 @@ class MessageGuard:
         try:
             verdict = check(raw)
         except Exception:  # noqa: BLE001 - a broken check must refuse, not crash the connection
-            log.exception("ejsrl: checking a value for %s failed", uuid)
+            self._log(logging.ERROR, "check failed", "ejsrl: checking a value for %s failed", uuid, exc_info=True)
             verdict = Verdict(False, message="the value could not be checked; it was not applied.")
         if not verdict.ok:
             client = self._client(connection)
             if client is not None:
                 self._show(client, uuid, handle._impl.value)
-                try:
-                    self.notify(client, "Value refused", verdict.message)
-                except Exception:  # noqa: BLE001
-                    log.debug("notifying a client failed", exc_info=True)
+                now, notified = time.monotonic(), self._notified.setdefault(connection, {})
+                if now - notified.get(uuid, -math.inf) >= _fair.NOTIFY_SECONDS and len(notified) < 256:
+                    notified[uuid] = now
+                    try:
+                        self.notify(client, "Value refused", verdict.message)
+                    except Exception:  # noqa: BLE001
+                        log.debug("notifying a client failed", exc_info=True)
             return self._drop("refused value")
         if not (type(verdict.value) is type(raw) and verdict.value == raw):
             client = self._client(connection)
@@ -438,9 +482,15 @@ class MessageGuard:
         server = self.server
         if server is None:
             return None
+        known = self._clients.get(connection)
+        if known is not None:
+            return known
         for client_id, conn in list(server._websock_server._live_connections.items()):
             if conn is connection:
-                return server._connected_clients.get(client_id)
+                client = server._connected_clients.get(client_id)
+                if client is not None:
+                    self._clients[connection] = client
+                return client
         return None
 
     @staticmethod
@@ -460,6 +510,35 @@ def session_token(server: Any, client_id: int) -> str | None:
         return None
     match = SESSION_PATH.fullmatch(path.partition("?")[0])
     return match.group(1) if match is not None else None
+
+
+def browser_of(server: Any, client_id: int) -> str | None:
+    """The :data:`BROWSER_COOKIE` that client ``client_id``'s websocket handshake carried
+    (its browser), or None (a script, or a browser that has not loaded the page)."""
+    try:
+        connection = server._websock_server._live_connections.get(client_id)
+        headers = connection.request.headers if connection is not None and connection.request is not None else None
+    except AttributeError:
+        return None
+    return _cookie(headers) if headers is not None else None
+
+
+def _cookie(headers: Any) -> str | None:
+    """The well-formed :data:`BROWSER_COOKIE` in request ``headers``, or None."""
+    for line in headers.get_all("Cookie"):
+        for part in line.split(";"):
+            name, _, value = part.strip().partition("=")
+            if name == BROWSER_COOKIE and _COOKIE_VALUE.fullmatch(value):
+                return value
+    return None
+
+
+def _set_cookie(response: Any) -> None:
+    """Name a browser that has no :data:`BROWSER_COOKIE` yet (on the page's response)."""
+    import secrets
+
+    response.headers["Set-Cookie"] = (f"{BROWSER_COOKIE}={secrets.token_urlsafe(18)}; Path=/; HttpOnly; "
+                                      "SameSite=Strict")
 
 
 def _default_notify(client: Any, title: str, body: str) -> Any:
@@ -483,56 +562,101 @@ def guard_of(server: Any) -> MessageGuard | None:
 class _Hook:
     """Wraps ``websockets.asyncio.server.serve`` while one viser server starts."""
 
-    def __init__(self, original: Callable[..., Any], access: Access, guard: MessageGuard, max_bytes: int) -> None:
+    def __init__(self, original: Callable[..., Any], access: Access, guard: MessageGuard, max_bytes: int,
+                 addresses: _fair.AddressBook | None) -> None:
         self.original = original
         self.access = access
         self.guard = guard
         self.max_bytes = max_bytes
+        self.addresses = addresses
         self.installed = False
 
     def __call__(self, handler: Any, *args: Any, **kwargs: Any) -> Any:
         if getattr(handler, "__qualname__", "") != _VISER_HANDLER or "process_request" not in kwargs:
             return self.original(handler, *args, **kwargs)
         inner = kwargs["process_request"]
-        access, guard = self.access, self.guard
-        warned: set[str] = set()
+        access, guard, addresses = self.access, self.guard, self.addresses
+        refusals = _fair.QuietLog(log, "refused connections")
 
         def process_request(connection: Any, request: Any) -> Any:
             why = access.refusal(request.headers)
             if why is not None:
-                if why not in warned:
-                    warned.add(why)
-                    log.warning("ejsrl: refused a connection: %s. If that page should reach the lab, "
-                                "start the lab with --allow-origin %s", why, _suggestion(request.headers))
+                refusals(logging.WARNING, why[:200], "ejsrl: refused a connection: %s. %s", why,
+                         _hint(request.headers))
                 return connection.respond(http.HTTPStatus.FORBIDDEN, f"This lab refuses the request: {why}.\n")
+            upgrade = "websocket" in (v.lower() for v in request.headers.get_all("Upgrade"))
+            address = _address(connection)
+            if upgrade and addresses is not None and addresses.full(address):
+                if addresses.first_refusal(address):
+                    log.warning("ejsrl: refused websockets from %s: it has %d open (the most from one address)",
+                                address, addresses.limit)
+                return connection.respond(http.HTTPStatus.TOO_MANY_REQUESTS,
+                                          "Too many connections from your address: close some tabs of this lab.\n")
             session_page = SESSION_PATH.fullmatch(request.path.partition("?")[0])
-            if session_page is not None and "websocket" not in (v.lower() for v in request.headers.get_all("Upgrade")):
+            if session_page is not None and not upgrade:
                 # a tab's own address (/s/<token>/): the lab's page, the same for every tab
                 query = request.path.partition("?")[2]
                 request.path = "/" + ("?" + query if query else "")
-            return inner(connection, request) if inner is not None else None
+            response = inner(connection, request) if inner is not None else None
+            if not upgrade and response is not None and request.path.partition("?")[0] in ("/", "/index.html") \
+                    and _cookie(request.headers) is None:
+                _set_cookie(response)
+            return response
 
         async def guarded_handler(connection: Any) -> None:
-            recv = connection.recv
+            def check(raw: Any) -> tuple[bytes, dict[str, Any]] | None:
+                try:
+                    return guard.check(connection, raw)
+                except Exception:  # noqa: BLE001 - a bug here must drop the message, not the client
+                    guard._log(logging.ERROR, "check raised", "ejsrl: checking a client message failed; it was "
+                               "dropped", exc_info=True)
+                    return None
 
-            async def checked_recv(decode: bool | None = None) -> Any:
-                while True:
-                    raw = await recv(decode)
-                    try:
-                        out = guard.filter(connection, raw)
-                    except Exception:  # noqa: BLE001 - a bug here must drop the message, not the client
-                        log.exception("ejsrl: checking a client message failed; it was dropped")
-                        out = None
-                    if out is not None:
-                        return out
-
-            connection.recv = checked_recv
-            await handler(connection)
+            inbox = _fair.Inbox(connection.recv, check)
+            connection.recv = inbox.recv
+            address = _address(connection)
+            if addresses is not None:
+                addresses.opened(address)
+            loop = asyncio.get_running_loop()
+            deadline = loop.call_later(_fair.REGISTER_SECONDS, _close_unregistered, guard, connection)
+            try:
+                await handler(connection)
+            finally:
+                deadline.cancel()
+                inbox.close()
+                guard.forget(connection)
+                if addresses is not None:
+                    addresses.closed(address)
 
         kwargs["process_request"] = process_request
         kwargs["max_size"] = self.max_bytes
         self.installed = True
         return self.original(guarded_handler, *args, **kwargs)
+
+
+def _address(connection: Any) -> str:
+    """The client's IP address of ``connection`` ('' if unknown)."""
+    try:
+        return str(connection.remote_address[0])
+    except (AttributeError, IndexError, TypeError):
+        return ""
+
+
+def _close_unregistered(guard: MessageGuard, connection: Any) -> None:
+    """Close ``connection`` if it never registered (see :data:`ejsrl.view._fair.REGISTER_SECONDS`)."""
+    if not guard.registered(connection):
+        guard._drop("websocket never registered")
+        asyncio.ensure_future(connection.close(1008, "no camera message: not a lab page"))
+
+
+def _hint(headers: Any) -> str:
+    """What the teacher should change for a refused request to get through."""
+    forwarded = headers.get("X-Forwarded-Host") or headers.get("X-Forwarded-For")
+    if forwarded is not None:
+        return ("It came through a proxy: the proxy must pass the browser's Host header on "
+                "(nginx: proxy_set_header Host $http_host;), and the lab be started with "
+                f"--allow-origin {_suggestion(headers)} (see specs/deploy.md)")
+    return f"If that page should reach the lab, start the lab with --allow-origin {_suggestion(headers)}"
 
 
 def start_server(
@@ -560,8 +684,10 @@ def start_server(
 
     access = Access(host if answer_as is None else answer_as, tuple(allow_origins))
     guard = MessageGuard()
+    # behind a front every connection comes from the front: the front counts the addresses
+    addresses = _fair.AddressBook() if answer_as is None else None
     with _SERVE_LOCK:
-        hook = _Hook(ws_server.serve, access, guard, max_message_bytes)
+        hook = _Hook(ws_server.serve, access, guard, max_message_bytes, addresses)
         ws_server.serve = hook  # type: ignore[assignment]
         try:
             with contextlib.nullcontext() if banner else contextlib.redirect_stdout(io.StringIO()):

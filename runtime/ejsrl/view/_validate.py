@@ -78,12 +78,20 @@ def _as_number(raw: Any) -> float | None:
     return x if math.isfinite(x) else None
 
 
-def _numeric(control: Control, raw: Any, lo: float | None, hi: float | None, step: float | None) -> Checked:
-    x = _as_number(raw)
+def _numeric(control: Control, raw: Any, lo: float | None, hi: float | None, step: float | None,
+             text: bool = True) -> Checked:
+    """``text``: a numeral in a string is read (a number field, a text field bound to a
+    number); a slider's value is never text."""
+    x = None if isinstance(raw, str) and not text else _as_number(raw)
     if x is None:
         return _refuse(control, f"{_show(raw)} is not a finite number")
     note = ""
-    if step is not None and step > 0 and lo is not None:
+    # clamped first: 1e308 - min over a step of 0.01 is no finite number to round
+    if lo is not None and x < lo:
+        x, note = float(lo), f"clamped to the minimum {lo:g}"
+    if hi is not None and x > hi:
+        x, note = float(hi), f"clamped to the maximum {hi:g}"
+    if step is not None and step > 0 and lo is not None and math.isfinite((x - lo) / step):
         q = lo + round((x - lo) / step) * step
         # keep the decimals of the step (0.1 stays 0.1, not 0.30000000000000004)
         digits = max(0, -math.floor(math.log10(step)) + 3) if step < 1 else 0
@@ -145,7 +153,7 @@ def validate_control(control: Control, raw: Any) -> Checked:
             return _refuse(control, f"the text is {len(raw)} characters long (at most {MAX_TEXT_LENGTH})")
         return Checked(True, raw)
     if isinstance(control, Slider):
-        return _numeric(control, raw, control.min, control.max, control.step)
+        return _numeric(control, raw, control.min, control.max, control.step, text=False)
     if isinstance(control, Number):
         return _numeric(control, raw, control.min, control.max, None)
     if control.vtype in ("float", "int"):

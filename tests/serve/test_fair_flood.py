@@ -1,0 +1,181 @@
+"""Fair share under a hostile client (issue #30), with real clients: the pendulum example
+served as a teacher serves it (``python app.py``, one serving process), three students
+playing their own simulations, and a script that sends 2,000 slider values a second while
+40 more of its connections open a live session address. The students must keep their
+frame rate and their controls must answer; the teacher's terminal must not fill up.
+
+Bounded: one process, 44 connections, about 30 s in all, loopback only."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+import re
+import statistics
+import time
+
+import msgspec
+import pytest
+
+from testkit.guard_client import CAMERA, Client, gui_update, run_async
+from testkit.served import Served
+
+_READOUT = re.compile(r"^\*\*t\*\* = ([-+0-9.eE]+)")
+STUDENTS = 3
+FLOOD_RATE = 2000.0  # values a second
+LIVE_COPIES = 40
+MEASURE_SECONDS = 5.0
+
+
+def token_of(client: Client) -> str | None:
+    for text in client.texts():
+        match = re.search(r"s/([A-Za-z0-9_-]{8,64})/'", text)
+        if match:
+            return match.group(1)
+    return None
+
+
+def readouts(client: Client) -> list[float]:
+    """Every simulated time the client's time readout was sent (one per display frame)."""
+    out = []
+    for m in client.received:
+        if m.get("type") in ("GuiUpdateMessage", "GuiMarkdownMessage"):
+            data = m.get("updates", m.get("props", {}))
+            match = _READOUT.match(str(data.get("_markdown", data.get("content", ""))))
+            if match:
+                out.append(float(match.group(1)))
+    return out
+
+
+def button(client: Client) -> str:
+    return next(m["uuid"] for m in client.received if m.get("type") == "GuiButtonMessage"
+                and m["props"]["label"] in ("Play", "Pause"))
+
+
+def labels_of(client: Client, uuid: str) -> list[str]:
+    return [m["updates"]["label"] for m in client.seen("GuiUpdateMessage", uuid=uuid) if "label" in m["updates"]]
+
+
+async def student(port: int, cookie: str | None, path: str = "") -> Client:
+    client = await Client.open(port, path=path, cookie=cookie)
+    await client.until(lambda: token_of(client) is not None or "This lab is full" in " ".join(client.texts()),
+                       "the panel", timeout=90)
+    return client
+
+
+async def frames_per_second(clients: list[Client], seconds: float) -> list[float]:
+    before = [len(readouts(c)) for c in clients]
+    await asyncio.sleep(seconds)
+    return [(len(readouts(c)) - b) / seconds for c, b in zip(clients, before)]
+
+
+async def response_times(client: Client, presses: int = 4) -> list[float]:
+    """Seconds from pressing Play/Pause to the button being relabelled, ``presses`` times."""
+    uuid = button(client)
+    out = []
+    for _ in range(presses):
+        seen = len(labels_of(client, uuid))
+        t = time.monotonic()
+        await client.send(gui_update(uuid, value=True))
+        await client.until(lambda: len(labels_of(client, uuid)) > seen, "the button to answer", timeout=20)
+        out.append(time.monotonic() - t)
+        await asyncio.sleep(0.1)
+    return out
+
+
+@pytest.fixture(scope="module")
+def served(built, tmp_path_factory):
+    server = Served(built("pendulum"), tmp_path_factory.mktemp("fair"), "--processes", "1", "--max-sessions", "12")
+    yield server
+    server.stop()
+
+
+def test_a_flood_and_copies_of_a_live_address_do_not_slow_the_other_students(served):
+    async def scenario() -> dict[str, object]:
+        students = [await student(served.port, f"student-browser-{i:04d}") for i in range(STUDENTS)]
+        for s in students:
+            await s.send(gui_update(button(s), value=True))  # Play
+        await asyncio.sleep(1.5)
+        quiet_fps = await frames_per_second(students, MEASURE_SECONDS)
+        quiet_rt = await response_times(students[0])
+
+        evil = await student(served.port, None)
+        slider = next(m["uuid"] for m in evil.received if m.get("type") == "GuiSliderMessage")
+        evil_token = token_of(evil)
+        stop = asyncio.Event()
+        sent = 0
+
+        async def flood() -> None:
+            nonlocal sent
+            start = time.monotonic()
+            while not stop.is_set():
+                due = int((time.monotonic() - start) * FLOOD_RATE)
+                while sent < due:
+                    await evil.ws.send(msgspec.msgpack.encode(gui_update(slider, value=0.1 + (sent % 290) / 100)))
+                    sent += 1
+                await asyncio.sleep(0.005)
+
+        flooding = asyncio.create_task(flood())
+        # 40 connections to the flooder's live address, each registering like a page does: a reload
+        # waiting for its old connection must hold no thread another session needs
+        copies = []
+        for _ in range(LIVE_COPIES):
+            c = await Client.open(served.port, path=f"/s/{evil_token}", camera=False)
+            await c.send(CAMERA)
+            copies.append(c)
+        await asyncio.sleep(1.0)
+        loud_fps = await frames_per_second(students, MEASURE_SECONDS)
+        loud_rt = await response_times(students[0]) + await response_times(students[1])
+        new_tab = time.monotonic()
+        late = await student(served.port, "student-browser-late")
+        new_tab = time.monotonic() - new_tab
+        stop.set()
+        await flooding
+        flood_seconds = sent / FLOOD_RATE
+        for c in [*students, evil, *copies, late]:
+            await c.close()
+        return dict(quiet_fps=quiet_fps, quiet_rt=quiet_rt, loud_fps=loud_fps, loud_rt=loud_rt, sent=sent,
+                    flood_seconds=flood_seconds, new_tab=new_tab)
+
+    r = run_async(scenario(), timeout=240)
+    print(f"\nquiet: {r['quiet_fps']} frames/s, controls {max(r['quiet_rt']):.3f} s; flood of {r['sent']} values "
+          f"in {r['flood_seconds']:.1f} s + {LIVE_COPIES} copies of a live address: {r['loud_fps']} frames/s, "
+          f"controls median {statistics.median(r['loud_rt']):.3f} s max {max(r['loud_rt']):.3f} s, "
+          f"a new tab {r['new_tab']:.2f} s")
+    assert r["sent"] >= 0.8 * FLOOD_RATE * MEASURE_SECONDS  # the flood really ran at its rate
+    assert min(r["loud_fps"]) >= 27.0, r["loud_fps"]
+    assert max(r["loud_rt"]) <= 0.3, r["loud_rt"]
+    # a new tab is answered at once (its panel, or "full" once the copies took the places left)
+    assert r["new_tab"] < 3.0
+
+
+def test_hostile_messages_add_little_to_the_teachers_terminal(served):
+    """2,000 messages with bad UTF-8, a value of 1e308 (clamped, as documented), the text
+    "2.0" for a slider (refused), unknown kinds: at most 20 KB of log in all."""
+    before = served.err.stat().st_size + served.out.stat().st_size
+
+    async def scenario() -> tuple[Client, str]:
+        evil = await student(served.port, None)
+        slider = next(m["uuid"] for m in evil.received if m.get("type") == "GuiSliderMessage")
+        good = msgspec.msgpack.encode(gui_update(slider, value=1.5))
+        bad_utf8 = good.replace(slider.encode()[:4], b"\xff\xfe\xfd\xfc")
+        for i in range(500):
+            await evil.ws.send(bad_utf8)
+            await evil.ws.send(msgspec.msgpack.encode(gui_update(slider, value=1e308)))
+            await evil.ws.send(msgspec.msgpack.encode(gui_update(slider, value="2.0")))
+            await evil.ws.send(msgspec.msgpack.encode({"type": f"Nonsense{i}Message"}))
+        await evil.send(gui_update(slider, value=1e308))
+        await evil.until(lambda: 3.0 in evil.values_of(slider), "1e308 to be clamped to the maximum 3.0", timeout=30)
+        await evil.until(lambda: any("Value refused" in n and "2.0" in n for n in evil.notifications()),
+                         "the text to be refused", timeout=30)
+        assert evil.closed is None  # the connection carries on
+        await evil.close()
+        return evil, slider
+
+    evil, slider = run_async(scenario(), timeout=120)
+    time.sleep(0.5)
+    added = served.err.stat().st_size + served.out.stat().st_size - before
+    print(f"\n2,000 hostile messages added {added} bytes of log")
+    assert added <= 20_000, (served.err.read_text()[-3000:])
+    assert "Traceback" not in served.err.read_text()
+    assert all(math.isfinite(v) and v <= 3.0 for v in evil.values_of(slider))
