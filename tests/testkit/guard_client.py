@@ -77,14 +77,16 @@ class Client:
     @classmethod
     async def open(cls, port: int, *, origin: str | None = None, host: str | None = None,
                    camera: bool = True, server: Any = None, path: str = "", cookie: str | None = None,
-                   address: str = "127.0.0.1") -> "Client":
+                   source: str | None = None) -> "Client":
         # with ``host``, the Host header names it while the TCP connection still goes to 127.0.0.1;
         # ``path``: the websocket's path (a classroom session's address, /s/<token>); ``cookie``:
-        # the browser cookie a page would have set (ejsrl_browser=...); ``address``: where to connect
+        # the browser cookie a page would have set (ejsrl_browser=...); ``source``: the address to
+        # connect from (another loopback address, 127.0.0.2, is another client address)
         uri = f"ws://{host or f'127.0.0.1:{port}'}{path}"
         headers = {"Cookie": f"ejsrl_browser={cookie}"} if cookie is not None else None
-        ws = await connect(uri, subprotocols=[SUBPROTOCOL], origin=origin, host=address, port=port,
-                           max_size=None, open_timeout=10, additional_headers=headers)
+        extra = {"local_addr": (source, 0)} if source is not None else {}
+        ws = await connect(uri, subprotocols=[SUBPROTOCOL], origin=origin, host="127.0.0.1", port=port,
+                           max_size=None, open_timeout=10, additional_headers=headers, **extra)
         client = cls(ws)
         if camera:
             before = len(server.get_clients()) if server is not None else 0

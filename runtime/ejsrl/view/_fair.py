@@ -94,8 +94,11 @@ class Inbox:
         rate: float = MESSAGE_RATE,
         burst: float = MESSAGE_BURST,
         clock: Callable[[], float] = time.monotonic,
+        counts: dict[str, int] | None = None,
     ) -> None:
         self.receive = receive
+        #: where messages replaced or dropped here are counted (the guard's ``dropped``)
+        self.counts = counts if counts is not None else {}
         self.check = check
         self.rate = float(rate)
         self.burst = float(burst)
@@ -151,11 +154,16 @@ class Inbox:
             key = coalesce_key(message)
             if key in self.pending:
                 self.coalesced += 1
+                self._count("replaced by a newer value")
                 del self.pending[key]
             elif len(self.pending) >= MAX_PENDING:
                 self.overflowed += 1
+                self._count("too many kinds pending")
                 continue
             self.pending[key] = out
+
+    def _count(self, why: str) -> None:
+        self.counts[why] = self.counts.get(why, 0) + 1
 
     def close(self) -> None:
         """Stop reading (the connection is done)."""
@@ -174,8 +182,8 @@ def _retrieve(task: asyncio.Future[Any]) -> None:
 class AddressBook:
     """Websockets open per client address; the addresses refused (each logged once)."""
 
-    def __init__(self, limit: int = MAX_PER_ADDRESS) -> None:
-        self.limit = int(limit)
+    def __init__(self, limit: int | None = None) -> None:
+        self.limit = int(MAX_PER_ADDRESS if limit is None else limit)
         self.open: collections.Counter[str] = collections.Counter()
         self.refused: collections.Counter[str] = collections.Counter()
 

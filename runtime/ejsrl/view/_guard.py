@@ -612,7 +612,7 @@ class _Hook:
                                "dropped", exc_info=True)
                     return None
 
-            inbox = _fair.Inbox(connection.recv, check)
+            inbox = _fair.Inbox(connection.recv, check, counts=guard.dropped)
             connection.recv = inbox.recv
             address = _address(connection)
             if addresses is not None:

@@ -1,0 +1,215 @@
+"""The limits a served app puts on one client (issue #30), through raw viser websocket
+clients: connections per address, a deadline to register, messages paced with only the
+latest value per control, sessions bound to their browser, and the note a tab gets when
+its address's session is gone."""
+
+from __future__ import annotations
+
+import asyncio
+import re
+import time
+
+import pytest
+from websockets.exceptions import InvalidStatus
+
+from ejsrl.view import _fair
+from testkit.browser_lab import make_app
+from testkit.guard_client import CAMERA, Client, gui_update, run_async
+
+
+@pytest.fixture
+def classroom(request):
+    options = dict(max_sessions=6, grace=30.0)
+    options.update(getattr(request, "param", {}))
+    app = make_app()
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, **options)
+    yield app, server
+    app.stop()
+    server.stop()
+
+
+def token_of(client: Client) -> str | None:
+    for text in client.texts():
+        match = re.search(r"s/([A-Za-z0-9_-]{8,64})/'", text)
+        if match:
+            return match.group(1)
+    return None
+
+
+async def tab(server, path: str = "", cookie: str | None = None) -> Client:
+    client = await Client.open(server.get_port(), path=path, cookie=cookie)
+    await client.until(lambda: token_of(client) is not None or "This lab is full" in " ".join(client.texts()),
+                       "the panel", timeout=30)
+    return client
+
+
+def test_connections_from_one_address_are_capped_and_the_refusal_logged_once(monkeypatch, caplog):
+    monkeypatch.setattr(_fair, "MAX_PER_ADDRESS", 3)
+    app = make_app()
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=4)
+    port = server.get_port()
+
+    async def scenario() -> None:
+        mine = [await Client.open(port, camera=False) for _ in range(3)]
+        for _ in range(5):
+            with pytest.raises(InvalidStatus) as refused:
+                await Client.open(port, camera=False)
+            assert refused.value.response.status_code == 429
+            assert b"Too many connections" in refused.value.response.body
+        # another address is not affected (127.0.0.2 is loopback too)
+        other = await Client.open(port, source="127.0.0.2", server=server)
+        await other.until(lambda: token_of(other) is not None, "the other address's panel", timeout=30)
+        # a closed connection gives its place back
+        await mine[0].close()
+        again = None
+        deadline = time.monotonic() + 10
+        while again is None:
+            try:
+                again = await Client.open(port, camera=False)
+            except InvalidStatus:
+                assert time.monotonic() < deadline, "the closed connection's place was never given back"
+                await asyncio.sleep(0.1)
+        for c in [*mine[1:], other, again]:
+            await c.close()
+
+    try:
+        with caplog.at_level("WARNING", logger="ejsrl.serve"):
+            run_async(scenario())
+    finally:
+        app.stop()
+        server.stop()
+    lines = [r.getMessage() for r in caplog.records if "refused websockets from" in r.getMessage()]
+    assert lines == ["ejsrl: refused websockets from 127.0.0.1: it has 3 open (the most from one address)"]
+
+
+def test_a_websocket_that_never_registers_is_closed(monkeypatch):
+    monkeypatch.setattr(_fair, "REGISTER_SECONDS", 1.0)
+    app = make_app()
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2)
+
+    async def scenario() -> float:
+        idle = await Client.open(server.get_port(), camera=False)
+        page = await Client.open(server.get_port(), server=server)  # registers at once: stays
+        t = time.monotonic()
+        await idle.until(lambda: idle.closed is not None, "the idle websocket to be closed", timeout=10)
+        waited = time.monotonic() - t
+        await asyncio.sleep(1.5)
+        assert page.closed is None
+        await page.close()
+        return waited
+
+    try:
+        waited = run_async(scenario())
+    finally:
+        app.stop()
+        server.stop()
+    assert 0.5 <= waited <= 3.0
+
+
+def test_a_flood_of_values_is_paced_and_only_the_latest_counts(classroom):
+    """5,000 values sent at once: the model ends on the last one, and most were replaced by a
+    newer one before viser saw them."""
+    import msgspec
+
+    from ejsrl.view._guard import guard_of
+
+    app, server = classroom
+    guard = guard_of(server)
+
+    async def scenario() -> None:
+        evil = await tab(server)
+        session = app.classroom.sessions[token_of(evil)]
+        length = evil.uuid_of("GuiSliderMessage", "Length")
+        for i in range(5000):
+            await evil.ws.send(msgspec.msgpack.encode(gui_update(length, value=0.5 + (i % 15) / 10)))
+        await evil.send(gui_update(length, value=1.3))
+        await Client.until(lambda: abs(session.app.model.L - 1.3) < 1e-9, "the last value to reach the model",
+                           timeout=30)
+        await evil.settle(0.5)
+        assert abs(session.app.model.L - 1.3) < 1e-9  # no older value arrived after it
+        await evil.close()
+
+    run_async(scenario())
+    assert guard.dropped.get("replaced by a newer value", 0) >= 4000, guard.dropped
+
+
+def test_a_session_resumes_only_in_the_browser_that_created_it(classroom):
+    app, server = classroom
+
+    async def scenario() -> None:
+        mine = await tab(server, cookie="a" * 24)
+        token = token_of(mine)
+        length = mine.uuid_of("GuiSliderMessage", "Length")
+        await mine.send(gui_update(length, value=1.7))
+        await Client.until(lambda: app.classroom.sessions[token].app.model.L == 1.7, "the student's value")
+        await mine.close()
+        await Client.until(lambda: app.classroom.sessions[token].client_id is None, "the tab to be gone")
+        # a projector (another browser) opening the address within the grace period: a lab of its own
+        other = await tab(server, f"/s/{token}", cookie="b" * 24)
+        assert token_of(other) != token
+        assert any("another browser" in n for n in other.notifications())
+        assert app.classroom.sessions[token_of(other)].app.model.L == 1.0
+        # ... and so does a script with no cookie
+        script = await tab(server, f"/s/{token}")
+        assert token_of(script) not in (token, token_of(other))
+        # the student's own browser finds its simulation again
+        back = await tab(server, f"/s/{token}", cookie="a" * 24)
+        assert token_of(back) == token and app.classroom.sessions[token].app.model.L == 1.7
+        assert back.notifications() == []
+        for c in (other, script, back):
+            await c.close()
+
+    run_async(scenario(), timeout=120)
+
+
+@pytest.mark.parametrize("classroom", [dict(grace=0.5)], indirect=True)
+def test_a_tab_whose_session_is_gone_is_told_why(classroom):
+    app, server = classroom
+
+    async def scenario() -> None:
+        first = await tab(server, cookie="c" * 24)
+        token = token_of(first)
+        await first.close()
+        await Client.until(lambda: token not in app.classroom.sessions, "the session to be freed", timeout=10)
+        late = await tab(server, f"/s/{token}", cookie="c" * 24)
+        assert token_of(late) != token
+        assert any("Your earlier simulation ended" in n and "closed for more than" in n
+                   for n in late.notifications())
+        # an address this server never gave (its process was restarted since): told the lab was restarted
+        restarted = await tab(server, "/s/NeverGivenToken1234/", cookie="d" * 24)
+        assert any("This lab was restarted" in n for n in restarted.notifications())
+        for c in (late, restarted):
+            await c.close()
+
+    run_async(scenario(), timeout=60)
+
+
+def test_a_reload_waiting_for_its_old_connection_holds_no_thread(classroom):
+    """Forty copies of a live address (same browser) wait for it without parking viser's
+    thread pool: a new tab meanwhile gets its panel at once."""
+    app, server = classroom
+
+    async def scenario() -> float:
+        owner = await tab(server, cookie="e" * 24)
+        token = token_of(owner)
+        copies = []
+        for _ in range(40):
+            c = await Client.open(server.get_port(), path=f"/s/{token}", cookie="e" * 24, camera=False)
+            await c.send(CAMERA)
+            copies.append(c)
+        await asyncio.sleep(0.2)
+        assert len(app.classroom._waiting.get(token, [])) >= 30
+        t = time.monotonic()
+        newcomer = await tab(server, cookie="f" * 24)
+        took = time.monotonic() - t
+        assert token_of(newcomer) is not None
+        # the owner's tab closes: the first copy takes the session over, at once
+        await owner.close()
+        await Client.until(lambda: any(token_of(c) == token for c in copies), "a copy to resume the session",
+                           timeout=10)
+        for c in [*copies, newcomer]:
+            await c.close()
+        return took
+
+    took = run_async(scenario(), timeout=120)
+    assert took < 1.5, took
