@@ -156,8 +156,9 @@ COMMON: tuple[Prop, ...] = (
 
 #: the virtual camera's texture of a solid element (the browser view draws it plain)
 _TEXTURE: tuple[Prop, ...] = (
-    Prop("texture", "text", None, "checker: a checkerboard on each face, as the virtual camera sees it (capture)."),
-    Prop("texture_size", "num", None, "The checker's squares, metres along the element's own axes (default 0.05)."),
+    Prop("texture", "text", None, "checker: a checkerboard on each face, as the virtual camera sees it (capture); "
+         "or a fiducial marker '<dictionary>:<id>' (e.g. 'aruco_4x4_50:7', 'apriltag_36h11:0') on the faces along +z."),
+    Prop("texture_size", "num", None, "The checker's squares, or the marker's side, metres along the element's own axes (default 0.05)."),
 )
 
 _KINDS: tuple[Kind, ...] = (
