@@ -37,13 +37,17 @@ def move_to_point(x: ArrayLike, goal: ArrayLike, *, Kv: float = 0.5, Kh: float =
     return np.array([Kv * math.hypot(dx, dy), Kh * heading])
 
 
-def move_to_pose(x: ArrayLike, goal: ArrayLike, *, Krho: float = 1.0, Kalpha: float = 5.0, Kbeta: float = -2.0,
+def move_to_pose(x: ArrayLike, goal: ArrayLike, *, Krho: float = 1.0, Kalpha: float = 6.0, Kbeta: float = -6.0,
                  L: float | None = 1.0, backwards: bool = True) -> Array:
     """Drive to the pose ``goal = (x, y, theta)`` in polar coordinates: ``rho`` the distance
     to the goal, ``alpha`` the goal's bearing from the heading, ``beta = theta* - theta -
     alpha``; ``v = Krho rho``, ``omega = Kalpha alpha + Kbeta beta`` (stable for ``Krho > 0``,
-    ``Kbeta < 0``, ``Kalpha > Krho``). A goal behind the vehicle (|alpha| > pi/2) is
-    reached in reverse when ``backwards``. Bicycle steering ``atan(omega L / v)``."""
+    ``Kbeta < 0``, ``Kalpha > Krho``). Linearised, alpha and beta decay with the roots of
+    ``s^2 + (Kalpha - Krho) s - Krho Kbeta``: the defaults put them at -2 and -3, faster than
+    rho's -Krho, so a car (whose turn rate vanishes with its speed) is aligned before it
+    stops (Kalpha = 5, Kbeta = -2 leave up to 0.06 rad). A goal behind the vehicle
+    (|alpha| > pi/2) is reached in reverse when ``backwards``. Bicycle steering
+    ``atan(omega L / v)``."""
     x = vector(x, 3, "x")
     g = vector(goal, 3, "goal")
     dx, dy = g[0] - x[0], g[1] - x[1]

@@ -37,12 +37,17 @@ def path_length(path: ArrayLike) -> float:
     return float(np.hypot(*np.diff(P, axis=0).T).sum()) if len(P) > 1 else 0.0
 
 
+def _pt(p: ArrayLike) -> str:
+    """A point as the user wrote it: ``(2, 2)``, ``(0.5, 1.25)``."""
+    return "(" + ", ".join(f"{float(v):g}" for v in np.asarray(p, dtype=float).reshape(-1)) + ")"
+
+
 def _cell(grid: BinaryOccupancyGrid, p: ArrayLike, what: str) -> tuple[int, int]:
     c, r = (int(v) for v in grid.w2g(np.asarray(p, dtype=float)))
     if not grid.inside((c, r)):
-        raise ValueError(f"the {what} {tuple(np.round(np.asarray(p, float), 3))} is outside the grid")
+        raise ValueError(f"the {what} {_pt(p)} is outside the grid")
     if grid.grid[r, c]:
-        raise ValueError(f"the {what} {tuple(np.round(np.asarray(p, float), 3))} is in an obstacle")
+        raise ValueError(f"the {what} {_pt(p)} is in an obstacle")
     return c, r
 
 
@@ -116,7 +121,7 @@ class DistanceTransformPlanner(_GridPlanner):
                 if 0 <= rr < rows and 0 <= cc < cols and D[rr, cc] < best:
                     best, step = D[rr, cc], (dr, dc)
             if step is None or not math.isfinite(best):
-                raise NoPathError(f"the goal is not reachable from {tuple(np.asarray(start, float))}")
+                raise NoPathError(f"the goal is not reachable from {_pt(start)}")
             r, c = r + step[0], c + step[1]
             cells.append((c, r))
         return g.g2w(np.array(cells))
@@ -160,7 +165,7 @@ class AStarPlanner(_GridPlanner):
                     parent[(cc, rr)] = u
                     heapq.heappush(heap, (ng + h(cc, rr), ng, (cc, rr)))
         if t not in closed:
-            raise NoPathError(f"the goal {tuple(np.asarray(goal, float))} is not reachable from the start")
+            raise NoPathError(f"the goal {_pt(goal)} is not reachable from the start")
         cells = [t]
         while cells[-1] != s:
             cells.append(parent[cells[-1]])
@@ -256,7 +261,10 @@ class DstarPlanner(_GridPlanner):
             if top is None:
                 break
             k_old, u = top
-            if not (k_old < self._key(s) or self.rhs[s[1], s[0]] != self.g[s[1], s[0]]):
+            ks = self._key(s)
+            # keys summed in another order differ in the last bits: a top key within
+            # rounding of the start's is expanded too (more work, never a wrong path)
+            if not (k_old[0] < ks[0] + 1e-9 * max(1.0, abs(ks[0])) or self.rhs[s[1], s[0]] != self.g[s[1], s[0]]):
                 break
             self.expanded += 1
             k_new = self._key(u)
@@ -279,7 +287,7 @@ class DstarPlanner(_GridPlanner):
     def _as_cell(self, where: ArrayLike) -> tuple[int, int]:
         c, r = (int(v) for v in self.occgrid.w2g(np.asarray(where, dtype=float)))
         if not self.occgrid.inside((c, r)):
-            raise ValueError(f"{tuple(np.asarray(where, float))} is outside the grid")
+            raise ValueError(f"{_pt(where)} is outside the grid")
         return c, r
 
     def modify_cost(self, where: ArrayLike, cost: float) -> None:
@@ -313,7 +321,7 @@ class DstarPlanner(_GridPlanner):
         self.expanded = 0
         self._compute()
         if math.isinf(self.rhs[s[1], s[0]]):
-            raise NoPathError(f"the goal is not reachable from {tuple(np.asarray(start, float))}")
+            raise NoPathError(f"the goal is not reachable from {_pt(start)}")
         cells = [s]
         u = s
         while u != self.goal_cell:
