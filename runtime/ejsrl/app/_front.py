@@ -19,7 +19,10 @@ process cannot use a lab machine's other cores, however many it has. With
   stops is started again (its students' sessions are lost, with a line in the terminal).
 
 The front reads nothing but the request's first line and headers, and never what a
-client sends afterwards; every check of what clients send stays in the workers.
+client sends afterwards; every check of what clients send stays in the workers. It counts
+the connections of each client address (the workers see only the front's): at most
+:data:`ejsrl.view._fair.MAX_PER_ADDRESS` websockets and :data:`CONNECTIONS_PER_WEBSOCKET`
+times as many connections in all; more are answered 429 (logged once per address).
 """
 
 from __future__ import annotations
@@ -60,6 +63,9 @@ HEAD_LIMIT = 64 * 1024
 RETRY_SECONDS = 10.0
 #: seconds the workers get to stop before they are killed
 STOP_SECONDS = 5.0
+#: connections of any kind one address may have open, per websocket it may have (a page
+#: loads its files over a few connections of its own)
+CONNECTIONS_PER_WEBSOCKET = 4
 
 _TOKEN = re.compile(r"/s/(\d{1,3})x[A-Za-z0-9_-]{8,64}(?:/|\?|$)")
 _UPGRADE = re.compile(rb"(?im)^upgrade:[ \t]*websocket[ \t]*\r?$")
@@ -169,6 +175,11 @@ class Front:
         self._server: asyncio.base_events.Server | None = None
         self._thread: threading.Thread | None = None
         self._stopping = False
+        from ejsrl.view._fair import AddressBook
+
+        #: websockets, and connections of any kind, open per client address
+        self.websockets = AddressBook()
+        self.connections = AddressBook(self.websockets.limit * CONNECTIONS_PER_WEBSOCKET)
 
     # -- the workers ---------------------------------------------------------------------------------
     def start(self) -> None:
@@ -328,15 +339,30 @@ class Front:
         return ready[next(self._turn) % len(ready)]
 
     async def _relay(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        peer = writer.get_extra_info("peername")
+        address = str(peer[0]) if isinstance(peer, tuple) and peer else ""
+        if self.connections.full(address):
+            self._refuse(address, self.connections.limit, "connections")
+            writer.close()
+            return
+        self.connections.opened(address)
         try:
-            await self._relay_one(reader, writer)
+            await self._relay_one(reader, writer, address)
         except (ConnectionError, OSError):  # a client or a worker went away mid-way: nothing to tell
             writer.close()
         except Exception:  # noqa: BLE001 - one connection's failure must not reach the others
             log.debug("ejsrl: relaying a connection failed", exc_info=True)
             writer.close()
+        finally:
+            self.connections.closed(address)
 
-    async def _relay_one(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+    def _refuse(self, address: str, limit: int, what: str) -> None:
+        """Log, once per address, that ``address`` was refused for having ``limit`` ``what`` open."""
+        book = self.connections if what == "connections" else self.websockets
+        if book.first_refusal(address):
+            log.warning("ejsrl: refused %s from %s: it has %d open (the most from one address)", what, address, limit)
+
+    async def _relay_one(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, address: str) -> None:
         try:
             head = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), HEAD_SECONDS)
         except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, asyncio.TimeoutError, ConnectionError, ValueError):
@@ -345,6 +371,15 @@ class Front:
         parts = head.split(b"\r\n", 1)[0].split(b" ")
         path = parts[1].decode("latin-1") if len(parts) == 3 else ""
         websocket = _UPGRADE.search(head) is not None
+        if websocket and self.websockets.full(address):
+            self._refuse(address, self.websockets.limit, "websockets")
+            body = b"Too many connections from your address: close some tabs of this lab.\n"
+            writer.write(b"HTTP/1.1 429 Too Many Requests\r\nContent-Type: text/plain; charset=utf-8\r\n"
+                         b"Connection: close\r\nContent-Length: %d\r\n\r\n%s" % (len(body), body))
+            with contextlib.suppress(ConnectionError):
+                await writer.drain()
+            writer.close()
+            return
         worker = self.route(path, websocket)
         upstream: tuple[asyncio.StreamReader, asyncio.StreamWriter] | None = None
         if worker is not None:
@@ -364,6 +399,7 @@ class Front:
         up_writer.write(head)
         if websocket:
             worker.tabs += 1
+            self.websockets.opened(address)
         try:
             to_worker = asyncio.ensure_future(_pipe(reader, up_writer, half_close=True))
             to_client = asyncio.ensure_future(_pipe(up_reader, writer, half_close=False))
@@ -376,6 +412,7 @@ class Front:
         finally:
             if websocket:
                 worker.tabs -= 1
+                self.websockets.closed(address)
             for w in (writer, up_writer):
                 w.close()
 

@@ -22,6 +22,7 @@ import asyncio
 import collections
 import itertools
 import logging
+import os
 import time
 from collections.abc import Awaitable, Callable, Hashable
 from typing import Any
@@ -48,8 +49,10 @@ MESSAGE_BURST = 30.0
 #: controls); beyond it a new kind is dropped until the client is under its rate again
 MAX_PENDING = 64
 #: websockets open at once from one client address (a class behind one NAT shares one
-#: address, so this is generous: a single script opening thousands is what it stops)
-MAX_PER_ADDRESS = 200
+#: address, so this is generous: a single script opening thousands is what it stops);
+#: the environment variable ``EJSRL_MAX_PER_ADDRESS`` sets another number
+_ASKED = os.environ.get("EJSRL_MAX_PER_ADDRESS", "").strip()
+MAX_PER_ADDRESS = int(_ASKED) if _ASKED.isdigit() and int(_ASKED) > 0 else 200
 #: seconds a websocket may stay open without registering (the page's first camera
 #: message, sent as soon as the page has drawn) before it is closed
 REGISTER_SECONDS = 15.0
