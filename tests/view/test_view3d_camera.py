@@ -174,3 +174,20 @@ def test_a_view_whose_values_change_is_shown_again_and_only_then():
     view_node(w).set(fov=30.0)  # an expression's new value, as the scene binding writes it
     view.on_frame([cam])
     assert cam.fov == pytest.approx(math.radians(30))
+
+
+def test_the_restore_view_button_is_in_the_panel_of_a_lab_with_a_scene_only():
+    from ejsrl.app import App, AppMeta, SimConfig
+    from ejsrl.view.elements import Dynamic, Label
+    from ejsrl.view.viser_view import ViserView, make_server
+    from testkit.browser_lab import Pendulum, make_app
+
+    server, _url = make_server("127.0.0.1", 0, banner=False)
+    try:
+        with_scene = ViserView(make_app(), server)
+        assert with_scene.reset_view_button is not None and with_scene.reset_view_button.label == "Restore view"
+        plain = App(Pendulum, [Label(Dynamic(lambda m: f"t = {m.t}", "f't = {t}'"))], sim=SimConfig(fps=30.0),
+                    meta=AppMeta(title="No scene", description="", author="Tests", spec="p.ejs.yaml"))
+        assert ViserView(plain, server).reset_view_button is None
+    finally:
+        server.stop()

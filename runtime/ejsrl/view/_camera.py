@@ -147,6 +147,8 @@ class ViewCamera:
         #: the rev of the view node last shown, and the pose resolved then
         self._rev: int | None = None
         self.pose: CameraPose | None = None
+        #: the world's view node (or None) and the number of nodes the world had when it was looked for
+        self._found: tuple[Any, int] | None = None
 
     def _world(self) -> Any:
         try:
@@ -154,11 +156,19 @@ class ViewCamera:
         except RuntimeError:
             return None
 
+    def _node(self, world: Any) -> Any:
+        """The world's ``view`` node, looked for again only when the world's nodes change in number
+        (``set_view`` adds one to a scene without it): a frame costs no walk through the world."""
+        count = len(world.nodes)
+        if self._found is None or self._found[1] != count or (self._found[0] is not None and self._found[0].world is not world):
+            self._found = (view_node(world), count)
+        return self._found[0]
+
     def _resolve(self) -> CameraPose | None:
         world = self._world()
         if world is None:
             return None
-        node = view_node(world)
+        node = self._node(world)
         if node is None:
             return None
         self._rev = node.rev
@@ -183,7 +193,7 @@ class ViewCamera:
         """A frame: the whole camera if what the world asks for changed, else the followed
         object's moves (the caller holds the model lock)."""
         world = self._world()
-        node = view_node(world) if world is not None else None
+        node = self._node(world) if world is not None else None
         if node is None:
             return
         if node.rev != self._rev:

@@ -129,7 +129,8 @@ class ViserView:
             if world is not None:
                 with app.lock:
                     self.scene.sync(world)
-                self._add_reset_view(target.gui)
+                if self.panel.has_scene:
+                    self._add_reset_view(target.gui)
         self._guard = guard = guard_of(server)
         if guard is not None:
             guard.notify = _notify_red
