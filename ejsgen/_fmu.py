@@ -398,7 +398,7 @@ def _compile_one(c: Compiler, name: str, fmu: Fmu, f: FmuFile, path: tuple[Any, 
         m = _values_method(c, f"{base}_inputs", "inputs", fmu.inputs, path, f"The inputs of FMU '{name}', in order ({', '.join(fmu.inputs)}).")
         args += [f"inputs={tuple(fmu.inputs)!r}", f"read_inputs=self.{m}"]
     if fmu.outputs:
-        lines = [Line(f"{target} = values[{k}]  # {var}", c.loc(path + ("outputs", var))) for k, (var, target) in enumerate(targets.items())]
+        lines = _output_lines(c, targets, path)
         m = c.add_method(c.method_name(f"{base}_outputs"), "self, values", f"Write the outputs of FMU '{name}' into the model.", lines)
         args += [f"outputs={tuple(fmu.outputs)!r}", f"write_outputs=self.{m}"]
     if fmu.parameters:
@@ -475,6 +475,36 @@ def _selfed(node: ast.AST) -> ast.AST:
             return ast.Attribute(value=ast.Name("self", ast.Load()), attr=n.id, ctx=ast.Load())
 
     return _Self().visit(ast.parse(ast.unparse(node), mode="eval").body)
+
+
+def _output_lines(c: Compiler, targets: dict[str, str | None], path: tuple[Any, ...]) -> list[Line]:
+    """The assignments of the outputs: ``self.x = values[k]``, and outputs going to
+    consecutive elements of one array as one slice (``self.tau[0:3] = values[0:3]``: one
+    assignment instead of three, at every evaluation of a model-exchange FMU)."""
+    import re
+
+    element = re.compile(r"^(self\.[A-Za-z_][A-Za-z_0-9]*)\[(\d+)\]$")
+    items = list(targets.items())
+    lines: list[Line] = []
+    k = 0
+    while k < len(items):
+        var, target = items[k]
+        m = element.match(target or "")
+        end = k + 1
+        if m:
+            while end < len(items):
+                m2 = element.match(items[end][1] or "")
+                if not (m2 and m2.group(1) == m.group(1) and int(m2.group(2)) == int(m.group(2)) + end - k):
+                    break
+                end += 1
+        if end - k > 1 and m:
+            first = int(m.group(2))
+            names = ", ".join(v for v, _ in items[k:end])
+            lines.append(Line(f"{m.group(1)}[{first}:{first + end - k}] = values[{k}:{end}]  # {names}", c.loc(path + ("outputs", var))))
+        else:
+            lines.append(Line(f"{target} = values[{k}]  # {var}", c.loc(path + ("outputs", var))))
+        k = end
+    return lines
 
 
 def _values_method(c: Compiler, base: str, role: str, values: dict[str, Any], path: tuple[Any, ...], doc: str) -> str:

@@ -33,7 +33,7 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from ejsrl.fmi._instance import FmuTerminated
+from ejsrl.fmi._instance import FmuError, FmuTerminated
 
 if TYPE_CHECKING:
     from ejsrl.fmi.coupling import FmuRun
@@ -88,6 +88,58 @@ def continuous_inputs(md: Any, names: Sequence[str]) -> list[bool]:
     return [by_name[n].type in ("Real", "Float64", "Float32") and by_name[n].variability == "continuous" for n in names]
 
 
+#: time events of one FMU within one step beyond which it is taken for Zeno behaviour
+MAX_TIME_EVENTS = 100
+
+
+class TimeEvents:
+    """The page's integrator seen through the FMU's time events: a step that holds the next
+    announced event time is cut there, exactly; the event iteration runs at that time and
+    the rest of the step follows from the state it left (as many events as the step holds).
+
+    ``inner``: the :class:`~ejsrl.sim.ode.OdeIntegrator` (the page's method, its events and
+    the FMU's event indicators); the page calls :meth:`step` and :meth:`reset` as on it."""
+
+    def __init__(self, inner: Any, me: MeCoupling) -> None:
+        self.inner = inner
+        self.me = me
+        self.rates, self.method, self.events = inner.rates, inner.method, inner.events
+        self.tolerance, self.max_step = inner.tolerance, inner.max_step
+
+    def reset(self) -> None:
+        self.inner.reset()
+
+    def step(self, t: float, y: np.ndarray, h: float, t_end: float | None = None) -> Any:
+        from ejsrl.sim.ode import StepResult
+
+        me, inner = self.me, self.inner
+        t_end = t + h if t_end is None else t_end
+        fired: list[tuple[str, float]] = []
+        while True:
+            te = me.next_event
+            if te is None or me.terminated is not None or te > t_end + 1e-12 * (1.0 + abs(t_end)):
+                result = inner.step(t, y, t_end - t if fired else h, t_end)
+                if fired:
+                    result = StepResult(result.t, result.y, fired + result.fired, result.stop)
+                return result
+            if len(fired) >= MAX_TIME_EVENTS:
+                from ejsrl.sim.ode import ZenoError
+
+                raise ZenoError(f"time event of FMU '{me.run.spec.name}' fired more than {MAX_TIME_EVENTS} times in one step at t={t:.12g}: the FMU keeps announcing events at this time")
+            if te > t:  # to the event time, exactly
+                part = inner.step(t, y, te - t, te)
+                fired += part.fired
+                if part.stop or part.t < te:
+                    return StepResult(part.t, part.y, fired, part.stop)
+                y = part.y
+            t = max(t, te)
+            fired.append((f"time event of FMU '{me.run.spec.name}'", t))
+            y = me._event(t, y)
+            inner.reset()
+            if t >= t_end:
+                return StepResult(t_end, y, fired, False)
+
+
 class MeCoupling:
     """Couples a started model-exchange :class:`FmuRun` to the ODE page ``page``.
 
@@ -100,10 +152,8 @@ class MeCoupling:
         inst = run.inst
         assert inst is not None
         self.inst = inst
+        #: the next time event the FMU announced (None: none)
         self.next_event = next_event
-        #: the time event's parity: its function is parity * (t - next_event), so every
-        #: time event crosses zero the other way and the solver arms it afresh
-        self._parity = 1.0
         self.terminated: FmuTerminated | None = None
         spec = run.spec
         cont = continuous_inputs(inst.md, spec.inputs)
@@ -127,6 +177,29 @@ class MeCoupling:
         state0, load0, integ = page.state, page.load, page.integrator
         rates0 = integ.rates
         me = self
+        own = isinstance(page, OwnPage)
+        set_time, set_states, derivatives = inst.fast_calls()
+        self._set_time, self._set_states = set_time, set_states
+        spec = run.spec
+        read_inputs = spec.read_inputs
+        all_cont = len(self._cont_idx) == len(spec.inputs)
+        set_cont = inst.setter(self._cont_names, "setting inputs") if self._cont_idx else None
+        cont_idx = self._cont_idx
+        nx = inst.nx
+
+        def send(t: float, x: np.ndarray, inputs: bool = True, outputs: bool = True) -> None:
+            """The FMU gets the time, its states and (``inputs``) the continuous inputs;
+            (``outputs``) its outputs go to the model."""
+            set_time(t)
+            if nx:
+                set_states(x)
+            if inputs and set_cont is not None:
+                values = read_inputs()  # type: ignore[misc]
+                set_cont(values if all_cont else [values[k] for k in cont_idx])
+            if outputs:
+                run.receive_outputs()
+
+        self._send = send
 
         def state() -> tuple[float, np.ndarray]:
             t, y = state0()
@@ -141,14 +214,32 @@ class MeCoupling:
         def rates(t: float, y: np.ndarray) -> np.ndarray:
             n = me._n_model
             load0(t, y[:n])
-            me.evaluate(t, y[n:])
+            x = y[n:]
+            try:
+                if me.terminated is not None:
+                    dx = me._dx_frozen
+                else:
+                    send(t, x)
+                    me._eval_key = None
+                    dx = derivatives()
+            except FmuError as exc:
+                raise run._fail(exc) from None
             dy = rates0(t, y[:n])
-            if me.terminated is not None:
-                dx = me._dx_frozen
-            else:
-                dx = run.guarded(inst.derivatives)
             run.calls += 1
-            return np.concatenate((np.asarray(dy, dtype=float), dx))
+            return np.concatenate((dy, dx)) if n else dx
+
+        def own_rates(t: float, x: np.ndarray) -> np.ndarray:
+            """The FMU's own solver: the model does not change during it (its inputs were sent
+            before, its outputs are read after), so the time and states are all it needs."""
+            try:
+                if me.terminated is not None:
+                    return me._dx_frozen
+                send(t, x, False, False)
+                me._eval_key = None
+                run.calls += 1
+                return derivatives()
+            except FmuError as exc:
+                raise run._fail(exc) from None
 
         def wrap_event(ev: Any) -> Any:
             def when(t: float, y: np.ndarray) -> float:
@@ -161,21 +252,22 @@ class MeCoupling:
             return EventDef(ev.name, when, ev.direction, action, ev.stop)
 
         events = [wrap_event(e) for e in integ.events]
-        name = run.spec.name
+        name = spec.name
         for k in range(inst.nz):
             events.append(EventDef(f"event indicator {k} of FMU '{name}'", self._indicator(k), 0, self._state_event, after=True))
-        events.append(EventDef(f"time event of FMU '{name}'", self._time_function, 0, self._time_event))
         page.state, page.load = state, load
-        method = integ.method if inst.nx or not isinstance(page, OwnPage) else "euler"  # nothing to measure an error on
-        page.integrator = OdeIntegrator(
-            rates,
+        method = integ.method if nx or not own else "euler"  # nothing to measure an error on
+        inner = OdeIntegrator(
+            own_rates if own else rates,
             method,
             tolerance=integ.tolerance,
             max_step=None if math.isinf(integ.max_step) else integ.max_step,
             events=events,
         )
+        page.integrator = TimeEvents(inner, self)
         page.names = tuple(page.names) + (f"the states of FMU '{name}'",)
-        page.event_where.update({e.name: run.spec.where for e in events[len(integ.events) :]})
+        page.event_where.update({e.name: spec.where for e in events[len(integ.events) :]})
+        page.event_where[f"time event of FMU '{name}'"] = spec.where
 
     def evaluate(self, t: float, x: np.ndarray) -> None:
         """Give the FMU the time, its states and the continuous inputs; write its outputs into
@@ -185,15 +277,11 @@ class MeCoupling:
         key = (t, x.tobytes())
         if key == self._eval_key:
             return
-        run, inst = self.run, self.inst
         self._eval_key = None
-        run.guarded(lambda: inst.set_time(t))
-        if inst.nx:
-            run.guarded(lambda: inst.set_states(x))
-        if self._cont_idx:
-            values = run.spec.read_inputs()  # type: ignore[misc]
-            run.guarded(lambda: inst.set_values(self._cont_names, [values[k] for k in self._cont_idx], "setting inputs"))
-        run.receive_outputs()
+        try:
+            self._send(t, x)
+        except FmuError as exc:
+            raise self.run._fail(exc) from None
         self._eval_key = key
 
     def _indicator(self, k: int) -> Any:
@@ -213,18 +301,10 @@ class MeCoupling:
 
     _z_key: tuple[float, bytes] | None = None
 
-    def _time_function(self, t: float, y: np.ndarray) -> float:
-        if self.next_event is None or self.terminated is not None:
-            return -self._parity
-        return self._parity * (t - self.next_event)
-
     # -- events --------------------------------------------------------------------------------
     def _state_event(self, t: float, y: np.ndarray) -> np.ndarray:
         return self._event(t, y)
 
-    def _time_event(self, t: float, y: np.ndarray) -> np.ndarray:
-        at = self.next_event if self.next_event is not None else t
-        return self._event(max(t, at), y)
 
     def _event(self, t: float, y: np.ndarray, changes: Any = None) -> np.ndarray:
         """Event mode at (t, y): the FMU gets them, ``changes()`` sets what changed, the event
@@ -240,7 +320,6 @@ class MeCoupling:
         if changes is not None:
             run.guarded(changes)
         changed, self.next_event, terminate = run.guarded(inst.event_update)
-        self._parity = -self._parity
         self._eval_key = self._z_key = None
         if terminate:
             self._terminate(t)
@@ -310,6 +389,11 @@ class MeCoupling:
         discrete inputs the step changed, run the event iteration at the step's end."""
         run, inst = self.run, self.inst
         if isinstance(self.page, OwnPage) and self.terminated is None:
+            self._eval_key = None
+            try:  # the inputs, as the model holds them after its step, held over the FMU's
+                self._send(self.page.t, run.x, True, False)
+            except FmuError as exc:
+                raise run._fail(exc) from None
             self.page.advance(t_new)
         if self.terminated is None:
             self._eval_key = None

@@ -91,6 +91,8 @@ class FmuRun:
         self.terminated: FmuTerminated | None = None
         self.reported = False
         self._h: float | None = None
+        self._set_inputs: Callable[[Sequence[Any]], None] | None = None
+        self._get_outputs: Callable[[], list[Any]] | None = None
 
     # -- errors ----------------------------------------------------------------------------
     def _fail(self, exc: FmuError) -> UserCodeError:
@@ -114,6 +116,8 @@ class FmuRun:
             raise UserCodeError(f"FMU '{spec.name}': {exc}", spec.where) from None
         self.inst = self.guarded(lambda: FmuInstance(folder, md, spec.kind, spec.name))
         inst = self.inst
+        self._set_inputs = inst.setter(spec.inputs, "setting inputs") if spec.inputs and spec.read_inputs is not None else None
+        self._get_outputs = inst.getter(spec.outputs) if spec.outputs and spec.write_outputs is not None else None
         self.t = float(t0)
         self.params = list(spec.read_parameters()) if spec.read_parameters else []
         structural = [k for k, p in enumerate(spec.parameters) if inst.vars[p].causality == "structuralParameter"]
@@ -164,17 +168,18 @@ class FmuRun:
         return pages[spec.ode]
 
     def _send_inputs(self) -> None:
-        spec = self.spec
-        if spec.inputs and spec.read_inputs is not None:
-            values = spec.read_inputs()
-            self.inst.set_values(spec.inputs, values, "setting inputs")  # type: ignore[union-attr]
+        if self._set_inputs is not None:
+            self._set_inputs(self.spec.read_inputs())  # type: ignore[misc]
 
     def receive_outputs(self) -> None:
         """Read the FMU's outputs and write them into the model variables."""
-        spec = self.spec
-        if spec.outputs and spec.write_outputs is not None:
-            values = self.guarded(lambda: self.inst.get_values(spec.outputs))  # type: ignore[union-attr]
-            spec.write_outputs(values)
+        get = self._get_outputs
+        if get is not None:
+            try:
+                values = get()
+            except FmuError as exc:
+                raise self._fail(exc) from None
+            self.spec.write_outputs(values)  # type: ignore[misc]
 
     def _send_tunable(self) -> None:
         """Send the tunable parameters whose value changed since they were last sent."""
@@ -198,8 +203,13 @@ class FmuRun:
         if self.terminated is not None or self.held is not None:
             return
         if t >= self.t - _EPS * max(1.0, abs(self.t)):
-            self._send_tunable()
-            self.guarded(self._send_inputs)
+            if self.spec.tunable:
+                self._send_tunable()
+            if self._set_inputs is not None:
+                try:
+                    self._set_inputs(self.spec.read_inputs())  # type: ignore[misc]
+                except FmuError as exc:
+                    raise self._fail(exc) from None
             self.held = []
 
     def after_step(self, t_new: float) -> None:
@@ -234,7 +244,7 @@ class FmuRun:
         self.receive_outputs()
 
     def _do_step(self, inst: FmuInstance, h: float) -> None:
-        if not inst.variable_step:
+        if not inst.variable_step:  # noqa: SIM102
             if self._h is None:
                 self._h = h
             elif abs(h - self._h) > 1e-9 * self._h:
@@ -244,7 +254,11 @@ class FmuRun:
                     self.spec.where,
                 )
         start = len(inst.log)
-        if self.guarded(lambda: inst.do_step(self.t, h)):
+        try:
+            ended = inst.do_step(self.t, h)
+        except FmuError as exc:
+            raise self._fail(exc) from None
+        if ended:
             self.terminated = FmuTerminated(self.spec.name, self.t + h, inst.said(start, 3))
         self.calls += 1
 
@@ -279,6 +293,7 @@ class Fmus:
         base = Path(base_dir) if base_dir is not None else app_folder(model)
         self.runs = [FmuRun(model, d, base) for d in defs]
         self.model = model
+        self._independent: str | None = getattr(model, "INDEPENDENT", None)
         # the instances to free: when closed, or once the model is collected (a browser tab's
         # session that ends), or at exit; the list holds no reference back to the model
         self._instances: list[FmuInstance] = []
@@ -294,12 +309,12 @@ class Fmus:
                     self._instances.append(run.inst)
 
     def before_step(self) -> None:
-        t = self.model._ejs_time() or 0.0
+        t = float(getattr(self.model, self._independent)) if self._independent else 0.0
         for run in self.runs:
             run.before_step(t)
 
     def after_step(self) -> None:
-        t = self.model._ejs_time() or 0.0
+        t = float(getattr(self.model, self._independent)) if self._independent else 0.0
         for run in self.runs:
             run.after_step(t)
 
