@@ -5,16 +5,18 @@ unknown ``preset`` (with "did you mean"), a ``preset`` together with a ``positio
 rotation or transform (a camera's orientation is its target and up), a field of view outside
 1-170 degrees, an ``up`` of zero or along the direction the camera looks (when both are
 constants), a camera standing on its target, and a ``follow`` that names no object of the
-scene (checked once the whole scene is known, with the closest name as a hint).
+scene nor a robot's link (``arm.link3``; checked once the whole scene is known, with the
+closest name as a hint).
 """
 
 from __future__ import annotations
 
+import re
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ejsgen._suggest import did_you_mean
+from ejsgen._suggest import closest, did_you_mean
 from ejsgen.errors import SpecError
 from ejsrl.world.view3d import ALIASES, PRESETS, check_up, preset_direction
 
@@ -97,7 +99,14 @@ def check_follows(vc: ViewCompiler) -> None:
     """Once the scene is compiled: every ``follow`` names one of its objects."""
     c = vc.c
     for path, p, name in vc.__dict__.get("_views3d", []):
+        link = re.fullmatch(r"(.+)\.link\d+", p.follow or "")
+        if link is not None and link.group(1) in vc.scene_names:
+            continue  # a robot's link: "<robot>.link<i>" (0 the base), as collisions() names them
         if p.follow is not None and p.follow != name and p.follow not in vc.scene_names:
             others = sorted(n for n in vc.scene_names if n != name)
+            hint = did_you_mean(p.follow, others)
+            robot = closest(link.group(1), others) if link is not None and not hint else None
+            if robot is not None:  # a link of a misspelt robot
+                hint = f"did you mean '{robot}{p.follow[len(link.group(1)):]}'?"
             c.errors.append(SpecError(c.loc(path + ("follow",)), f"the view follows '{p.follow}', but the scene has no object of that name",
-                                      did_you_mean(p.follow, others) or (f"objects: {', '.join(others)}" if others else "give the object a name")))
+                                      hint or (f"objects: {', '.join(others)}" if others else "give the object a name")))

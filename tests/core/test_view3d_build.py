@@ -117,3 +117,17 @@ def test_a_bad_set_view_call_stops_the_run_with_the_reason(tmp_path, call, messa
     app = load_app(tmp_path / "app")
     app.step_once()
     assert app.error is not None and message in str(app.error), app.error
+
+
+def test_a_view_may_follow_a_robots_link(tmp_path, capsys):
+    spec = tmp_path / "arm.ejs.yaml"
+    spec.write_text(
+        "ejs: 1\ntitle: Arm\nimports:\n  - from ejsrl.robotics import models\nmodel:\n  variables:\n    q: [0.0, 0.3, 0.2, 0.0, 0.0, 0.0]\n"
+        "view:\n  - scene:\n      - robot: {name: arm, model: \"models.puma560()\", q: q}\n"
+        "      - view: {preset: front, follow: arm.link6, follow_offset: true}\n"
+    )
+    assert main(["validate", str(spec)]) == 0
+    spec.write_text(spec.read_text().replace("follow: arm.link6", "follow: arn.link6"))
+    assert main(["validate", str(spec)]) == 1
+    assert "11:39: error: the view follows 'arn.link6', but the scene has no object of that name; did you mean 'arm.link6'?" \
+        in capsys.readouterr().err

@@ -246,7 +246,8 @@ _KINDS: tuple[Kind, ...] = (
              "z up; alias xz), back (from +y), right (from +x: the y-z plane; alias yz), left (from -x), top (from +z: "
              "the x-y plane, y up; alias xy), bottom (from -z), iso (from [1, -1, 0.75], the default). Not with "
              "`position`."),
-        Prop("follow", "name", None, "A scene object the camera tracks every frame: the target is its position."),
+        Prop("follow", "name", None, "A scene object (or a robot's link, `arm.link3`) the camera tracks every frame: "
+             "the target is its position."),
         Prop("follow_offset", "bool", False, "With `follow`: the camera moves along with the object, keeping its "
              "offset from it (false: it stays where it is and turns to watch the object)."),
     ), draw="none", node_extra={"commanded": None}),
