@@ -15,6 +15,9 @@ if ! ldconfig -p | grep -q 'libEGL_mesa.so.0' || ! ls /usr/lib/*/dri/swrast_dri.
 fi
 # a C compiler: the build compiles FMUs kept as C sources (lab 8's joint drives, tests/fmu)
 command -v cc >/dev/null 2>&1 || need+=(gcc libc6-dev)
+# Debian's nginx for the test of the class-across-machines recipe (specs/deploy.md); only the
+# binary is used, with a config in a temporary folder on loopback ports
+[ -x /usr/sbin/nginx ] || need+=(nginx)
 if [ ${#need[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null

@@ -303,7 +303,8 @@ class Classroom:
             return ("Your earlier simulation ended", f"Its tab was closed for more than {self.grace:.0f} s, so it "
                     "was freed. This is a new simulation.")
         return ("This lab was restarted", "The simulation this address had is gone: the lab (or the copy of it "
-                "that ran your simulation) was restarted. This is a new simulation.")
+                "that ran your simulation) was restarted, or the address belongs to another server of the "
+                "class. This is a new simulation.")
 
     def _settle_waiting(self, token: str, *, expired_only: bool) -> None:
         """Settle the tabs waiting for session ``token``: all of them (its old connection has

@@ -226,10 +226,10 @@ class Access:
 def _suggestion(headers: Any) -> str:
     """The ``--allow-origin`` value that would let a refused request through."""
     origins = headers.get_all("Origin")
-    if len(origins) == 1:
-        return origins[0]
     hosts = headers.get_all("Host")
-    return f"http://{hosts[0]}" if len(hosts) == 1 else "ORIGIN"
+    text = origins[0] if len(origins) == 1 else f"http://{hosts[0]}" if len(hosts) == 1 else "ORIGIN"
+    # a client's text, shown in a log and a 403: printable ASCII, cut
+    return text if re.fullmatch(r"[!-~]{1,200}", text) else "ORIGIN"
 
 
 # -- what a client may send ----------------------------------------------------------------------
@@ -581,9 +581,11 @@ class _Hook:
         def process_request(connection: Any, request: Any) -> Any:
             why = access.refusal(request.headers)
             if why is not None:
-                refusals(logging.WARNING, why[:200], "ejsrl: refused a connection: %s. %s", why,
-                         _hint(request.headers))
-                return connection.respond(http.HTTPStatus.FORBIDDEN, f"This lab refuses the request: {why}.\n")
+                hint = _hint(request.headers)
+                refusals(logging.WARNING, why[:200], "ejsrl: refused a connection: %s. %s", why, hint)
+                proxied = _proxied(request.headers)  # the proxy's operator reads it: tell what to set
+                return connection.respond(http.HTTPStatus.FORBIDDEN, f"This lab refuses the request: {why}.\n"
+                                          + (f"{hint}.\n" if proxied else ""))
             upgrade = "websocket" in (v.lower() for v in request.headers.get_all("Upgrade"))
             address = _address(connection)
             if upgrade and addresses is not None and addresses.full(address):
@@ -649,10 +651,14 @@ def _close_unregistered(guard: MessageGuard, connection: Any) -> None:
         asyncio.ensure_future(connection.close(1008, "no camera message: not a lab page"))
 
 
+def _proxied(headers: Any) -> bool:
+    """True if a proxy says it forwarded the request."""
+    return any(headers.get(h) is not None for h in ("X-Forwarded-For", "X-Forwarded-Host", "X-Real-IP", "Forwarded"))
+
+
 def _hint(headers: Any) -> str:
     """What the teacher should change for a refused request to get through."""
-    forwarded = headers.get("X-Forwarded-Host") or headers.get("X-Forwarded-For")
-    if forwarded is not None:
+    if _proxied(headers):
         return ("It came through a proxy: the proxy must pass the browser's Host header on "
                 "(nginx: proxy_set_header Host $http_host;), and the lab be started with "
                 f"--allow-origin {_suggestion(headers)} (see specs/deploy.md)")
