@@ -69,7 +69,7 @@ class OwnPage:
 
     def advance(self, t_new: float) -> None:
         """Integrate to the model's time ``t_new`` (events located on the way)."""
-        from ejsrl.sim.model import UserCodeError
+        from ejsrl.sim._errors import UserCodeError
         from ejsrl.sim.ode import ZenoError
 
         t, y = self.state()

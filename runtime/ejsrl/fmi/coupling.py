@@ -11,15 +11,17 @@ re-instantiates each FMU) and calls it around each step:
   pages thus see the outputs of the last communication point during a step, as a
   Simulink block with a sample time does (zero-order hold both ways).
 - **model exchange**: the FMU's continuous states are appended to the state of an ODE
-  page, so one solver integrates both: at each evaluation of the rates the FMU gets the
-  time, its states and its inputs, its outputs go into the model variables (the page's
-  rates may use them), and its derivatives join the page's rates. After each step the
-  FMU is told the step was accepted; events it asks for (step or time events, a sign
-  change of an event indicator) are handled then, at the end of the step.
+  page (or of the FMU's own solver when the model has none), so one solver integrates
+  both; events follow the FMI state machine (:mod:`ejsrl.fmi._me`): state events are
+  located inside the step by the same engine as the spec's own ``events:``
+  (:mod:`ejsrl.sim._events`), time events end a step exactly, parameters and discrete
+  inputs are set in event mode.
 
-A failing FMU call raises :class:`~ejsrl.sim.model.UserCodeError` with the FMU's own
-log messages and the spec line of the FMU, so the app pauses and shows it (a headless
-run exits non-zero with it).
+A failing FMU call raises :class:`~ejsrl.sim._errors.UserCodeError` naming the FMU and
+the call, with the FMU's own log messages (its warnings and errors) and the spec line of
+the FMU, so the app pauses and shows it (a headless run exits non-zero with it). An FMU
+that ends the run itself (``terminateSimulation``) pauses it with its message shown as
+information. This package imports nothing of :mod:`ejsrl.sim.model`: the model drives it.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from ejsrl.fmi._instance import FmuError, FmuInstance, FmuTerminated, read_description, unpacked
-from ejsrl.sim.model import UserCodeError
+from ejsrl.sim._errors import UserCodeError
 
 __all__ = ["FmuDef", "Fmus", "FmuRun"]
 
@@ -156,14 +158,12 @@ class FmuRun:
 
     def _page(self, pages: Sequence[Any]) -> Any:
         """The ODE page ``spec.ode`` that integrates a model-exchange FMU's states."""
-        from ejsrl.sim.model import OdePage
-
         spec = self.spec
         if spec.ode is None:
             from ejsrl.fmi._me import OwnPage
 
             return OwnPage(self.t, spec.method, spec.tolerance, spec.where)
-        if not (0 <= spec.ode < len(pages)) or not isinstance(pages[spec.ode], OdePage):
+        if not (0 <= spec.ode < len(pages)) or not hasattr(pages[spec.ode], "integrator"):  # an ODE page
             raise UserCodeError(f"FMU '{spec.name}': model exchange needs an ODE page to integrate its states", spec.where)
         return pages[spec.ode]
 

@@ -20,23 +20,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
+from ejsrl.sim._errors import UserCodeError
 from ejsrl.sim.names import prelude
 from ejsrl.sim.world_access import WorldAccess, WorldFunctionsAccess
 
 __all__ = ["ModelBase", "CodePage", "OdePage", "UserCodeError", "SetValueError", "Controller", "locate_error"]
-
-
-class UserCodeError(Exception):
-    """An error raised by the spec's code, with its spec location.
-
-    ``message``: what went wrong, in words; ``where``: ``"file:line:col"`` in the spec
-    (empty if unknown).
-    """
-
-    def __init__(self, message: str, where: str = "") -> None:
-        super().__init__(f"{where}: {message}" if where else message)
-        self.message = message
-        self.where = where
 
 
 class SetValueError(ValueError):
