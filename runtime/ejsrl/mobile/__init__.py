@@ -19,7 +19,7 @@ Units: metres, radians, seconds; a pose is ``(x, y, theta)``.
 from __future__ import annotations
 
 from ._util import angdiff, wrap
-from .control import follow_line, lookahead_point, move_to_point, move_to_pose, pure_pursuit
+from .control import follow_line, lookahead_point, move_to_point, move_to_pose, pose_direction, pure_pursuit
 from .drawing import chi2_2dof, ellipse_points, vehicle_outline
 from .ekf import EKF
 from .grid import BinaryOccupancyGrid, OccupancyGrid
@@ -32,5 +32,5 @@ __all__ = [
     "AStarPlanner", "Bicycle", "BinaryOccupancyGrid", "DiffSteer", "DistanceTransformPlanner", "DstarPlanner",
     "EKF", "LandmarkMap", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "RangeBearingSensor", "SE2",
     "Unicycle", "VehicleBase", "angdiff", "chi2_2dof", "ellipse_points", "follow_line", "lookahead_point",
-    "move_to_point", "move_to_pose", "path_length", "pure_pursuit", "vehicle_outline", "wrap",
+    "move_to_point", "move_to_pose", "path_length", "pose_direction", "pure_pursuit", "vehicle_outline", "wrap",
 ]

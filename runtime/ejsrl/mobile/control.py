@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from ._util import Array, angdiff, vector
 
-__all__ = ["move_to_point", "move_to_pose", "follow_line", "pure_pursuit", "lookahead_point"]
+__all__ = ["move_to_point", "move_to_pose", "pose_direction", "follow_line", "pure_pursuit", "lookahead_point"]
 
 
 def _steer(v: float, omega: float, L: float | None) -> Array:
@@ -37,8 +37,17 @@ def move_to_point(x: ArrayLike, goal: ArrayLike, *, Kv: float = 0.5, Kh: float =
     return np.array([Kv * math.hypot(dx, dy), Kh * heading])
 
 
+def pose_direction(x: ArrayLike, goal: ArrayLike) -> int:
+    """+1 if the goal lies ahead of the vehicle (its bearing within +-pi/2 of the
+    heading), -1 if behind: the direction to give :func:`move_to_pose` for a whole
+    manoeuvre (chosen once, so it cannot switch back and forth on the way)."""
+    x = vector(x, 3, "x")
+    g = np.asarray(goal, dtype=float)
+    return 1 if abs(angdiff(math.atan2(g[1] - x[1], g[0] - x[0]), x[2])) <= math.pi / 2 else -1
+
+
 def move_to_pose(x: ArrayLike, goal: ArrayLike, *, Krho: float = 1.0, Kalpha: float = 6.0, Kbeta: float = -6.0,
-                 L: float | None = 1.0, backwards: bool = True) -> Array:
+                 L: float | None = 1.0, direction: int = 0) -> Array:
     """Drive to the pose ``goal = (x, y, theta)`` in polar coordinates: ``rho`` the distance
     to the goal, ``alpha`` the goal's bearing from the heading, ``beta = theta* - theta -
     alpha``; ``v = Krho rho``, ``omega = Kalpha alpha + Kbeta beta`` (stable for ``Krho > 0``,
@@ -46,8 +55,11 @@ def move_to_pose(x: ArrayLike, goal: ArrayLike, *, Krho: float = 1.0, Kalpha: fl
     ``s^2 + (Kalpha - Krho) s - Krho Kbeta``: the defaults put them at -2 and -3, faster than
     rho's -Krho, so a car (whose turn rate vanishes with its speed) is aligned before it
     stops (Kalpha = 5, Kbeta = -2 leave up to 0.06 rad). A goal behind the vehicle
-    (|alpha| > pi/2) is reached in reverse when ``backwards``. Bicycle steering
-    ``atan(omega L / v)``."""
+    (|alpha| > pi/2) is reached in reverse with ``direction=0`` (decided at each call:
+    on a goal near the vehicle's side the choice can flip from one call to the next and
+    the vehicle dither in place; a simulation should fix it for the manoeuvre with
+    ``direction=pose_direction(x_start, goal)``: 1 forwards, -1 in reverse). Bicycle
+    steering ``atan(omega L / v)``."""
     x = vector(x, 3, "x")
     g = vector(goal, 3, "goal")
     dx, dy = g[0] - x[0], g[1] - x[1]
@@ -56,7 +68,7 @@ def move_to_pose(x: ArrayLike, goal: ArrayLike, *, Krho: float = 1.0, Kalpha: fl
     th = x[2]
     alpha = angdiff(bearing, th)
     sign = 1.0
-    if backwards and abs(alpha) > math.pi / 2:
+    if direction < 0 or (direction == 0 and abs(alpha) > math.pi / 2):
         th = th + math.pi  # drive the rear first: the same law seen from the back
         alpha = angdiff(bearing, th)
         sign = -1.0
