@@ -1,0 +1,170 @@
+"""The mobile-robot labs (issue #27) in a real browser: a car driven to the pose a student
+drags and turns with the keys ends on that pose, drawn where the model is; EKF localisation
+driven from the keyboard draws the filter's 95 % ellipse from the model's own covariance,
+and its sensor switch works from the keyboard. Their gallery pictures are taken here."""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from testkit.browser import wait_until
+
+SLOW = 120_000
+
+
+def _serve(name: str):  # type: ignore[no-untyped-def]
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from testkit import EXAMPLES
+
+    tmp = tempfile.TemporaryDirectory()
+    app = load_app(build(EXAMPLES / f"{name}.ejs.yaml", Path(tmp.name) / "app"))
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
+    return tmp, app, server
+
+
+@pytest.fixture(scope="module")
+def car_lab():
+    tmp, app, server = _serve("mobile_car_to_pose")
+    try:
+        yield app, f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+        tmp.cleanup()
+
+
+@pytest.fixture(scope="module")
+def ekf_lab():
+    tmp, app, server = _serve("mobile_ekf_localisation")
+    try:
+        yield app, f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+        tmp.cleanup()
+
+
+def open_tab(context, url: str):  # type: ignore[no-untyped-def]
+    page = context.new_page()
+    page.bring_to_front()
+    page.set_default_timeout(SLOW)
+    page.goto(url)
+    page.wait_for_selector("canvas.ejs2d-c[data-drawn]", timeout=SLOW)
+    wait_until(lambda: "/s/" in page.evaluate("location.href"), what="the tab's session address")
+    return page
+
+
+def session_model(app, page):  # type: ignore[no-untyped-def]
+    token = re.search(r"/s/([A-Za-z0-9_-]+)/", page.evaluate("location.href")).group(1)
+    return app.classroom.sessions[token].app
+
+
+def css(page, x: float, y: float) -> tuple[float, float]:  # type: ignore[no-untyped-def]
+    """Where the world point (x, y) is on the page (the panel's own mapping)."""
+    box = page.locator("canvas.ejs2d-c").first.bounding_box()
+    px, py = page.evaluate(f"window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], {x}, {y})")
+    return box["x"] + px, box["y"] + py
+
+
+def polylines(page) -> list[np.ndarray]:  # type: ignore[no-untyped-def]
+    """Every polyline/polygon of the panel's last frame, decoded from the page (float32)."""
+    frame = json.loads(page.evaluate("Object.values(window.__ejs2d.panels)[0].text"))
+    out = []
+
+    def walk(node):  # type: ignore[no-untyped-def]
+        if isinstance(node, dict):
+            if node.get("t") == "polyline" and "xy" in node:
+                out.append(np.frombuffer(base64.b64decode(node["xy"]), dtype="<f4").reshape(-1, 2).astype(float))
+            for v in node.values():
+                walk(v)
+        elif isinstance(node, list):
+            for v in node:
+                walk(v)
+
+    walk(frame)
+    return out
+
+
+def drawn(page, pts: np.ndarray, tol: float = 1e-4) -> bool:  # type: ignore[no-untyped-def]
+    """Is a polyline with exactly these points (to float32) in the panel's frame?"""
+    return any(p.shape[0] >= len(pts) and np.abs(p[:len(pts)] - pts).max() < tol for p in polylines(page))
+
+
+@pytest.mark.browser
+def test_the_car_drives_to_the_pose_dragged_and_turned_by_the_student(car_lab, browser_context):
+    from ejsrl.mobile import vehicle_outline
+    from testkit.browser import save_shot
+
+    app, url = car_lab
+    page = open_tab(browser_context, url)
+    try:
+        lab = session_model(app, page)
+        m = lab.model
+        # drag the goal (green disc) from (5, 3) to (3, -4)
+        page.mouse.move(*css(page, m.gx, m.gy))
+        page.mouse.down()
+        page.mouse.move(*css(page, 3.0, -4.0), steps=6)
+        page.mouse.up()
+        wait_until(lambda: abs(m.gx - 3.0) < 0.1 and abs(m.gy + 4.0) < 0.1, what="the goal dragged to (3, -4)")
+        gx, gy = m.gx, m.gy
+        # the panel has the keyboard since the drag: two turns of -15 degrees
+        page.keyboard.press("ArrowRight")
+        page.keyboard.press("ArrowRight")
+        wait_until(lambda: m.goal_heading == 60.0, what="ArrowRight twice: the goal turned to 60 degrees")
+        page.keyboard.press("Space")
+        wait_until(lambda: lab.is_playing(), what="Space: play")
+        wait_until(lambda: m.t > 4.0, timeout=60, what="4 s of driving")
+        save_shot(page, "mobile_car_to_pose")  # on its way (the gallery's picture)
+        wait_until(lambda: m.dist < 1e-3 and abs(m.herr) < 0.05, timeout=120, what="the car on the goal pose")
+        assert math.hypot(m.x - gx, m.y - gy) < 1e-3
+        assert abs((m.theta - math.radians(60.0) + math.pi) % (2 * math.pi) - math.pi) < 1e-3
+        page.keyboard.press("Space")
+        wait_until(lambda: not lab.is_playing(), what="Space: pause")
+        # the car is drawn where the model is (its outline, as vehicle_outline gives it)
+        car = np.vstack([vehicle_outline([m.x, m.y, m.theta], 1.6 * m.L)])
+        wait_until(lambda: drawn(page, car, tol=1e-3), what="the car outline at the model's pose")
+    finally:
+        page.close()
+
+
+@pytest.mark.browser
+def test_ekf_lab_draws_its_covariance_ellipse_and_takes_the_keyboard(ekf_lab, browser_context):
+    from ejsrl.mobile import ellipse_points
+    from testkit.browser import save_shot
+
+    app, url = ekf_lab
+    page = open_tab(browser_context, url)
+    try:
+        lab = session_model(app, page)
+        m = lab.model
+        page.mouse.click(*css(page, 10.5, -10.5))  # an empty corner: the panel takes the keyboard
+        page.keyboard.press("ArrowUp")
+        wait_until(lambda: m.speed == 1.25, what="ArrowUp: faster")
+        page.keyboard.press("ArrowLeft")
+        wait_until(lambda: abs(m.steer - 0.2) < 1e-12, what="ArrowLeft: steer left")
+        page.keyboard.press("Space")
+        wait_until(lambda: m.t > 15.0, timeout=120, what="15 s of driving")
+        page.keyboard.press("Space")
+        wait_until(lambda: not lab.is_playing(), what="Space: pause")
+        assert m.err < 0.3 and m.sigma < 0.2
+        ell = ellipse_points(m.magnification**2 * m.P[:2, :2], m.xe[:2], confidence=0.95)
+        wait_until(lambda: drawn(page, ell), what="the 95 % ellipse of the model's P on the panel")
+        save_shot(page, "mobile_ekf_localisation")
+        page.keyboard.press("s")
+        wait_until(lambda: not m.sensor_on, what="S: the sensor off")
+        t0, s0 = m.t, m.sigma
+        page.keyboard.press("Space")
+        wait_until(lambda: m.t > t0 + 10.0, timeout=120, what="10 s of dead reckoning")
+        page.keyboard.press("Space")
+        assert m.sigma > 2 * s0  # without the sensor the uncertainty grows
+    finally:
+        page.close()
