@@ -225,3 +225,61 @@ def test_tabs_served_from_two_processes_each_run_their_own_simulation(built, tmp
             if p is not None:
                 p.close()
         server.stop()
+
+
+@pytest.mark.browser
+def test_a_session_resumes_only_in_the_browser_that_created_it(classroom, browser_context):
+    """Issue #30: the address alone no longer takes a closed tab's simulation over (a projector,
+    a copied link): the browser's cookie must match. Another browser is played by this one with
+    its cookies cleared (and given back afterwards)."""
+    app, url = classroom
+    a = open_tab(browser_context, url)
+    other = mine = gone = None
+    saved = []
+    try:
+        cookie = next(c for c in browser_context.cookies() if c["name"] == "ejsrl_browser")
+        assert cookie["httpOnly"] and cookie["sameSite"] == "Strict"
+        assert "ejsrl_browser" not in a.evaluate("document.cookie")  # the page's scripts cannot read it
+        session = session_of(app, a)
+        slider = a.get_by_role("slider").first
+        slider.focus()
+        slider.press("End")
+        wait_until(lambda: abs(session.app.model.L - 2.0) < 1e-9, what="L == 2")
+        where = address(a).split("?")[0]
+        a.close()
+        wait_until(lambda: session.client_id is None, what="the tab to be gone")
+
+        saved = browser_context.cookies()
+        browser_context.clear_cookies()  # another browser, the same address
+        other = front(browser_context.new_page())
+        other.goto(where)
+        other.get_by_text("Length").first.wait_for(timeout=SLOW)
+        other.locator(".mantine-Notification-title", has_text="A simulation of your own").wait_for()
+        wait_until(lambda: "/s/" in address(other) and address(other).split("?")[0] != where,
+                   what="the other browser's own address")
+        assert session_of(app, other) is not session
+        assert other.get_by_role("slider").first.get_attribute("aria-valuenow") == "1"
+        other.close()
+        other = None
+
+        browser_context.clear_cookies()
+        browser_context.add_cookies(saved)  # the student's own browser again
+        mine = front(browser_context.new_page())
+        mine.goto(where)
+        mine.get_by_text("Length").first.wait_for(timeout=SLOW)
+        wait_until(lambda: session.client_id is not None, what="the student's session to be taken back")
+        assert address(mine).split("?")[0] == where
+        wait_until(lambda: mine.get_by_role("slider").first.get_attribute("aria-valuenow") == "2",
+                   what="the slider where the student left it")
+        assert mine.locator(".mantine-Notification-title", has_text="A simulation of your own").count() == 0
+
+        # an address this lab never gave (it was restarted since): the page says so
+        gone = front(browser_context.new_page())
+        gone.goto(f"{url}/s/NeverGivenToken1234/")
+        gone.locator(".mantine-Notification-title", has_text="This lab was restarted").wait_for()
+    finally:
+        for p in (other, mine, gone):
+            if p is not None:
+                p.close()
+        if saved and not any(c["name"] == "ejsrl_browser" for c in browser_context.cookies()):
+            browser_context.add_cookies(saved)
