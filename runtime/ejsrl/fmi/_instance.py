@@ -148,6 +148,9 @@ class FmuInstance:
             said = self.said(start)
             status = getattr(exc, "status", None)
             how = f"returned {_STATUS[status]}" if isinstance(status, int) and 0 <= status < len(_STATUS) else f"failed ({exc})"
+            function = getattr(exc, "function", None)  # FMPy's FMICallException names the FMI function
+            if isinstance(function, str) and function != what:
+                what = f"{what}: {function}"
             raise FmuError(f"FMU '{self.name}': {what} {how}", said) from None
 
     def _logger_text(self, status: int, category: bytes | None, message: bytes | None) -> None:
