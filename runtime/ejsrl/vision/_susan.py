@@ -713,6 +713,7 @@ def susan_corners(
     max_corners: int | None = None,
     subpixel: bool = True,
     return_response: bool = False,
+    blur: float | str | None = None,
 ) -> NDArray[np.float64] | tuple[NDArray[np.float64], NDArray[np.float32]]:
     """SUSAN corner detector (Smith and Brady 1997).
 
@@ -730,6 +731,14 @@ def susan_corners(
     ``cv2.cornerSubPix``: the true vertex of an L corner, the saddle of an X-junction), kept
     when it stays within 3 pixels; the pixel found otherwise is the one just inside the
     corner, up to about 1.5 px from the vertex.
+
+    ``blur``: the image's blur, for blurred pictures (a defocused or moving camera, a
+    virtual camera's ``blur`` option): None (default) searches the image as it is; a number
+    is the camera's blur sigma in pixels; ``"auto"`` reads it from the image
+    (``_susan_scale.estimate_blur``, ~1.5 ms at 640x480). When it reads above 1 px the mask
+    is widened in proportion (the image averaged down by 1.7 sigma, the corners brought back
+    and refined on the full image: see ``ejsrl.vision._susan_scale``); sharper images are
+    searched as with None.
 
     The response is ``g - n`` where the USAN area ``n < g``. The false-positive tests
     (see ``_corner_tests``: the centroid and contiguity tests of the original, and a test
@@ -759,6 +768,17 @@ def susan_corners(
         raise ValueError(f"susan_corners: nms_radius must be a whole number of pixels >= 0 (3: a 7 x 7 window), got {nms_radius}")
     if max_corners is not None and (int(max_corners) != max_corners or max_corners < 0):
         raise ValueError(f"susan_corners: max_corners must be a whole number >= 0, or None for no limit, got {max_corners}")
+    if blur is not None:
+        from ejsrl.vision import _susan_scale
+
+        _sigma, f = _susan_scale.blur_scale(gray, blur)
+        if f > 1.0:
+            opts = dict(g=g, nms_radius=nms_radius, quality=quality, min_response=min_response, max_corners=max_corners)
+            pts, resp = _susan_scale.scaled_corners(
+                gray, f, lambda small: susan_corners(small, t, subpixel=False, return_response=True, **opts),
+                (lambda full, p: _refine(full, p, _kernels())) if subpixel else None,
+            )
+            return (pts, resp) if return_response else pts
     H, W = gray.shape
     gthr = 0.5 * len(SUSAN_MASK) if g is None else float(g)
     g100 = gthr * _SCALE
