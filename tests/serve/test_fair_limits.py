@@ -213,3 +213,44 @@ def test_a_reload_waiting_for_its_old_connection_holds_no_thread(classroom):
 
     took = run_async(scenario(), timeout=120)
     assert took < 1.5, took
+
+
+def test_a_tab_shown_few_frames_is_told_so(classroom, monkeypatch):
+    """A tab whose frames are held (its connection cannot take them) at 2 of 5 frames shown
+    reads about 12 frames/s in its time readout; a tab shown every frame reads nothing of it."""
+    app, server = classroom
+    slow_ids: set[int] = set()
+    ticks: dict[int, int] = {}
+    original = type(app.classroom).backlog
+
+    def backlog(self, client_id):
+        if client_id in slow_ids:
+            ticks[client_id] = ticks.get(client_id, 0) + 1
+            return 0 if ticks[client_id] % 5 == 0 else 10
+        return original(self, client_id)
+
+    monkeypatch.setattr(type(app.classroom), "backlog", backlog)
+
+    def readouts(client: Client) -> list[str]:
+        out = []
+        for m in client.received:
+            if m.get("type") in ("GuiUpdateMessage", "GuiMarkdownMessage"):
+                text = str(m.get("updates", m.get("props", {})).get("_markdown", ""))
+                if text.startswith("**t** ="):
+                    out.append(text)
+        return out
+
+    async def scenario() -> None:
+        slow, quick = await tab(server), await tab(server)
+        slow_ids.add(app.classroom.sessions[token_of(slow)].client_id)
+        for c in (slow, quick):
+            await c.send(gui_update(c.uuid_of("GuiButtonMessage", "Play"), value=True))
+        await slow.until(lambda: any("frames/s" in t for t in readouts(slow)), "the slow tab's note", timeout=20)
+        note = next(t for t in readouts(slow) if "frames/s" in t)
+        shown = float(re.search(r"showing (\d+) frames/s \(the server is busy\)", note).group(1))
+        assert 8 <= shown <= 16, note
+        assert not any("frames/s" in t for t in readouts(quick))
+        for c in (slow, quick):
+            await c.close()
+
+    run_async(scenario(), timeout=60)

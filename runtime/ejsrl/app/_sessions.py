@@ -70,6 +70,8 @@ VISER_WINDOW = 1.0 / 60.0 + 0.004
 #: a tab reloading may connect before its old connection is seen to close: how long the
 #: new one waits for the old one to go before it is given a session of its own (seconds)
 RELOAD_WAIT_SECONDS = 2.0
+#: seconds over which the frames shown to a tab are counted (``app.shown_fps``)
+SHOWN_WINDOW = 2.0
 #: how many addresses of freed sessions are remembered (to tell their tabs why the lab is new)
 FREED_MEMORY = 4096
 #: the share of the machine's cores that sessions may use when the default limit is derived
@@ -127,6 +129,9 @@ class Session:
         self.behind_since: float | None = None
         #: frames in a row at which the tab had not been sent the frame before
         self.unsent_ticks = 0
+        #: frames shown to the tab (not held) since ``shown_mark`` (clock seconds), for ``app.shown_fps``
+        self.shown_frames = 0
+        self.shown_mark: float | None = None
         self.freed = False
         #: serialises taking the session (a tab connecting) and leaving it (a tab closing)
         self.lock = threading.RLock()
@@ -149,10 +154,27 @@ class Session:
         view.hold = self.unsent_ticks >= 1 + math.ceil(VISER_WINDOW / period)
         app.frame()
         now = self.classroom.clock()
+        self._count_shown(app, now, shown=not view.hold)
         if not (app.is_playing() or now < self.awake_until):
             return None
         nxt = due + period
         return nxt if nxt >= now else now  # behind: no catching up, back of the queue
+
+
+    def _count_shown(self, app: Any, now: float, *, shown: bool) -> None:
+        """Keep ``app.shown_fps``: frames a second the tab was sent over the last
+        :data:`SHOWN_WINDOW` seconds of play (None while paused), which its time readout
+        reports when it is low."""
+        if not app.is_playing():
+            app.shown_fps, self.shown_mark = None, None
+            return
+        if self.shown_mark is None:
+            self.shown_mark, self.shown_frames = now, 0
+            return
+        self.shown_frames += 1 if shown else 0
+        if now - self.shown_mark >= SHOWN_WINDOW:
+            app.shown_fps = self.shown_frames / (now - self.shown_mark)
+            self.shown_mark, self.shown_frames = now, 0
 
 
 class Classroom:

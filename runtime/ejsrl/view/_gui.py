@@ -110,6 +110,9 @@ def has_scene(elements: Any) -> bool:
 
 #: below this measured speed (1.0: as fast as the lab asks) the readout says the server is busy
 SLOW_SPEED = 0.95
+#: below this many frames a second shown to a tab (classroom serving: ``app.shown_fps``,
+#: set by :mod:`ejsrl.app._sessions`) the readout says so too
+SLOW_SHOWN_FPS = 20.0
 
 
 def slow_text(speed: float, realtime: bool) -> str:
@@ -600,6 +603,10 @@ class Panel:
         speed = getattr(self.app, "speed", None) if self.app.is_playing() else None
         if speed is not None and speed < SLOW_SPEED:
             text += slow_text(speed, bool(getattr(getattr(self.app, "sim", None), "realtime", False)))
+        else:
+            shown = getattr(self.app, "shown_fps", None) if self.app.is_playing() else None
+            if shown is not None and shown < SLOW_SHOWN_FPS:
+                text += f" · *showing {shown:.0f} frames/s (the server is busy)*"
         if text != self._readout_shown:
             set_markdown(self.readout, text)
             self._readout_shown = text
