@@ -129,8 +129,30 @@ def test_a_stretching_spring_is_sent_as_poses_until_its_length_leaves_the_pieces
         sent_points += "SceneNodeUpdateMessage" in got
         if "SceneNodeUpdateMessage" not in got:  # a pose frame: exactly the new segment
             assert covers_exactly(mirror, "spring", np.zeros(3), end)
-    # points only when the length leaves [h, 2h] (h = length / 1.4 when sent): 1.43x, then 2.04x of 1
-    assert sent_points == 2, sent_points
+    # points only when the length leaves [h, 2h]: past 4/3 (h = 1/1.5 when made), then while it
+    # is within twice the shortest (1) at each new longest the band has not room for (h the
+    # middle, by ratio, of longest / 2 and shortest), then once past 2 (h = 0.75 * 2.1): a
+    # quarter of the frames of a steady stretch, none once it stays in its band
+    assert sent_points == 5, sent_points
+
+
+def test_a_spring_oscillating_within_twice_its_shortest_length_is_sent_as_poses_once_it_has_swung(mirrored):
+    world, mirror, sent = mirrored
+    spring = world.add(Line("spring", points=np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -0.7]])))  # made at its shortest
+    mirror.sync(world)
+    frames_with_points = []
+    for k, t in enumerate(np.arange(0.0, 6.0, 1 / 30)):
+        length = 1.0 - 0.3 * np.cos(7 * t)  # from 0.7 (h = 0.47) up to 1.3: within twice the shortest
+        end = np.array([0.3 * np.sin(2 * t), 0.0, -length])
+        spring.set(points=np.array([[0.0, 0.0, 0.0], end]))
+        sent.clear()
+        mirror.sync(world)
+        got = kinds(sent, f"{ROOT}/spring/g0") | kinds(sent, f"{ROOT}/spring/g1")
+        if "SceneNodeUpdateMessage" in got:
+            frames_with_points.append(k)
+        else:
+            assert covers_exactly(mirror, "spring", np.zeros(3), end)
+    assert 1 <= len(frames_with_points) <= 3 and frames_with_points[-1] < 30, frames_with_points  # within its first swing
 
 
 def test_a_line_whose_shape_changes_is_sent_as_points(mirrored):

@@ -10,9 +10,11 @@ its shape allows, and its points are sent only when its shape changes:
 - a line of two distinct points (a rod, a spring drawn straight, a beam) is two *pieces*, each a
   segment of a fixed length ``h`` posed at one end and pointing at the other: together they
   cover the segment exactly while its length ``l`` stays within ``[h, 2h]``, so it stretches,
-  shrinks, turns and moves by poses alone; only a length leaving that band sends new points
-  (``h = l / 1.4``, in the pieces' current frames); a one-piece line of two points that
-  stretches becomes two pieces (drawn anew once);
+  shrinks, turns and moves by poses alone (``h = l / 1.5`` when made: a third shorter or
+  longer); a length leaving that band sends new pieces, in the pieces' current frames, that
+  cover every length seen so far when the longest is at most twice the shortest (a spring
+  oscillating within that is then sent by poses alone), else with room the way it went; a
+  one-piece line of two points that stretches becomes two pieces (drawn anew once);
 - any other line is one segment set whose rigid motion (every distance kept: a turning
   polygon, a link drawn as a polyline) is fitted to the points last sent by Kabsch's method
   and sent as the pose of its geometry; a new shape (a growing trail, a chain of springs)
@@ -21,6 +23,7 @@ its shape allows, and its points are sent only when its shape changes:
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -34,9 +37,10 @@ __all__ = ["RIGID_LINES", "LineDraw", "rigid_fit", "polyline_segments"]
 #: path does (the browser tests measure both)
 RIGID_LINES = True
 
-#: a two-point line's pieces are ``length / PIECE_RATIO`` long when (re)made: it may then
-#: shrink to 1/1.4 or stretch to 2/1.4 of that length before its points are sent again
-PIECE_RATIO = 1.4
+#: a two-point line's pieces are ``length / PIECE_RATIO`` long when made: it may then shrink
+#: to 2/3 or stretch to 4/3 of that length (a spring about its rest length) before its points
+#: are sent again
+PIECE_RATIO = 1.5
 
 
 def polyline_segments(points: Any) -> np.ndarray:
@@ -119,9 +123,11 @@ class _Handle:
 class LineDraw:
     """How one line (or trail) node is drawn: one segment set, or two pieces for two points."""
 
-    def __init__(self, handles: list[_Handle], pieces: bool) -> None:
+    def __init__(self, handles: list[_Handle], pieces: bool, length: float = 0.0) -> None:
         self.handles = handles
         self.pieces = pieces
+        #: for pieces: the shortest and longest lengths seen (metres)
+        self.seen = (length, length)
         #: the style last set (colour, width, shown): set again only when it changes
         self.sent: tuple | None = None
 
@@ -149,7 +155,7 @@ class LineDraw:
                 h = scene.add_line_segments(f"{base}/g{i}", polyline_segments(local), colors=color, thickness=width,
                                             thickness_units="screen")
                 handles.append(_Handle(h, local))
-            draw = cls(handles, True)
+            draw = cls(handles, True, length)
         draw.sent = (tuple(color), width, len(pts) >= 2)
         return draw
 
@@ -189,9 +195,16 @@ class LineDraw:
             return False
         d = (pts[1] - pts[0]) / length
         piece = float(np.linalg.norm(a.local[1] - a.local[0]))
+        lo, hi = min(self.seen[0], length), max(self.seen[1], length)
+        self.seen = (lo, hi)
         if not (piece * (1.0 - 1e-9) <= length <= 2.0 * piece * (1.0 + 1e-9)):
-            # out of the pieces' band: new pieces, sent in their current frames (shown a frame later)
-            piece = length / PIECE_RATIO
+            # out of the pieces' band: new pieces, sent in their current frames (shown a frame
+            # later): for every length seen if one piece length covers them all (the middle of
+            # those that do, by ratio: room both ways), else with room the way it went
+            if hi <= 2.0 * lo:
+                piece = math.sqrt(hi / 2.0 * lo)
+            else:
+                piece = 0.75 * length if length > piece else 0.55 * length
             a.points(np.array([pts[0], pts[0] + piece * d]))
             b.points(np.array([pts[1], pts[1] - piece * d]))
             return True
