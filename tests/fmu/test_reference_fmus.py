@@ -248,12 +248,13 @@ def test_the_bouncing_ball_with_its_restitution_changed_mid_run_bounces_when_fmp
     assert len(ratios) >= 4 and np.ptp(ratios) > 0.1
 
 
-def test_the_stairs_time_events_land_exactly_on_the_announced_times(tmp_path):
+@pytest.mark.parametrize("version", [2, 3])
+def test_the_stairs_time_events_land_exactly_on_the_announced_times(tmp_path, version):
     """Stair's counter feeds an ODE state: x' = counter integrates to the staircase's area only
     if every step ends at the announced event time (dt = 0.3 puts them mid-step)."""
     from ejsgen.cli import build
 
-    fmu = reference(2, "Stair")
+    fmu = reference(version, "Stair")
     (tmp_path / fmu.name).write_bytes(fmu.read_bytes())
     spec = tmp_path / "stair.ejs.yaml"
     spec.write_text(textwrap.dedent("""\
