@@ -22,7 +22,7 @@ Images are NumPy arrays, and every image function checks its input the same way:
 
 A bad input is a ``ValueError`` that says what to do, never an OpenCV error or a crash.
 Features are ``(x, y)`` = (column, row) pixel coordinates, as in OpenCV. SUSAN corners run
-compiled, 3x faster on one thread (5x on two) and outside the GIL, when numba is installed: ``pip install 'ejsgen[fast]'``
+compiled, about 3x faster than the NumPy path on one thread and outside the GIL, when numba is installed: ``pip install 'ejsgen[fast]'``
 (the same corners either way; ``EJSRL_SUSAN=numpy`` forces the NumPy path). Everything public
 is importable from here:
 

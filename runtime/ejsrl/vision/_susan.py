@@ -29,10 +29,11 @@ Speed: with numba installed (``pip install 'ejsgen[fast]'``), ``susan_corners`` 
 compiled (``_susan_numba``: the same corners, response and sub-pixel positions, bit for bit,
 3x as fast on one thread, 5x on two, outside the GIL). Outside a served class a call runs them on two
 threads (``set_threads``; a served class sets one, its sessions already sharing the cores). On
-the 18 real photographs scikit-image bundles, at 640x480, it takes 1.1-1.2x the time of
-``cv2.goodFeaturesToTrack`` (on OpenCV's 2 threads) at the median and at most 2.9x (grass, a
-texture: 2569 corners, each refined; page 2.6-2.7x, gravel 2.4x). The NumPy path: 5.3x at the
-median, 15x on grass (bench/vision.py).
+one thread each in CPU time (a served class; bench/vision.py, 2026-11-27, a loaded 2-core
+machine) it takes 1.6x the time of ``cv2.goodFeaturesToTrack`` at the median over 40
+photographs at 640x480 and 5.1x at worst (textures: grass, a forest slope, page, gravel: 8 of
+40 over 3x); idle on two threads it measured 1.1-1.2x and 2.9x. The NumPy path: 4.6x at the
+median, 16x at worst. Blurred pictures: ``blur=`` (``_susan_scale``).
 Without numba, this NumPy/OpenCV code. The kernels are compiled (a child process writes
 numba's cache, once per machine) or loaded in the background from the first call, this code
 running until they are ready (``_Compiled``).
@@ -86,8 +87,9 @@ FAST_HINT = "SUSAN's compiled kernels need numba: pip install 'ejsgen[fast]' (or
 class _Compiled:
     """numba's kernels, compiled (or loaded from numba's cache) once per process in a thread.
 
-    The first process on a machine compiles them (about 12 s on a 2-core machine); later ones
-    load them from numba's cache (about 0.7 s, numba's import included). With
+    The first process on a machine compiles them (12 s on an idle 2-core machine, 17-27 s on
+    a loaded one); later ones load them from numba's cache (0.7 s idle, 1.6-2.2 s loaded,
+    numba's import included). With
     ``BACKEND = "auto"`` no SUSAN call waits for that: until the kernels are ready the NumPy
     path runs (the same corners).
 
