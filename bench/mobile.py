@@ -10,6 +10,8 @@ with a check that both give the same answer first.
   house): the path lengths must be equal;
 - EKF localisation and EKF-SLAM, 100 s at 10 Hz (1,000 steps, 20 landmarks) with the same
   seeds: the final estimates must be equal;
+- a particle filter (1,000 particles, uniform start, 20 s): random, so compared by the
+  median final error over seeds;
 - a vehicle (Bicycle) stepped 1,000 times with odometry noise.
 
 Needs the ``bench`` extra (``pip install roboticstoolbox-python``). Options: ``--repeat N``
@@ -158,6 +160,39 @@ def main() -> None:
         same = xr.shape == xo.shape and bool(np.allclose(xr, xo, atol=1e-9))
         r = report(f"EKF {kind}, 1,000 steps, 20 landmarks", res, f"final estimates equal: {same} (state {xo.shape[0]})")
         met += [(same, f"EKF {kind}: the Toolbox's estimate"), (r > 1, f"EKF {kind} faster: {r:.2f}x")]
+
+    # particle filter: random, so compared by its error over seeds, not bit for bit
+    R = np.diag([0.1, 0.1, math.radians(1.0)]) ** 2
+    Lk = np.diag([0.1, 0.1])
+    errs: dict[str, list[float]] = {"Toolbox ParticleFilter": [], "ejsrl ParticleFilter": []}
+
+    def pf_run(lib: str, seed: int):  # type: ignore[no-untyped-def]
+        def run():  # type: ignore[no-untyped-def]
+            mod = rtb if lib == "Toolbox ParticleFilter" else M
+            lm = mod.LandmarkMap(20, workspace=10, seed=0)
+            if mod is rtb:
+                veh = rtb.Bicycle(covar=V, control=lambda v, t, x: (1.0, 0.15), animation=None, seed=1)
+                sensor = rtb.RangeBearingSensor(robot=veh, map=lm, covar=W, seed=0, animate=False)
+                pf = rtb.ParticleFilter(veh, sensor, R, Lk, nparticles=1000, seed=seed)
+                pf.run(T=20)
+            else:
+                veh = M.Bicycle(covar=V, control=lambda v, t, x: (1.0, 0.15), seed=1)
+                sensor = M.RangeBearingSensor(veh, lm, covar=W, seed=0)
+                pf = M.ParticleFilter(veh, sensor, R, Lk, nparticles=1000, seed=seed)
+                pf.run(20)
+            e = pf.get_xyt()[-1]
+            errs[lib].append(math.hypot(e[0] - veh.x[0], e[1] - veh.x[1]))
+        return run
+
+    times = {k: [] for k in errs}
+    for seed in range(args.repeat):
+        for lib in (list(errs) if seed % 2 == 0 else list(errs)[::-1]):
+            times[lib].append(cpu(pf_run(lib, seed))[0])
+    res = {k: (float(np.median(v)), None) for k, v in times.items()}
+    er, eo = (float(np.median(errs[k])) for k in errs)
+    r = report("Particle filter, 1,000 particles from a uniform start, 200 steps", res,
+               f"median final position error over {args.repeat} seeds: {er:.3f} m and {eo:.3f} m")
+    met += [(eo < 0.3, f"particle filter localises the car: {eo:.3f} m"), (r > 1, f"particle filter faster: {r:.2f}x")]
 
     def veh_rtb():  # type: ignore[no-untyped-def]
         v = rtb.Bicycle(covar=V, control=drive, animation=None, seed=1)

@@ -9,7 +9,8 @@
   :class:`DistanceTransformPlanner`, :class:`AStarPlanner`, :class:`DstarPlanner` (replans
   when cells change);
 - sensors: :class:`LandmarkMap`, :class:`RangeBearingSensor`, :class:`LaserScanner`;
-- estimation: :class:`EKF` (dead reckoning, localisation, EKF-SLAM);
+- estimation: :class:`EKF` (dead reckoning, localisation, EKF-SLAM), :class:`ParticleFilter`
+  (Monte Carlo localisation);
 - :class:`SE2` poses; drawing helpers for the 2D panel: :func:`ellipse_points`,
   :func:`vehicle_outline`.
 
@@ -23,6 +24,7 @@ from .control import follow_line, lookahead_point, move_to_point, move_to_pose, 
 from .drawing import chi2_2dof, ellipse_points, vehicle_outline
 from .ekf import EKF
 from .grid import BinaryOccupancyGrid, OccupancyGrid
+from .particles import ParticleFilter
 from .planners import AStarPlanner, DistanceTransformPlanner, DstarPlanner, NoPathError, path_length
 from .poses import SE2
 from .sensors import LandmarkMap, LaserScanner, RangeBearingSensor
@@ -30,7 +32,7 @@ from .vehicles import Bicycle, DiffSteer, Omni, Unicycle, VehicleBase
 
 __all__ = [
     "AStarPlanner", "Bicycle", "BinaryOccupancyGrid", "DiffSteer", "DistanceTransformPlanner", "DstarPlanner",
-    "EKF", "LandmarkMap", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "RangeBearingSensor", "SE2",
+    "EKF", "LandmarkMap", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "ParticleFilter", "RangeBearingSensor", "SE2",
     "Unicycle", "VehicleBase", "angdiff", "chi2_2dof", "ellipse_points", "follow_line", "lookahead_point",
     "move_to_point", "move_to_pose", "path_length", "pose_direction", "pure_pursuit", "vehicle_outline", "wrap",
 ]

@@ -82,7 +82,15 @@ class RangeBearingSensor:
 
     def h(self, x: ArrayLike, landmark: int | ArrayLike | None = None) -> Array:
         """Range and bearing (2,) from pose x (3,) to one landmark (its id or its
-        coordinates), or (N, 2) to every landmark when None."""
+        coordinates), or (N, 2) to every landmark when None; from (m, 3) poses to one
+        landmark, (m, 2)."""
+        X = np.asarray(x, dtype=float)
+        if X.ndim == 2:
+            if landmark is None:
+                raise ValueError("h: for many poses give one landmark")
+            p = self._lm(landmark)
+            dx, dy = p[0] - X[:, 0], p[1] - X[:, 1]
+            return np.column_stack((np.hypot(dx, dy), angdiff(np.arctan2(dy, dx), X[:, 2])))
         xp, yp, th = (float(v) for v in vector(x, 3, "x"))
         if landmark is None:
             dx, dy = self.map.landmarks[0] - xp, self.map.landmarks[1] - yp
