@@ -78,13 +78,15 @@ def test_the_pool_has_the_threads_it_was_given():
 
 
 def test_the_default_limit_follows_the_cores_and_the_lab_cost():
-    assert _sessions.default_max_sessions(0.001, 30.0, cpus=2) == 28  # 1.6 cores / ((1.5 + 0.4) ms * 30)
-    assert _sessions.default_max_sessions(0.001, 30.0, cpus=4) == 56
+    assert _sessions.default_max_sessions(0.001, 30.0, cpus=2) == 38  # 1.6 cores / ((1.0 + 0.4) ms * 30)
+    assert _sessions.default_max_sessions(0.001, 30.0, cpus=4) == 76
     assert _sessions.default_max_sessions(0.020, 30.0, cpus=2) == 2  # a heavy lab: the floor
     assert _sessions.default_max_sessions(1e-9, 30.0, cpus=64) == _sessions.MAX_DEFAULT_SESSIONS
     # a cheap lab's frames still cost the sending: the pendulum's 0.3 ms frames, 1 core
-    # (a process) -> 0.8 / ((0.45 + 0.4) ms * 30) = 31, where bench/classroom.py held 40
-    assert _sessions.default_max_sessions(0.0003, 30.0, cpus=1.0) == 31
+    # (a process) -> 0.8 / ((0.3 + 0.4) ms * 30) = 38 a process, where bench/classroom.py held 40
+    assert _sessions.default_max_sessions(0.0003, 30.0, cpus=1.0) == 38
+    # the six-axis arm's 1.95 ms frames: 11 a process, 22 on two cores (bench/classroom.py held 24)
+    assert _sessions.default_max_sessions(0.00195, 30.0, cpus=1.0) == 11
     app = make_app()
     cost = _sessions.measure_frame_cost(app, frames=4)
     assert 0.0 < cost < 0.05

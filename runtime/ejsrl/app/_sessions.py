@@ -81,6 +81,12 @@ CPU_SHARE = 0.8
 #: pendulum, whose frame alone takes 0.2-0.35 ms; without it the pendulum's default was
 #: 100 places a process where 40 held
 SEND_SECONDS = 0.0004
+#: what a session costs while served over what :func:`measure_frame_cost` measures (which
+#: already reads every value its view shows): ``bench/classroom.py`` measured 1.4 ms a frame
+#: served for the six-axis arm (1.95 ms measured), 3.6-4.2 ms for visual servoing (3.4-4.1)
+#: and 0.3 ms for the pendulum (0.3). With 1.5 the six-axis arm's default was 16 places where
+#: 24 held.
+VIEW_FACTOR = 1.0
 MAX_DEFAULT_SESSIONS = 100
 #: seconds between GIL hand-overs while serving a class (Python's default is 5 ms): the
 #: stepper threads and viser's event-loop thread share one GIL, and a frame ready to be sent
@@ -589,9 +595,9 @@ def measure_frame_cost(app: Any, frames: int = 12) -> float:
 
 def default_max_sessions(frame_cost: float, fps: float, cpus: float | None = None) -> int:
     """How many sessions playing at ``fps`` frames of ``frame_cost`` CPU seconds fit in
-    :data:`CPU_SHARE` of ``cpus`` cores (one process: one core, the GIL), with the view's
-    own cost counted as half again plus :data:`SEND_SECONDS` a frame; between 2 and
-    :data:`MAX_DEFAULT_SESSIONS`."""
+    :data:`CPU_SHARE` of ``cpus`` cores (one process: one core, the GIL), each frame
+    costing ``frame_cost`` times :data:`VIEW_FACTOR` plus :data:`SEND_SECONDS`; between 2
+    and :data:`MAX_DEFAULT_SESSIONS`."""
     n = cpus if cpus is not None else (os.cpu_count() or 1)
-    per_session = (max(frame_cost, 1e-4) * 1.5 + SEND_SECONDS) * max(float(fps), 1.0)
+    per_session = (max(frame_cost, 1e-4) * VIEW_FACTOR + SEND_SECONDS) * max(float(fps), 1.0)
     return int(min(MAX_DEFAULT_SESSIONS, max(2, math.floor(n * CPU_SHARE / per_session))))
