@@ -155,6 +155,7 @@ SPECIAL = {
         "np.shape(b)[0], 60), np.array([[1, 0, 0, 0.1], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1.0]])).rectify(b, b)"
     ),
     "Pipeline.run": "V.Pipeline('gray', 'blur', 'canny').run(b)",
+    "depth_to_points": "V.depth_to_points(b, V.CameraModel(max(1, np.shape(b)[1]), max(1, np.shape(b)[0]), 60))",
 }
 #: public callables that take no image (points, poses, colours, classes): checked elsewhere
 NO_IMAGE = {
@@ -164,9 +165,11 @@ NO_IMAGE = {
     "match_features", "find_homography", "find_fundamental", "find_essential", "recover_pose", "epipolar_distances",
     "StereoRectification", "stereo_rectify", "depth_from_disparity", "triangulate", "Calibration", "calibrate_camera",
     "chessboard_points", *V._servo.__all__,
+    "Marker", "marker_bits", "marker_image", "marker_pose", "IcpResult", "best_rigid_transform", "estimate_normals", "icp",
+    "transform_points", "voxel_downsample", "ImageSource",
 }  # fmt: skip
 #: functions that move pixel values without judging them (a depth map's inf/NaN stays): NaN is a valid input
-MOVES_VALUES = {"CameraModel.undistort", "CameraModel.distort", "StereoRectification.rectify"}
+MOVES_VALUES = {"CameraModel.undistort", "CameraModel.distort", "StereoRectification.rectify", "depth_to_points"}
 
 
 def sweep_calls() -> dict[str, str]:

@@ -47,9 +47,12 @@ def depth_to_points(
     out; ``stride`` keeps every stride-th row and column (a lighter cloud). With ``rgb``
     (H, W, 3) returns ``(points, colours (N, 3) uint8)``. Rows run top to bottom of the image.
     """
-    D = np.asarray(depth, dtype=np.float64)
-    if D.ndim != 2:
-        raise ValueError(f"depth must be an (H, W) image, got shape {D.shape}")
+    D = np.asarray(depth)
+    if D.dtype.kind not in "biuf":
+        raise ValueError(f"depth must be real numbers (metres; inf or NaN where nothing is seen), got dtype {D.dtype}")
+    D = D.astype(np.float64, copy=False)
+    if D.ndim != 2 or D.size == 0:
+        raise ValueError(f"depth must be a non-empty (H, W) image, got shape {D.shape}")
     W, H = int(getattr(camera, "width")), int(getattr(camera, "height"))
     if D.shape != (H, W):
         raise ValueError(f"depth is {D.shape[1]}x{D.shape[0]} but the camera is {W}x{H}")
