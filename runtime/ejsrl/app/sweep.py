@@ -28,11 +28,19 @@ from typing import Any
 import numpy as np
 
 from ejsrl.app.sweep_design import Run, SweepDesignError, design
-from ejsrl.app.sweep_exec import DASK_HINT, Executor, Progress, cpu_count, execute
+from ejsrl.app._rowfile import CannotWrite
+from ejsrl.app.sweep_exec import DASK_HINT, Executor, Progress, SchedulerLost, cpu_count, execute
+from ejsrl.app.sweep_journal import Journal, JournalError, assemble, parts_folder, sweep_key
 from ejsrl.app.sweep_table import PYARROW_HINT, SUMMARY_COLUMNS, Table, results_table, summary_table, write_table
 from ejsrl.app.sweep_worker import AppRef, LoadedApp, RunOptions, RunResult, app_ref, loaded, register
 
-__all__ = ["SweepResult", "sweep", "add_sweep_options", "sweep_main", "app_sweep", "summary_path"]
+__all__ = ["SweepResult", "sweep", "add_sweep_options", "sweep_main", "app_sweep", "summary_path", "EXIT_CANNOT_WRITE", "EXIT_SCHEDULER_LOST"]
+
+EXIT_CANNOT_WRITE = 74
+"""The status of a sweep that could not write its tables or keep its runs (EX_IOERR)."""
+
+EXIT_SCHEDULER_LOST = 69
+"""The status of a sweep whose Dask scheduler was lost (EX_UNAVAILABLE)."""
 
 
 @dataclass
@@ -154,6 +162,7 @@ def add_sweep_options(p: argparse.ArgumentParser) -> None:
     o.add_argument("--plot-y", metavar="COLUMN", help="the summary column to plot (default: the first metric, else a final value)")
     o.add_argument("--plot-x", metavar="P[,Q]", help="the parameter on the x axis (and the one of the curves); default: the one with the most values, then the next")
     o.add_argument("--quiet", action="store_true", help="no progress bar")
+    o.add_argument("--resume", action="store_true", help="continue a stopped sweep (same options): run only the runs its OUT.parts folder lacks")
     x = p.add_argument_group("where the runs execute")
     x.add_argument("--workers", type=int, metavar="N", help=f"processes (default: the cores, {cpu_count()} here; 0: in this process)")
     x.add_argument("--dask", action="store_true", help="start a Dask LocalCluster of --workers processes and run there")
@@ -194,7 +203,10 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     """Run the sweep the parsed command line asks for; write its tables; the exit status.
 
     0 when the tables were written and some run succeeded, 1 when every run failed, 2 for a
-    wrong command line, 128 + n when signal n stopped the sweep (the finished runs are written).
+    wrong command line, 128 + n when signal n stopped the sweep (the finished runs are written),
+    ``EXIT_CANNOT_WRITE`` (74) when a file could not be written, ``EXIT_SCHEDULER_LOST`` (69)
+    when the Dask scheduler was lost. Finished runs are kept in ``OUT.parts/`` as they finish
+    (:mod:`ejsrl.app.sweep_journal`); ``--resume`` runs only the ones missing there.
     """
     err = sys.stderr
     np.seterr(all="ignore")
@@ -233,51 +245,86 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     ex = Executor(cpu_count() if args.workers is None else args.workers, dask=args.dask, scheduler=args.scheduler)
     if not ex.dask and not ex.scheduler and ex.workers > len(runs):
         ex.workers = len(runs)
+    parts = parts_folder(args.out)
+    try:
+        journal = Journal.start(parts, sweep_key(ref.digest, runs, options), len(runs), resume=bool(getattr(args, "resume", False)))
+    except JournalError as exc:
+        print(f"error: {exc}", file=err)
+        return 2
+    except (CannotWrite, OSError) as exc:
+        print(exc.line() if isinstance(exc, CannotWrite) else f"error: cannot write {parts}: {exc.strerror or exc}", file=err)
+        return EXIT_CANNOT_WRITE
+    done = journal.done()
+    todo = [r for r in runs if r.run not in done]
     plural = "s" if len(runs) != 1 else ""
     span = f"each advancing {model_cls.INDEPENDENT} by {args.duration:g}" if model_cls.INDEPENDENT else f"each of {args.duration:g} steps"
-    print(f"{label}: {len(runs)} run{plural}, {span}, on {ex.describe()}", file=err, flush=True)
+    resuming = f" (resuming: {len(done)} done, {len(todo)} to run)" if done else ""
+    print(f"{label}: {len(runs)} run{plural}, {span}, on {ex.describe()}{resuming}", file=err, flush=True)
     progress = None if args.quiet else Progress(len(runs), err)
+    if progress is not None:
+        progress.done = len(done)
     start = time.perf_counter()
     try:
-        results, signum = execute(ref, runs, options, ex, progress=progress)
+        _, signum = execute(ref, todo, options, ex, progress=progress, on_batch=journal.write)
+    except SchedulerLost as exc:
+        print(f"error: the Dask scheduler at {exc.address} was lost after {len(journal.done())} of {len(runs)} runs; "
+              f"finished runs are in {parts}; rerun with --resume", file=err, flush=True)
+        return EXIT_SCHEDULER_LOST
+    except CannotWrite as exc:
+        print(f"{exc.line()}; the {len(journal.done())} finished runs are kept in {parts}: rerun with --resume once there is room",
+              file=err, flush=True)
+        return EXIT_CANNOT_WRITE
     except RuntimeError as exc:  # Dask could not start or reach its scheduler
         print(f"error: {exc}", file=err)
         return 2
     except OSError as exc:  # e.g. the scheduler's address does not answer
         print(f"error: {ex.describe()}: {exc}", file=err)
         return 2
-    result = SweepResult(runs, results, types, model_cls.INDEPENDENT, time.perf_counter() - start, signum)
+    seconds = time.perf_counter() - start
     summary_file = Path(args.summary) if args.summary else summary_path(args.out)
-    table = result.results_table()
-    summary = result.summary()
-    write_table(table, args.out)
-    write_table(summary, summary_file)
-    ok = sum(r.status != "error" for r in results)
-    rate = len(results) / result.seconds if result.seconds > 0 else math.inf
-    stopped = f"stopped by {_signal_name(signum)} after {len(results)} of {len(runs)} runs; " if signum else ""
+    try:
+        tally = assemble(journal, Path(args.out), summary_file, types, model_cls.INDEPENDENT, keep_summary=bool(args.plot))
+    except CannotWrite as exc:
+        print(f"{exc.line()}; removed it; the finished runs are kept in {parts}: rerun with --resume once there is room",
+              file=err, flush=True)
+        return EXIT_CANNOT_WRITE
+    if not signum:
+        journal.remove()
+    ran = tally.runs - len(done)
+    rate = ran / seconds if seconds > 0 else math.inf
+    stopped = f"stopped by {_signal_name(signum)} after {tally.runs} of {len(runs)} runs; " if signum else ""
     print(
-        f"{label}: {stopped}{len(results)} run{'s' if len(results) != 1 else ''} ({ok} ok, {len(results) - ok} failed) "
-        f"in {result.seconds:.2f} s ({rate:.1f} runs/s); wrote {args.out} ({table.rows} rows) and {summary_file}",
+        f"{label}: {stopped}{tally.runs} run{'s' if tally.runs != 1 else ''} ({tally.ok} ok, {tally.failed} failed) "
+        f"in {seconds:.2f} s ({rate:.1f} runs/s); wrote {args.out} ({tally.rows} rows) and {summary_file}",
         file=err,
         flush=True,
     )
-    for r in result.failed[:5]:
+    if signum:
+        print(f"{label}: the finished runs are kept in {parts}; rerun with --resume to run the other {len(runs) - tally.runs}",
+              file=err, flush=True)
+    for r in tally.first_failed:
         settings = " ".join(f"{n}={v}" for n, v in r.settings)
         print(f"  run {r.run} ({settings or 'the spec as written'}): {r.error}", file=err)
-    if len(result.failed) > 5:
-        print(f"  ... and {len(result.failed) - 5} more (the summary's error column has each)", file=err)
+    if tally.failed > 5:
+        print(f"  ... and {tally.failed - 5} more (the summary's error column has each)", file=err)
     if args.plot:
         from ejsrl.app.sweep_plot import PlotError, plot_summary
 
         try:
-            plot_summary(summary, [name for name, _ in runs[0].settings] if runs else [], args.plot, y=args.plot_y, x=args.plot_x)
+            assert tally.summary is not None
+            plot_summary(tally.summary, [name for name, _ in runs[0].settings] if runs else [], args.plot, y=args.plot_y, x=args.plot_x)
             print(f"{label}: drew {args.plot}", file=err)
         except PlotError as exc:
             print(f"error: --plot: {exc}", file=err)
             return 2
+        except OSError as exc:  # a full disk, a read-only folder
+            from ejsrl.app.sweep_journal import writing_reason
+
+            print(f"error: cannot write {args.plot}: {writing_reason(exc)}", file=err)
+            return EXIT_CANNOT_WRITE
     if signum:
         return 128 + int(signum)
-    return 1 if results and ok == 0 else 0
+    return 1 if tally.runs and tally.ok == 0 else 0
 
 
 def _signal_name(signum: int) -> str:

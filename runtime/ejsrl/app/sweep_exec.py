@@ -21,7 +21,7 @@ from ejsrl._signals import SignalScope
 from ejsrl.app.sweep_design import Run
 from ejsrl.app.sweep_worker import AppRef, RunOptions, RunResult, loaded, run_batch
 
-__all__ = ["Executor", "Progress", "cpu_count", "execute", "batches", "DASK_HINT"]
+__all__ = ["Executor", "Progress", "SchedulerLost", "cpu_count", "execute", "batches", "DASK_HINT", "MAX_BATCH"]
 
 DASK_HINT = "Dask is not installed: pip install 'ejsgen[sweep]' (or: pip install 'dask[distributed]')"
 
@@ -107,11 +107,34 @@ def _clock_text(seconds: float) -> str:
     return f"{h}:{m:02d}:{s:02d}" if h else f"{m}:{s:02d}"
 
 
+MAX_BATCH = 32
+"""Most runs in one batch: a batch's results are what the parent holds at a time (its memory
+stays flat however many runs a sweep has) and what a SIGKILL can cost."""
+
+
 def batches(runs: Sequence[Run], workers: int) -> list[list[Run]]:
-    """The runs in batches: about 16 per worker, so that the work balances and the progress moves,
-    while each task carries enough runs to pay for its dispatch."""
-    size = max(1, len(runs) // (max(workers, 1) * 16))
-    return [list(runs[i : i + size]) for i in range(0, len(runs), size)]
+    """The runs in batches: about 16 per worker (at most ``MAX_BATCH`` runs), so that the work
+    balances and the progress moves, while each task carries enough runs to pay for its dispatch.
+
+    A batch holds runs with contiguous numbers (the missing runs of a resumed sweep may have
+    gaps), so the batches a sweep keeps on disk never overlap.
+    """
+    size = max(1, min(MAX_BATCH, len(runs) // (max(workers, 1) * 16)))
+    out: list[list[Run]] = []
+    for run in runs:
+        if out and len(out[-1]) < size and out[-1][-1].run + 1 == run.run:
+            out[-1].append(run)
+        else:
+            out.append([run])
+    return out
+
+
+class SchedulerLost(Exception):
+    """The Dask scheduler at ``address`` stopped answering; the runs not yet back are not run."""
+
+    def __init__(self, address: str) -> None:
+        super().__init__(f"the Dask scheduler at {address} was lost")
+        self.address = address
 
 
 class _Stop(Exception):
@@ -207,6 +230,7 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
         payload = ref
     futures: list[Any] = []
     try:
+        address = str(client.scheduler.address if client.scheduler is not None else ex.scheduler)
         ref_future = client.scatter(payload, broadcast=True)
         futures = [client.submit(run_batch, ref_future, batch, options, pure=False) for batch in work]
         batch_of = {f.key: batch for f, batch in zip(futures, work)}
@@ -214,6 +238,8 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
             try:
                 out = fut.result()
             except Exception as exc:  # noqa: BLE001 - a worker died, the app could not be imported, ...
+                if _scheduler_lost(client, exc):
+                    raise SchedulerLost(address) from None
                 out = _failed_batch(batch_of[fut.key], exc)
             on_results(out)
     finally:
@@ -222,6 +248,17 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
         client.close()
         if cluster is not None:
             cluster.close()
+
+
+def _scheduler_lost(client: Any, exc: BaseException) -> bool:
+    """Whether a future failed because the scheduler went away (not because its runs failed)."""
+    from asyncio import CancelledError
+
+    from distributed.comm.core import CommClosedError
+
+    if isinstance(exc, (CancelledError, CommClosedError, OSError, TimeoutError)):
+        return True
+    return getattr(client, "status", "running") != "running"
 
 
 # -- the whole sweep -----------------------------------------------------------------------------------
@@ -234,12 +271,21 @@ def execute(
     ex: Executor,
     *,
     progress: Progress | None = None,
+    on_batch: Callable[[list[RunResult]], None] | None = None,
 ) -> tuple[list[RunResult], int | None]:
-    """Run every run; returns the results (by run number) and the signal that stopped the sweep, if one did."""
+    """Run every run; returns the results (by run number) and the signal that stopped the sweep, if one did.
+
+    With ``on_batch``, each finished batch goes to it (to disk) and is not kept: the results
+    returned are then empty. Exceptions of ``on_batch`` (``CannotWrite``) and
+    ``SchedulerLost`` stop the sweep and propagate.
+    """
     results: list[RunResult] = []
 
     def on_results(out: list[RunResult]) -> None:
-        results.extend(out)
+        if on_batch is not None:
+            on_batch(out)
+        else:
+            results.extend(out)
         if progress is not None:
             progress.update(out)
 
