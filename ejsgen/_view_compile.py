@@ -474,6 +474,12 @@ class ViewCompiler:
                 kw["on_change"] = self.code(f"_gizmo_{_slug(name)}_dragged", p.on_change, path + ("on_change",), f"the on_change of gizmo '{name}'")
         if kind == "view":
             check_view(self, item, name)
+        if isinstance(props.get("texture"), str):  # a constant texture the virtual camera cannot draw
+            from ejsrl.world.rendering import texture_problem
+
+            bad = texture_problem(props["texture"])
+            if bad is not None:
+                c.errors.append(SpecError(c.loc(path + ("texture",)), bad[0], bad[1]))
         if "visible" in p.model_fields_set:
             kw["visible"] = self.dynamic(path + ("visible",), "", f"the visibility of '{name}'", p.visible) if isinstance(p.visible, str) else bool(p.visible)
         if p.color is not None:

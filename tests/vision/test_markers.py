@@ -111,3 +111,38 @@ def test_bad_marker_textures_and_arguments_say_what_is_wrong() -> None:
         marker_pose(np.zeros((4, 2)), -1, CAM)
     with pytest.raises(ValueError, match="unknown marker dictionary"):
         detect_markers(np.zeros((10, 10), np.uint8), "qr")
+
+
+_SPEC = """\
+ejs: 1
+title: Marker
+model:
+  variables:
+    t: 0.0
+    dt: 0.1
+  evolution:
+    - code: t = t + dt
+view:
+  - scene:
+      - box: {name: plate, size: [0.3, 0.3, 0.01], texture: "TEX", texture_size: 0.1}
+"""
+
+
+@pytest.mark.parametrize(
+    ("texture", "expect"),
+    [
+        ("aruco_4x4_5:1", "11:61: error: unknown marker dictionary 'aruco_4x4_5'; did you mean 'aruco_4x4_50'?"),
+        ("aruco_4x4_50:50", "11:61: error: marker id 50 is not in 'aruco_4x4_50', which has ids 0..49; pick an id in that range"),
+        ("marble", "11:61: error: texture 'marble' is not one of 'checker' or a marker '<dictionary>:<id>'; e.g. texture: checker"),
+    ],
+)
+def test_a_bad_marker_texture_is_a_build_error_at_its_place(tmp_path, capsys, texture: str, expect: str) -> None:
+    from ejsgen.cli import main
+
+    spec = tmp_path / "m.ejs.yaml"
+    spec.write_text(_SPEC.replace("TEX", texture))
+    assert main(["validate", str(spec)]) == 1
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and f"{spec}:{expect}" in err, err
+    spec.write_text(_SPEC.replace("TEX", "apriltag_36h11:586"))
+    assert main(["validate", str(spec)]) == 0

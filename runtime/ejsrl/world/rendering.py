@@ -270,6 +270,29 @@ def texture_coords(world: Any, exclude: Sequence[str], tris: NDArray[np.float64]
     return out
 
 
+def texture_problem(texture: Any) -> tuple[str, str] | None:
+    """``(message, hint)`` when a constant ``texture`` value cannot be drawn (for build errors), else None."""
+    if not isinstance(texture, str) or texture in ("", "none") or texture in TEXTURES:
+        return None
+    if ":" in texture:
+        from ejsrl.vision.markers import parse_marker_texture
+
+        try:
+            if parse_marker_texture(texture) is not None:
+                return None
+        except ValueError as e:
+            msg = str(e)
+            if "did you mean" in msg:
+                hint = msg.split("; ", 1)[1].split(" (use", 1)[0]
+            elif "is not in" in msg:
+                hint = "pick an id in that range, or a dictionary with more markers (aruco_4x4_1000, apriltag_36h11)"
+            else:
+                hint = "e.g. texture: 'aruco_4x4_50:7'"
+            return msg.split("; did you mean")[0], hint
+    return (f"texture '{texture}' is not one of {', '.join(map(repr, TEXTURES))} or a marker '<dictionary>:<id>'",
+            "e.g. texture: checker, or texture: 'aruco_4x4_50:7'")
+
+
 def _marker_of(node: Any) -> tuple[str, int] | None:
     """(dictionary, id) of a node's marker texture, None if it has none (ValueError if it is malformed)."""
     tex = node.props.get("texture")
