@@ -168,3 +168,63 @@ def test_ekf_lab_draws_its_covariance_ellipse_and_takes_the_keyboard(ekf_lab, br
         assert m.sigma > 2 * s0  # without the sensor the uncertainty grows
     finally:
         page.close()
+
+
+@pytest.fixture(scope="module")
+def dstar_lab():
+    tmp, app, server = _serve("mobile_dstar_replanning")
+    try:
+        yield app, f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+        tmp.cleanup()
+
+
+@pytest.mark.browser
+def test_dstar_lab_repairs_the_path_when_an_obstacle_is_dragged_into_it(dstar_lab, browser_context):
+    import sys
+
+    from testkit import ROOT
+    from testkit.browser import save_shot
+
+    sys.path.insert(0, str(ROOT / "tests" / "mobile"))
+    from test_planners import grid_dijkstra
+
+    app, url = dstar_lab
+    page = open_tab(browser_context, url)
+    try:
+        lab = session_model(app, page)
+        m = lab.model
+        before = m.path.copy()
+        # drag the right-hand block from (24, 14) to (23, 10), across the path
+        page.mouse.move(*css(page, 24.0, 14.0))
+        page.mouse.down()
+        page.mouse.move(*css(page, 23.0, 10.0), steps=8)
+        page.mouse.up()
+        wait_until(lambda: abs(m.blocks[2][0] - 23.0) < 0.3 and abs(m.blocks[2][1] - 10.0) < 0.3,
+                   what="the block dragged to (23, 10)")
+        wait_until(lambda: "repaired" in m.status, what=f"the repaired path (status: {m.status!r})")
+
+        def consistent() -> bool:  # the last drag event handled: the path fits the grid D* has
+            with lab.lock:
+                grid = m.planner.occgrid.grid.copy()
+                cells = np.round(m.path).astype(int)
+                return len(cells) > 1 and not grid[cells[:, 1], cells[:, 0]].any() and \
+                    m.cost == pytest.approx(grid_dijkstra(grid, (27, 17))[2, 2], abs=1e-9)
+
+        # the repaired path: clear of the grid D* now has, as short as scipy's Dijkstra finds
+        wait_until(consistent, what="a repaired path clear of the new obstacles, of the shortest length")
+        assert not np.array_equal(before, m.path) and m.cost > 41.22  # the block was in its way
+        # the lab compares the repair with a plan from scratch on the same map
+        with lab.lock:
+            from ejsrl.mobile import BinaryOccupancyGrid, DstarPlanner
+
+            fresh = DstarPlanner(BinaryOccupancyGrid(m.planner.occgrid.grid.copy()))
+            fresh.plan((27, 17))
+            fresh.query((2, 2))
+            assert m.scratch == fresh.expanded and f"from scratch: {fresh.expanded}" in m.status
+        wait_until(lambda: drawn(page, m.path, tol=1e-4), what="the new path on the panel")
+        save_shot(page, "mobile_dstar_replanning")
+    finally:
+        page.close()

@@ -80,3 +80,32 @@ def test_ekf_lab_drifts_without_its_sensor(built, tmp_path) -> None:  # type: ig
     assert (d["seen"] < 0).all()
     assert d["sigma"][-1] > 5 * d["sigma"][0]  # dead reckoning: the uncertainty only grows
     assert np.all(np.diff(d["sigma"]) > -1e-12)
+
+
+def test_dstar_lab_drives_to_the_goal_clear_of_obstacles(built, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    app = built("mobile_dstar_replanning")
+    out = tmp_path / "run.csv"
+    r = run_app(app, "--headless", "--duration", "30", "--csv", str(out), "--vars", "t,x,y,cost,expanded")
+    assert r.returncode == 0, r.stderr
+    d = _csv(out)
+    # the first plan: the shortest 8-connected path on the walls and blocks grown by a cell
+    from test_planners import grid_dijkstra
+
+    walls = np.zeros((20, 30), dtype=bool)
+    walls[0, :] = walls[-1, :] = walls[:, 0] = walls[:, -1] = True
+    walls[0:11, 11] = True
+    walls[9:20, 19] = True
+    occ = walls.copy()
+    for c, rr in ((6, 8), (15, 4), (24, 14)):
+        occ[rr - 1:rr + 2, c - 1:c + 2] = True
+    grown = occ.copy()
+    grown[1:, :] |= occ[:-1, :]
+    grown[:-1, :] |= occ[1:, :]
+    g2 = grown.copy()
+    g2[:, 1:] |= grown[:, :-1]
+    g2[:, :-1] |= grown[:, 1:]
+    assert d["cost"][0] == pytest.approx(grid_dijkstra(g2, (27, 17))[2, 2], abs=1e-9)
+    # it arrives in the goal's cell and never drives through an obstacle cell
+    assert math.hypot(d["x"][-1] - 27.0, d["y"][-1] - 17.0) < 0.71
+    cells = np.round(np.column_stack([d["x"], d["y"]])).astype(int)
+    assert not occ[cells[:, 1], cells[:, 0]].any()
