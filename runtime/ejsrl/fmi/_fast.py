@@ -43,6 +43,7 @@ class FastCalls:
     set_states: Any
     derivatives: Any
     _state_buffers: Any
+    completed_step: Any
 
     def _raw(self, fname: str) -> Any:
         """FMPy's ctypes function ``fname`` itself (its argument types set), or None."""
@@ -152,3 +153,28 @@ class FastCalls:
             return dx.copy()
 
         return set_time, set_states, derivatives
+
+    def fast_completed_step(self) -> Any:
+        """A function ``completed() -> (enter event mode, terminate)``: the FMU's
+        ``CompletedIntegratorStep`` with its two flags made once."""
+        from ctypes import byref, c_bool, c_int
+
+        fname = "fmi2CompletedIntegratorStep" if self.version == 2 else "fmi3CompletedIntegratorStep"
+        fn = self._raw(fname)
+        if fn is None:
+            return self.completed_step
+        flag = c_int if self.version == 2 else c_bool  # fmi2Boolean is an int, fmi3Boolean a bool
+        enter, terminate = flag(), flag()
+        p_enter, p_terminate = byref(enter), byref(terminate)
+        comp, log = self._fmu.component, self.log
+
+        def completed() -> tuple[bool, bool]:
+            start = len(log)
+            if self._freed:
+                raise self._failed(fname, fname, 3, start)
+            status = fn(comp, 1, p_enter, p_terminate)
+            if status > 1:
+                raise self._failed(fname, fname, status, start)
+            return bool(enter.value), bool(terminate.value)
+
+        return completed

@@ -180,6 +180,7 @@ class MeCoupling:
         own = isinstance(page, OwnPage)
         set_time, set_states, derivatives = inst.fast_calls()
         self._set_time, self._set_states = set_time, set_states
+        self._completed = inst.fast_completed_step()
         spec = run.spec
         read_inputs = spec.read_inputs
         all_cont = len(self._cont_idx) == len(spec.inputs)
@@ -187,12 +188,13 @@ class MeCoupling:
         cont_idx = self._cont_idx
         nx = inst.nx
 
-        def send(t: float, x: np.ndarray, inputs: bool = True, outputs: bool = True) -> None:
-            """The FMU gets the time, its states and (``inputs``) the continuous inputs;
-            (``outputs``) its outputs go to the model."""
-            set_time(t)
-            if nx:
-                set_states(x)
+        def send(t: float | None, x: np.ndarray, inputs: bool = True, outputs: bool = True) -> None:
+            """The FMU gets the time and its states (unless t is None), (``inputs``) the
+            continuous inputs; (``outputs``) its outputs go to the model."""
+            if t is not None:
+                set_time(t)
+                if nx:
+                    set_states(x)
             if inputs and set_cont is not None:
                 values = read_inputs()  # type: ignore[misc]
                 set_cont(values if all_cont else [values[k] for k in cont_idx])
@@ -388,17 +390,26 @@ class MeCoupling:
         """Tell the FMU the step was accepted; a step event it asks for, or parameters and
         discrete inputs the step changed, run the event iteration at the step's end."""
         run, inst = self.run, self.inst
-        if isinstance(self.page, OwnPage) and self.terminated is None:
-            self._eval_key = None
+        own = isinstance(self.page, OwnPage)
+        if own and self.terminated is None:
             try:  # the inputs, as the model holds them after its step, held over the FMU's
-                self._send(self.page.t, run.x, True, False)
+                self._send(None, run.x, True, False)
+                self.page.advance(t_new)
+                self._send(t_new, run.x, False, True)  # its outputs at the end
             except FmuError as exc:
                 raise run._fail(exc) from None
-            self.page.advance(t_new)
+            self._eval_key = (t_new, run.x.tobytes())
         if self.terminated is None:
-            self._eval_key = None
-            self.evaluate(t_new, run.x)
-            enter, terminate = run.guarded(inst.completed_step)
+            if not own:
+                self._eval_key = None
+                self.evaluate(t_new, run.x)
+            if not inst.needs_completed_step:
+                enter, terminate = False, False
+            else:
+                try:
+                    enter, terminate = self._completed()
+                except FmuError as exc:
+                    raise run._fail(exc) from None
             run.calls += 1
             if terminate:
                 self._terminate(t_new)
