@@ -4,7 +4,7 @@ Names follow Corke's Robotics Toolbox: ``Robot.fkine``, ``jacob0``, ``ikine``, `
 Everything takes and returns NumPy arrays, SI units and radians.
 
 - :class:`Link`, :class:`Robot`: models and their kinematics and dynamics.
-- :class:`SE3`, :class:`SO3`: pose and rotation values (composition ``*``, ``inv``, ``interp``...).
+- :class:`SE3`, :class:`SO3`, :class:`UnitQuaternion`: pose and rotation values (composition ``*``, ``inv``, ``interp``...).
 - :func:`load_urdf`: a ``Robot`` from a URDF file (:class:`ETSLink` links, meshes to draw).
 - :mod:`models`: ``puma560``, ``stanford``, ``pa10``, ``ur5``, ``ur5_urdf``, ``planar``, ``rrr``, ``scara``,
   ``panda``, ``kr5``, ``irb140``, ``lbr_iiwa``, ``ur10``, ``random_arm``.
@@ -22,6 +22,7 @@ from .link import ETSLink, Link, PrismaticDH, PrismaticMDH, RevoluteDH, Revolute
 from .robot import Robot
 from .urdf import load_urdf
 from .pose import SE3, SO3
+from .quaternion import UnitQuaternion
 
 from . import models  # noqa: E402  (models need Robot)
 from . import ik, trajectory  # noqa: E402
@@ -33,6 +34,7 @@ __all__ = [
     "load_urdf",
     "SE3",
     "SO3",
+    "UnitQuaternion",
     "RevoluteDH",
     "PrismaticDH",
     "RevoluteMDH",
