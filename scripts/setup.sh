@@ -18,6 +18,9 @@ command -v cc >/dev/null 2>&1 || need+=(gcc libc6-dev)
 # Debian's nginx for the test of the class-across-machines recipe (specs/deploy.md); only the
 # binary is used, with a config in a temporary folder on loopback ports
 [ -x /usr/sbin/nginx ] || need+=(nginx)
+# Debian's mosquitto MQTT broker for the remote-laboratory tests (tests/plant); only the binary
+# is used, started by the tests with a config in a temporary folder on loopback ports
+[ -x /usr/sbin/mosquitto ] || need+=(mosquitto)
 if [ ${#need[@]} -gt 0 ]; then
   $SUDO apt-get update -qq
   DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq "${need[@]}" >/dev/null

@@ -1,0 +1,224 @@
+"""The app's side of a remote laboratory: one session's link to the plant over MQTT.
+
+The link is the only thing that talks to the plant (the browser never does). It
+
+* requests the lease for its session and keeps a heartbeat going (every ``heartbeat`` s, from its
+  own thread, so a paused or slow simulation does not trip the plant's watchdog; a killed app
+  process stops the heartbeat and the plant stops);
+* checks every command against the spec's limits before sending it (the plant checks again);
+* sends a command only while connected and holding the lease, tagged with the lease epoch and
+  a fresh sequence number; nothing is queued across a disconnect, so no stale command is sent
+  after a reconnect;
+* reconnects with backoff (0.1 s doubling to 2 s) and says so in :attr:`note` at once;
+* measures the round trip (command sent -> the plant's state echoing it), in s.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+import uuid
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from ejsrl.plant._creds import Credentials
+from ejsrl.plant._mqtt import make_client
+
+__all__ = ["PlantLink", "Limits"]
+
+
+@dataclass(frozen=True)
+class Limits:
+    """The app's own limits on a command: joint angles (n,) rad and speed (n,) rad/s."""
+
+    q_min: np.ndarray
+    q_max: np.ndarray
+    qd_max: np.ndarray | None = None
+
+    def check(self, q: np.ndarray, q_prev: np.ndarray | None, dt: float | None) -> str | None:
+        if q.shape != self.q_min.shape or not np.all(np.isfinite(q)):
+            return f"a command is {self.q_min.size} finite joint angles"
+        bad = np.flatnonzero((q < self.q_min - 1e-9) | (q > self.q_max + 1e-9))
+        if bad.size:
+            i = int(bad[0])
+            return (f"joint {i + 1} at {np.degrees(q[i]):.1f} deg is outside the lab's limits "
+                    f"[{np.degrees(self.q_min[i]):.0f}, {np.degrees(self.q_max[i]):.0f}] deg")
+        if self.qd_max is not None and q_prev is not None and dt:
+            over = np.flatnonzero(np.abs(q - q_prev) / dt > self.qd_max + 1e-9)
+            if over.size:
+                return f"joint {int(over[0]) + 1} would move faster than its speed limit"
+        return None
+
+
+class PlantLink:
+    """One session's MQTT link to the plant at ``host:port`` under topic ``prefix``."""
+
+    def __init__(self, host: str, port: int, *, prefix: str = "ejsrl/plant", limits: Limits | None = None,
+                 creds: Credentials | None = None, heartbeat: float = 0.1, session: str | None = None) -> None:
+        self.prefix = prefix.rstrip("/")
+        self.session = session or uuid.uuid4().hex[:12]   # the plant's name for this session (not the tab's token)
+        self.limits = limits
+        self.heartbeat_period = heartbeat
+        self.state: dict[str, Any] | None = None          # the plant's last state message
+        self.state_at = 0.0                               # monotonic time it arrived
+        self.plant_online = False
+        self.connected = False
+        self.note = "connecting to the plant"
+        self.latency: float | None = None                 # last round trip, s
+        self.latencies: list[float] = []
+        self.wants_lease = False
+        self._refused = False
+        self._seq = 0
+        self._sent: dict[int, float] = {}
+        self._last_q: np.ndarray | None = None
+        self._last_t: float | None = None
+        self._lock = threading.Lock()
+        self._changed = threading.Condition(self._lock)
+        self._stop = threading.Event()
+        self.client = make_client(f"ejsrl-app-{self.session}", creds or Credentials())
+        self.client.reconnect_delay_set(min_delay=0.1, max_delay=2)
+        self.client.on_connect = self._on_connect
+        self.client.on_disconnect = self._on_disconnect
+        self.client.on_message = self._on_message
+        self.client.connect_async(host, port, keepalive=5)
+        self.client.loop_start()
+        self._beat = threading.Thread(target=self._beat_loop, name="ejsrl-plant-heartbeat", daemon=True)
+        self._beat.start()
+
+    # ---- what the lab shows -----------------------------------------------------------------
+    @property
+    def holds_lease(self) -> bool:
+        st = self.state
+        return bool(self.connected and st and st.get("holder") == self.session)
+
+    @property
+    def queue_position(self) -> int | None:
+        """1 for the next in line, None when not waiting."""
+        st = self.state
+        if not st or self.session not in st.get("queue", []):
+            return None
+        return st["queue"].index(self.session) + 1
+
+    def measured(self) -> np.ndarray | None:
+        st = self.state
+        return None if st is None else np.asarray(st["q"], dtype=float)
+
+    def wait_for(self, pred: Any, timeout: float = 10.0) -> bool:
+        """Wait until ``pred(self)`` holds (checked on every state message); True when it did."""
+        end = time.monotonic() + timeout
+        with self._changed:
+            while not pred(self):
+                left = end - time.monotonic()
+                if left <= 0:
+                    return False
+                self._changed.wait(min(left, 0.05))
+        return True
+
+    # ---- what the session does --------------------------------------------------------------
+    def request_lease(self) -> None:
+        self.wants_lease = True
+        self._publish("lease", {"op": "request"})
+
+    def release_lease(self) -> None:
+        self.wants_lease = False
+        self._publish("lease", {"op": "release"})
+
+    def estop(self, on: bool = True) -> None:
+        """Emergency stop: any session may press it, holder or spectator."""
+        self._publish("estop", {"on": bool(on)})
+
+    def send(self, q: Sequence[float], gripper: float | None = None) -> str | None:
+        """Send joint set points ``q`` (rad); returns why it was not sent, or None when it was."""
+        qa = np.asarray(q, dtype=float).reshape(-1)
+        now = time.monotonic()
+        if self.limits is not None:
+            why = self.limits.check(qa, self._last_q, None if self._last_t is None else now - self._last_t)
+            if why:
+                return why
+        if not self.connected:
+            return "not connected to the plant: commands are disabled"
+        st = self.state
+        if not st or st.get("holder") != self.session:
+            return "this session does not hold the plant"
+        if st.get("estop"):
+            return "emergency stop is on"
+        with self._lock:
+            self._seq += 1
+            seq = self._seq
+            self._sent = {k: v for k, v in self._sent.items() if k > seq - 100}
+            self._sent[seq] = time.perf_counter()
+        msg: dict[str, Any] = {"epoch": st["epoch"], "seq": seq, "t": self._sent[seq], "q": qa.tolist()}
+        if gripper is not None:
+            msg["gripper"] = float(gripper)
+        self._publish("cmd", msg)
+        self._last_q, self._last_t = qa, now
+        return None
+
+    def close(self) -> None:
+        self._stop.set()
+        if self.wants_lease and self.connected:
+            self.release_lease()
+        self.client.disconnect()
+        self.client.loop_stop()
+
+    # ---- paho callbacks (the network thread) ------------------------------------------------
+    def _publish(self, kind: str, payload: dict[str, Any]) -> None:
+        if self.connected:
+            payload["session"] = self.session
+            self.client.publish(f"{self.prefix}/{kind}", json.dumps(payload), qos=0)
+
+    def _on_connect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
+        if reason.is_failure:
+            with self._lock:
+                self._refused = True
+                self.note = f"the broker refused the connection ({reason}): check the plant credentials"
+                self._changed.notify_all()
+            return
+        self._refused = False
+        client.subscribe([(f"{self.prefix}/state", 0), (f"{self.prefix}/online", 1)])
+        with self._lock:
+            self.connected = True
+            self._sent.clear()                # nothing in flight survives a reconnect
+            self.note = "connected"
+            self._changed.notify_all()
+        if self.wants_lease:
+            self.request_lease()
+
+    def _on_disconnect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
+        with self._lock:
+            self.connected = False
+            if not self._refused:
+                self.note = "connection to the plant lost: commands disabled, reconnecting"
+            self._changed.notify_all()
+
+    def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
+        if msg.topic.endswith("/online"):
+            with self._lock:
+                self.plant_online = msg.payload == b"1"
+                if not self.plant_online:
+                    self.note = "the plant is offline"
+                self._changed.notify_all()
+            return
+        try:
+            st = json.loads(msg.payload)
+        except (ValueError, UnicodeDecodeError):
+            return
+        now = time.perf_counter()
+        with self._lock:
+            ack = st.get("ack") or {}
+            if ack.get("session") == self.session and ack.get("seq") in self._sent:
+                rtt = now - self._sent.pop(ack["seq"])
+                self.latency = rtt
+                self.latencies.append(rtt)
+                del self.latencies[:-1000]
+            self.state, self.state_at, self.plant_online = st, time.monotonic(), True
+            if self.connected:
+                self.note = "connected"
+            self._changed.notify_all()
+
+    def _beat_loop(self) -> None:
+        while not self._stop.wait(self.heartbeat_period):
+            self._publish("heartbeat", {})
