@@ -418,13 +418,15 @@ def flood(name: str, n: int, seconds: float, out_root: Path) -> None:
                 await asyncio.sleep(0.005)
 
         flooding = asyncio.create_task(values())
+        await asyncio.sleep(1.0)
+        await measure(f"{FLOOD_RATE:.0f} values/s from one script")
         copies = []
         for _ in range(LIVE_COPIES):
             c = await Client.open(server.port, path=f"/s/{token}", camera=False)
             await c.send(CAMERA)
             copies.append(c)
         await asyncio.sleep(1.0)
-        await measure(f"{FLOOD_RATE:.0f} values/s from one script + {LIVE_COPIES} connections to its live address")
+        await measure(f"... + {LIVE_COPIES} connections to its live address")
         stop.set()
         await flooding
         print(f"   (the script sent {sent[0] / (time.perf_counter() - start):.0f} values/s)", flush=True)

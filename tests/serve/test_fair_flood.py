@@ -1,10 +1,16 @@
-"""Fair share under a hostile client (issue #30), with real clients: the pendulum example
-served as a teacher serves it (``python app.py``, one serving process), three students
-playing their own simulations, and a script that sends 2,000 slider values a second while
-40 more of its connections open a live session address. The students must keep their
-frame rate and their controls must answer; the teacher's terminal must not fill up.
+"""Fair share under a hostile client (issue #30), with real clients: the six-axis arm of
+the paper served as a teacher serves it (``python app.py``, one serving process), three
+students playing their own simulations, and a script that sends 2,000 joint values a
+second (each runs the lab's on_change code: forward kinematics), then also opens 40 more
+connections to its live session address. The students must keep their frame rate and
+their controls must answer; the teacher's terminal must not fill up.
 
-Bounded: one process, 44 connections, about 30 s in all, loopback only."""
+Without the pacing of ``ejsrl.view._fair`` the students fell from 28 to 18 frames/s and
+their controls answered in up to 0.4 s (``bench/classroom.py --flood``, a loaded machine).
+Frame rates are compared with the same students' quiet rate on the same machine, so that
+other work on the machine does not decide the test.
+
+Bounded: one process, 44 connections, about 40 s in all, loopback only."""
 
 from __future__ import annotations
 
@@ -20,7 +26,8 @@ import pytest
 from testkit.guard_client import CAMERA, Client, gui_update, run_async
 from testkit.served import Served
 
-_READOUT = re.compile(r"^\*\*t\*\* = ([-+0-9.eE]+)")
+_READOUT = re.compile(r"^\*\*\w+\*\* = ([-+0-9.eE]+)")
+LAB = "paper/six_axis_kinematics"
 STUDENTS = 3
 FLOOD_RATE = 2000.0  # values a second
 LIVE_COPIES = 40
@@ -85,7 +92,7 @@ async def response_times(client: Client, presses: int = 4) -> list[float]:
 
 @pytest.fixture(scope="module")
 def served(built, tmp_path_factory):
-    server = Served(built("pendulum"), tmp_path_factory.mktemp("fair"), "--processes", "1", "--max-sessions", "12")
+    server = Served(built(LAB), tmp_path_factory.mktemp("fair"), "--processes", "1", "--max-sessions", "12")
     yield server
     server.stop()
 
@@ -100,7 +107,7 @@ def test_a_flood_and_copies_of_a_live_address_do_not_slow_the_other_students(ser
         quiet_rt = await response_times(students[0])
 
         evil = await student(served.port, None)
-        slider = next(m["uuid"] for m in evil.received if m.get("type") == "GuiSliderMessage")
+        sliders = [m["uuid"] for m in evil.received if m.get("type") == "GuiSliderMessage"][:2]
         evil_token = token_of(evil)
         stop = asyncio.Event()
         sent = 0
@@ -110,12 +117,16 @@ def test_a_flood_and_copies_of_a_live_address_do_not_slow_the_other_students(ser
             start = time.monotonic()
             while not stop.is_set():
                 due = int((time.monotonic() - start) * FLOOD_RATE)
-                while sent < due:
-                    await evil.ws.send(msgspec.msgpack.encode(gui_update(slider, value=0.1 + (sent % 290) / 100)))
+                while sent < due:  # two joints' values in turn, every one a new value
+                    message = gui_update(sliders[sent % 2], value=float(sent % 180) / 2)
+                    await evil.ws.send(msgspec.msgpack.encode(message))
                     sent += 1
                 await asyncio.sleep(0.005)
 
         flooding = asyncio.create_task(flood())
+        await asyncio.sleep(1.0)
+        flood_fps = await frames_per_second(students, MEASURE_SECONDS)
+        flood_rt = await response_times(students[0]) + await response_times(students[1])
         # 40 connections to the flooder's live address, each registering like a page does: a reload
         # waiting for its old connection must hold no thread another session needs
         copies = []
@@ -134,17 +145,22 @@ def test_a_flood_and_copies_of_a_live_address_do_not_slow_the_other_students(ser
         flood_seconds = sent / FLOOD_RATE
         for c in [*students, evil, *copies, late]:
             await c.close()
-        return dict(quiet_fps=quiet_fps, quiet_rt=quiet_rt, loud_fps=loud_fps, loud_rt=loud_rt, sent=sent,
+        return dict(quiet_fps=quiet_fps, quiet_rt=quiet_rt, flood_fps=flood_fps, flood_rt=flood_rt,
+                    loud_fps=loud_fps, loud_rt=loud_rt, sent=sent,
                     flood_seconds=flood_seconds, new_tab=new_tab)
 
     r = run_async(scenario(), timeout=240)
-    print(f"\nquiet: {r['quiet_fps']} frames/s, controls {max(r['quiet_rt']):.3f} s; flood of {r['sent']} values "
-          f"in {r['flood_seconds']:.1f} s + {LIVE_COPIES} copies of a live address: {r['loud_fps']} frames/s, "
+    print(f"\nquiet: {r['quiet_fps']} frames/s, controls {max(r['quiet_rt']):.3f} s; a flood of {r['sent']} values "
+          f"in {r['flood_seconds']:.1f} s: {r['flood_fps']} frames/s, controls max {max(r['flood_rt']):.3f} s; "
+          f"+ {LIVE_COPIES} copies of a live address: {r['loud_fps']} frames/s, "
           f"controls median {statistics.median(r['loud_rt']):.3f} s max {max(r['loud_rt']):.3f} s, "
           f"a new tab {r['new_tab']:.2f} s")
-    assert r["sent"] >= 0.8 * FLOOD_RATE * MEASURE_SECONDS  # the flood really ran at its rate
-    assert min(r["loud_fps"]) >= 27.0, r["loud_fps"]
-    assert max(r["loud_rt"]) <= 0.3, r["loud_rt"]
+    assert r["sent"] >= 0.8 * FLOOD_RATE * 2 * MEASURE_SECONDS  # the flood really ran at its rate
+    # >= 27 frames/s, or on a machine too busy for that even when quiet, >= 90 % of the quiet rate
+    floor = min(27.0, 0.9 * min(r["quiet_fps"]))
+    assert min(r["flood_fps"]) >= floor, (r["quiet_fps"], r["flood_fps"])
+    assert min(r["loud_fps"]) >= floor, (r["quiet_fps"], r["loud_fps"])
+    assert max(r["flood_rt"] + r["loud_rt"]) <= 0.3, (r["flood_rt"], r["loud_rt"])
     # a new tab is answered at once (its panel, or "full" once the copies took the places left)
     assert r["new_tab"] < 3.0
 
@@ -165,7 +181,7 @@ def test_hostile_messages_add_little_to_the_teachers_terminal(served):
             await evil.ws.send(msgspec.msgpack.encode(gui_update(slider, value="2.0")))
             await evil.ws.send(msgspec.msgpack.encode({"type": f"Nonsense{i}Message"}))
         await evil.send(gui_update(slider, value=1e308))
-        await evil.until(lambda: 3.0 in evil.values_of(slider), "1e308 to be clamped to the maximum 3.0", timeout=30)
+        await evil.until(lambda: 180.0 in evil.values_of(slider), "1e308 to be clamped to the maximum 180", timeout=30)
         await evil.until(lambda: any("Value refused" in n and "2.0" in n for n in evil.notifications()),
                          "the text to be refused", timeout=30)
         assert evil.closed is None  # the connection carries on
@@ -178,4 +194,4 @@ def test_hostile_messages_add_little_to_the_teachers_terminal(served):
     print(f"\n2,000 hostile messages added {added} bytes of log")
     assert added <= 20_000, (served.err.read_text()[-3000:])
     assert "Traceback" not in served.err.read_text()
-    assert all(math.isfinite(v) and v <= 3.0 for v in evil.values_of(slider))
+    assert all(math.isfinite(v) and v <= 180.0 for v in evil.values_of(slider))

@@ -42,9 +42,9 @@ __all__ = [
 
 #: messages a second one client may have handled, sustained (a browser dragging a slider
 #: sends at most one value a frame, and the viewer camera as often while orbiting)
-MESSAGE_RATE = 60.0
+MESSAGE_RATE = 30.0
 #: ... and in a burst (messages)
-MESSAGE_BURST = 30.0
+MESSAGE_BURST = 20.0
 #: the most distinct pending messages one client may have waiting (kinds of message and
 #: controls); beyond it a new kind is dropped until the client is under its rate again
 MAX_PENDING = 64
