@@ -124,3 +124,14 @@ def test_a_built_app_reads_its_video_asset_each_step(video: Path, tmp_path: Path
     frames = np.rint(d["t"][1:] * FPS).astype(int) - 1  # row 0 is the start; x is measured before t advances
     assert len(frames) == 12
     np.testing.assert_allclose(d["x"][1:], [_true_x(i % N) for i in frames], atol=0.3)
+    # served, every tab's session is an App made as the classroom makes them: each reads its own source
+    from ejsrl.app import load_app
+
+    first = load_app(app)
+    second = type(first)(first.model_cls, first.view, sim=first.sim, meta=first.meta, base_dir=first.base_dir)
+    assert first.model.src is not second.model.src
+    for _ in range(5):
+        first.step_once()
+    second.step_once()
+    assert first.model.x == pytest.approx(_true_x(4), abs=0.3) and second.model.x == pytest.approx(_true_x(0), abs=0.3)
+    assert first.model.src.index == 5 and second.model.src.index == 1  # the next frame each would read
