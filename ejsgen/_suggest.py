@@ -15,8 +15,27 @@ def closest(name: str, candidates: Iterable[str], *, cutoff: float = 0.6) -> str
     same = [c for c in pool if c.lower() == name.lower() and c != name]
     if same:
         return same[0]
-    matches = difflib.get_close_matches(name, pool, n=1, cutoff=cutoff)
-    return matches[0] if matches else None
+    matches = difflib.get_close_matches(name, pool, n=5, cutoff=cutoff)
+    if not matches:
+        return None
+    # among the close ones, the fewest edits (a swap of two neighbours counts as one), then
+    # the same first letter, then the same letters (a typo of order: 'lable' is 'label', not 'table')
+    return min(matches, key=lambda c: (_edits(name, c), c[:1] != name[:1], sorted(c) != sorted(name), matches.index(c)))
+
+
+def _edits(a: str, b: str) -> int:
+    """Optimal-string-alignment distance: insertions, deletions, substitutions and swaps of neighbours."""
+    prev2: list[int] = []
+    prev = list(range(len(b) + 1))
+    for i in range(1, len(a) + 1):
+        cur = [i] + [0] * len(b)
+        for j in range(1, len(b) + 1):
+            cost = a[i - 1] != b[j - 1]
+            cur[j] = min(prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + cost)
+            if i > 1 and j > 1 and a[i - 1] == b[j - 2] and a[i - 2] == b[j - 1]:
+                cur[j] = min(cur[j], prev2[j - 2] + 1)
+        prev2, prev = prev, cur
+    return prev[len(b)]
 
 
 def did_you_mean(name: str, candidates: Iterable[str], *, cutoff: float = 0.6) -> str:

@@ -203,7 +203,7 @@ def _cmd_run(args: argparse.Namespace, app_args: list[str]) -> int:
 
     The status is the app's, or 128 + the signal's number (130 for SIGINT, 143 for SIGTERM).
     """
-    if args.watch:
+    if getattr(args, "watch", False):
         from ejsgen._watch import cmd_watch
 
         return cmd_watch(args.spec, app_args, output=args.output, temporary=_temporary_folder)

@@ -21,7 +21,7 @@ SPECS = Path(__file__).parent / "specs"
 
 
 def test_the_public_names_of_ejsrl_app_stay_where_generated_apps_and_scripts_find_them() -> None:
-    assert sorted(ejsrl.app.__all__) == sorted(["App", "SimConfig", "AppMeta", "main", "parse_set", "csv_columns", "load_app"])
+    assert sorted(ejsrl.app.__all__) == sorted(["App", "SimConfig", "AppMeta", "main", "parse_set", "csv_columns", "load_app", "app_assets", "bundle_assets"])
     for name in ejsrl.app.__all__:
         assert getattr(ejsrl.app, name) is not None
     # the parts of the package
