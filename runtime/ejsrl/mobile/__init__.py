@@ -7,7 +7,7 @@
   :func:`follow_line`, :func:`pure_pursuit`;
 - maps and planners: :class:`BinaryOccupancyGrid` (also from an image file),
   :class:`DistanceTransformPlanner`, :class:`AStarPlanner`, :class:`DstarPlanner` (replans
-  when cells change);
+  when cells change), :class:`PRMPlanner`, :class:`RRTPlanner` (car-like);
 - sensors: :class:`LandmarkMap`, :class:`RangeBearingSensor`, :class:`LaserScanner`;
 - estimation: :class:`EKF` (dead reckoning, localisation, EKF-SLAM), :class:`ParticleFilter`
   (Monte Carlo localisation);
@@ -27,12 +27,13 @@ from .grid import BinaryOccupancyGrid, OccupancyGrid
 from .particles import ParticleFilter
 from .planners import AStarPlanner, DistanceTransformPlanner, DstarPlanner, NoPathError, path_length
 from .poses import SE2
+from .sampling import PRMPlanner, RRTPlanner
 from .sensors import LandmarkMap, LaserScanner, RangeBearingSensor
 from .vehicles import Bicycle, DiffSteer, Omni, Unicycle, VehicleBase
 
 __all__ = [
     "AStarPlanner", "Bicycle", "BinaryOccupancyGrid", "DiffSteer", "DistanceTransformPlanner", "DstarPlanner",
-    "EKF", "LandmarkMap", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "ParticleFilter", "RangeBearingSensor", "SE2",
+    "EKF", "LandmarkMap", "PRMPlanner", "RRTPlanner", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "ParticleFilter", "RangeBearingSensor", "SE2",
     "Unicycle", "VehicleBase", "angdiff", "chi2_2dof", "ellipse_points", "follow_line", "lookahead_point",
     "move_to_point", "move_to_pose", "path_length", "pose_direction", "pure_pursuit", "vehicle_outline", "wrap",
 ]
