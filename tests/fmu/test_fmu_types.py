@@ -185,6 +185,40 @@ def test_an_fmu_with_only_scheduled_execution_is_refused_with_the_right_hint(tmp
     )
 
 
+def test_a_clock_or_a_clocked_variable_is_refused_naming_the_fmu_and_the_variable(tmp_path, capsys):
+    """The Clocks FMU given a co-simulation interface (as a tool exporting both would): its
+    clocks and the variables they drive are refused, each at its line."""
+    import zipfile
+
+    folder = tmp_path / "Clocks"
+    with zipfile.ZipFile(reference(3, "Clocks")) as zf:
+        zf.extractall(folder)
+    md = folder / "modelDescription.xml"
+    md.write_text(md.read_text().replace('<ScheduledExecution modelIdentifier="Clocks"/>', '<CoSimulation modelIdentifier="Clocks" canHandleVariableCommunicationStepSize="true"/>'))
+    spec = tmp_path / "clocks.ejs.yaml"
+    spec.write_text(textwrap.dedent("""\
+        ejs: 1
+        title: Clocks
+        model:
+          variables: {t: 0.0, dt: 0.1, ticks: 0, on: false}
+          evolution:
+            - code: t = t + dt
+        fmus:
+          clocks:
+            file: Clocks
+            inputs: {inClock1: on}
+            outputs: {totalInClockTicks: ticks}
+        """))
+    status = main(["build", str(spec), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err.splitlines()
+    assert status == 1
+    assert err[0] == (
+        f"{place(spec, 'inClock1: on', 'inClock1')}: error: 'inClock1' of the FMU 'Clocks' is an FMI 3 clock: FMI 3 clocks are not supported "
+        "(they need scheduled execution or co-simulation event mode); use the FMU's variables that no clock drives"
+    )
+    assert err[1].startswith(f"{place(spec, 'totalInClockTicks', 'totalInClockTicks')}: error: 'totalInClockTicks' of the FMU 'Clocks' is clocked (it changes only when a clock ticks)")
+
+
 def _flag(folder: Path, attribute: str) -> None:
     md = folder / "modelDescription.xml"
     text = md.read_text()
