@@ -10,6 +10,7 @@ with a check that both give the same answer first.
   house): the path lengths must be equal;
 - EKF localisation and EKF-SLAM, 100 s at 10 Hz (1,000 steps, 20 landmarks) with the same
   seeds: the final estimates must be equal;
+- PRM (300 points) on the house: random on both sides, compared by path length;
 - a particle filter (1,000 particles, uniform start, 20 s): random, so compared by the
   median final error over seeds;
 - a vehicle (Bicycle) stepped 1,000 times with odometry noise.
@@ -127,6 +128,25 @@ def main() -> None:
     lr, lo = M.path_length(res["Toolbox DstarPlanner"][1]), M.path_length(res["ejsrl DstarPlanner (D* Lite)"][1])
     r = report("D*, house crop 150 x 200 (plan + query)", res, f"path lengths {lr:.4f} m and {lo:.4f} m")
     met += [(abs(lr - lo) < 1e-9, "D*: paths of the same length"), (r > 1, f"D* faster: {r:.2f}x")]
+
+    # PRM on the house (random: both sample their own points; compared by path length)
+    def prm_rtb():  # type: ignore[no-untyped-def]
+        p = rtb.PRMPlanner(occgrid=og, npoints=300, seed=0)
+        p.plan()
+        return p.query(start=start, goal=goal)
+
+    def prm_ours():  # type: ignore[no-untyped-def]
+        p = M.PRMPlanner(ours, npoints=300, seed=0)
+        p.plan()
+        return p.query(start, goal)
+
+    res = interleaved({"Toolbox PRMPlanner (300 points)": prm_rtb, "ejsrl PRMPlanner (300 points)": prm_ours},
+                      max(1, args.repeat // 2))
+    lr = M.path_length(res["Toolbox PRMPlanner (300 points)"][1])
+    lo = M.path_length(res["ejsrl PRMPlanner (300 points)"][1])
+    r = report("PRM, house, kitchen -> br3 (plan + query)", res,
+               f"path lengths {lr:.1f} m and {lo:.1f} m (the grid's shortest: {M.path_length(path_o):.1f} m)")
+    met += [(r > 1, f"PRM faster: {r:.2f}x")]
 
     # EKF
     V = np.diag([0.02, math.radians(0.5)]) ** 2
