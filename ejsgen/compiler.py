@@ -519,6 +519,10 @@ class Compiler:
             from ejsgen._fmu import compile_fmus
 
             compile_fmus(self)
+        if self.spec.plant is not None:
+            from ejsgen._spec_plant import compile_plant
+
+            compile_plant(self)
         view = ViewCompiler(self).compile(self.checked.view)
         if self.spec.model.programs:
             from ejsgen._programs import compile_programs

@@ -296,7 +296,8 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
     if urdf:
         _check_urdf_parser(plan)
     fmi = ["fmpy>=0.3.20"] if "from ejsrl.fmi import" in app_text else []  # the spec's fmus: run through FMPy
-    reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf + fmi, fast=fast)
+    plant = ["paho-mqtt>=2.0"] if "from ejsrl.app._plant_link import" in app_text else []  # the spec's plant: over MQTT
+    reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf + fmi + plant, fast=fast)
     out_dir = out_dir.resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))

@@ -498,6 +498,9 @@ class Fmu(Strict):
     """FMU variable: constant start value (e.g. of a state)."""
 
 
+from ejsgen._spec_plant import Plant  # noqa: E402 - it builds on Strict
+
+
 class Spec(Strict):
     """A whole ``.ejs.yaml`` file."""
 
@@ -523,3 +526,5 @@ class Spec(Strict):
     """Per-run results of a sweep (ejsgen sweep): name: expression, evaluated on the state at the end of each run; each is a column of the sweep's summary."""
     fmus: dict[str, Fmu] = Field(default_factory=dict)
     """Functional Mock-up Units by name, co-simulated with the model (FMPy: pip install 'ejsgen[fmu]')."""
+    plant: Plant | None = None
+    """A real plant the lab drives in its Real plant mode (a remote laboratory: MQTT through paho-mqtt, pip install 'ejsgen[plant]')."""

@@ -57,11 +57,15 @@ class PlantLink:
     """One session's MQTT link to the plant at ``host:port`` under topic ``prefix``."""
 
     def __init__(self, host: str, port: int, *, prefix: str = "ejsrl/plant", limits: Limits | None = None,
-                 creds: Credentials | None = None, heartbeat: float = 0.1, session: str | None = None) -> None:
+                 creds: Credentials | None = None, heartbeat: float = 0.1, session: str | None = None,
+                 alive: Any = None) -> None:
         self.prefix = prefix.rstrip("/")
         self.session = session or uuid.uuid4().hex[:12]   # the plant's name for this session (not the tab's token)
         self.limits = limits
         self.heartbeat_period = heartbeat
+        #: ``alive()`` -> seconds since the session last showed a frame (None: always alive); the
+        #: heartbeat stops after 1 s of it, and the link closes itself after 10 s
+        self.alive = alive
         self.state: dict[str, Any] | None = None          # the plant's last state message
         self.state_at = 0.0                               # monotonic time it arrived
         self.plant_online = False
@@ -221,4 +225,69 @@ class PlantLink:
 
     def _beat_loop(self) -> None:
         while not self._stop.wait(self.heartbeat_period):
-            self._publish("heartbeat", {})
+            idle = self.alive() if self.alive is not None else 0.0
+            if idle > 10.0:            # the session is gone: give the plant back
+                threading.Thread(target=self.close, daemon=True).start()
+                return
+            if idle < 1.0:             # a session whose frames stopped stops beating: the watchdog stops the plant
+                self._publish("heartbeat", {})
+
+
+# ---- the spec's plant: section, as the generated app declares it ----------------------------------
+@dataclass(frozen=True)
+class PlantCommand:
+    """Model variable ``var`` drives ``to`` (``joints`` or ``gripper``); ``scale`` converts the
+    variable's unit to the plant's (deg -> rad: pi/180); limits in the plant's unit."""
+
+    var: str
+    to: str
+    scale: float = 1.0
+    q_min: list[float] | None = None
+    q_max: list[float] | None = None
+    max_speed: float | None = None
+
+
+@dataclass(frozen=True)
+class PlantMeasurement:
+    """Model variable ``var`` receives ``source``, divided by ``scale`` (rad -> deg: pi/180)."""
+
+    var: str
+    source: str
+    scale: float = 1.0
+
+
+@dataclass(frozen=True)
+class PlantDef:
+    """The spec's ``plant:``: where the broker is and which variables go to and from the plant.
+    ``EJSRL_PLANT_HOST``/``EJSRL_PLANT_PORT`` in the environment win over ``host``/``port``."""
+
+    host: str
+    port: int
+    topic: str = "ejsrl/plant"
+    heartbeat: float = 0.1
+    rate: float = 20.0
+    commands: list[PlantCommand] | None = None
+    measurements: list[PlantMeasurement] | None = None
+
+    def joints(self) -> PlantCommand | None:
+        return next((c for c in self.commands or [] if c.to == "joints"), None)
+
+    def limits(self) -> Limits | None:
+        j = self.joints()
+        if j is None or j.q_min is None or j.q_max is None:
+            return None
+        n = len(j.q_min)
+        speed = None if j.max_speed is None else np.full(n, j.max_speed)
+        return Limits(np.asarray(j.q_min, float), np.asarray(j.q_max, float), speed)
+
+    def connect(self, *, alive: Any = None) -> "PlantLink":
+        """A link for one session; credentials from the environment or ``EJSRL_PLANT_CREDENTIALS``."""
+        import os
+
+        from ejsrl.plant._creds import load_credentials
+
+        host = os.environ.get("EJSRL_PLANT_HOST") or self.host
+        port = int(os.environ.get("EJSRL_PLANT_PORT") or self.port)
+        creds = load_credentials(os.environ.get("EJSRL_PLANT_CREDENTIALS") or None)
+        return PlantLink(host, port, prefix=self.topic, limits=self.limits(), creds=creds,
+                         heartbeat=self.heartbeat, alive=alive)

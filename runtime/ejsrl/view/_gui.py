@@ -314,6 +314,10 @@ class Panel:
                     self.about_text = gui.add_markdown(text)
                 self.about.dock_left()
                 self.about.set_width(ABOUT_WIDTH)
+        if hasattr(getattr(app, "model", None), "_plant"):  # a remote laboratory (plant:): mode switch and e-stop first
+            from ejsrl.plant._panel import PlantPanel
+
+            self.drawings.append(PlantPanel(gui, app))
         self._build_elements(list(getattr(app, "view", []) or []))
 
     def _build_controls_bar(self) -> None:

@@ -1,0 +1,179 @@
+"""The plant panel of a remote laboratory: the Simulation / Real plant switch, the emergency stop,
+and what the student must see (connection, lease and queue position, latency, the plant's status).
+
+Built by the control panel (:class:`ejsrl.view._gui.Panel`) for a model with ``_plant()``, one per
+session. Every frame (:meth:`PlantPanel.refresh`, under the app's lock) it writes the measured
+values into the model's measurement variables and, in Real plant mode while this session holds
+the lease, sends the command variables to the plant (at most ``rate`` times a second, only when
+they changed). The browser only picks the mode and presses buttons; it never talks to the plant.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from ejsrl.view.elements import escape_markdown
+
+__all__ = ["PlantPanel", "MODES"]
+
+MODES = ("Simulation", "Real plant")
+
+
+class PlantPanel:
+    """The plant controls in ``gui`` for ``app`` (whose ``model._plant()`` declares the plant)."""
+
+    def __init__(self, gui: Any, app: Any) -> None:
+        self.app = app
+        self.defn = app.model._plant()
+        self._last_frame = time.monotonic()
+        self.link = self.defn.connect(alive=lambda: time.monotonic() - self._last_frame)
+        self.real = False
+        self._sent: tuple[float, ...] | None = None
+        self._sent_at = 0.0
+        self._shown = ""
+        self.refusal: str | None = None
+        self.mode = gui.add_dropdown("Plant mode", MODES, initial_value=MODES[0],
+                                     hint="Real plant: your commands go to the robot when it is your turn")
+        self.estop_button = gui.add_button("EMERGENCY STOP", color="red", hint="Stops the real robot for everyone")
+        self.rearm_button = gui.add_button("Re-arm the plant", color="gray", visible=False)
+        self.status = gui.add_markdown("")
+
+        @self.mode.on_update
+        def _(_e: Any) -> None:
+            value = self.mode.value
+            if value not in MODES:          # a browser may send anything: only the two modes count
+                self.mode.value = MODES[1] if self.real else MODES[0]
+                return
+            self.set_real(value == MODES[1])
+
+        @self.estop_button.on_click
+        def _(_e: Any) -> None:
+            self.link.estop(True)
+
+        @self.rearm_button.on_click
+        def _(_e: Any) -> None:
+            self.link.estop(False)
+
+    def set_real(self, real: bool) -> None:
+        """Switch this session to Real plant mode (join the queue for the lease) or back."""
+        if real == self.real:
+            return
+        self.real = real
+        self._sent = None
+        if real:
+            self.link.request_lease()
+        else:
+            self.link.release_lease()
+
+    # ---- every frame (the caller holds app.lock) -----------------------------------------------
+    def refresh(self) -> None:
+        self._last_frame = time.monotonic()
+        model = self.app.model
+        link = self.link
+        st = link.state
+        for m in self.defn.measurements or []:
+            value = self._measured(m.source, st)
+            if value is None:
+                continue
+            if isinstance(value, np.ndarray):
+                value = value / m.scale
+                old = getattr(model, m.var, None)
+                if isinstance(old, np.ndarray) and old.shape == value.shape:
+                    old[...] = value
+                    continue
+            elif isinstance(value, float):
+                value = value / m.scale
+            setattr(model, m.var, value)
+        if self.real and link.holds_lease and not (st or {}).get("estop"):
+            self._send(model)
+        self._show(st)
+
+    def _measured(self, source: str, st: dict[str, Any] | None) -> Any:
+        link = self.link
+        if source == "connected":
+            return 1.0 if link.connected else 0.0
+        if source == "holds_lease":
+            return 1.0 if link.holds_lease else 0.0
+        if source == "queue_position":
+            return float(link.queue_position or 0)
+        if source == "latency":
+            return None if link.latency is None else float(link.latency)
+        if st is None:
+            return None
+        if source in ("joints", "speeds"):
+            return np.asarray(st["q" if source == "joints" else "qd"], dtype=float)
+        if source == "gripper":
+            return float(st["gripper"])
+        return str(st.get(source) or "")
+
+    def _send(self, model: Any) -> None:
+        now = time.monotonic()
+        if now - self._sent_at < 1.0 / self.defn.rate:
+            return
+        joints = self.defn.joints()
+        grip = next((c for c in self.defn.commands or [] if c.to == "gripper"), None)
+        q = None if joints is None else np.asarray(getattr(model, joints.var), dtype=float).reshape(-1) * joints.scale
+        g = None if grip is None else float(getattr(model, grip.var))
+        if q is None:
+            st = self.link.state or {}
+            q = np.asarray(st.get("q", np.zeros(5)), dtype=float)
+        key = tuple(np.round(q, 6)) + ((g,) if g is not None else ())
+        if key == self._sent:
+            return
+        why = self.link.send(q, g)
+        self._sent_at = now
+        if why is None:
+            self._sent, self.refusal = key, None
+        else:
+            self.refusal = why
+
+    def _show(self, st: dict[str, Any] | None) -> None:
+        link = self.link
+        lines = []
+        if not link.connected:
+            lines.append(f"**Plant:** {escape_markdown(link.note)}")
+        elif st is None or not link.plant_online:
+            lines.append("**Plant:** offline (no state from the plant)")
+        else:
+            age = time.monotonic() - link.state_at
+            status = escape_markdown(str(st.get("status", "")))
+            lines.append(f"**Plant:** {status}" + (f" (no news for {age:.1f} s)" if age > 1.0 else ""))
+            if st.get("estop"):
+                lines.append("**EMERGENCY STOP is on**: the robot is stopped for everyone")
+            if self.real:
+                if link.holds_lease:
+                    waiting = len(st.get("queue") or [])
+                    lines.append("**You control the robot**" + (f" ({st.get('slot_left', 0):.0f} s left: {waiting} waiting)" if waiting else ""))
+                elif link.queue_position:
+                    lines.append(f"**Waiting for the robot:** you are number {link.queue_position} in the queue")
+                else:
+                    lines.append("**Watching:** asking for the robot")
+            else:
+                lines.append("**Simulation:** you watch the real robot; switch to Real plant to drive it")
+            if link.latency is not None:
+                lines.append(f"**Latency:** {link.latency * 1000:.1f} ms round trip")
+            event = st.get("event")
+            if event:
+                lines.append(f"*{escape_markdown(str(event))}*")
+            if self.refusal:
+                lines.append(f"Not sent: {escape_markdown(self.refusal)}")
+            refused = st.get("refused") or {}
+            if refused.get("session") == link.session and refused.get("reason"):
+                lines.append(f"Refused by the plant: {escape_markdown(str(refused['reason']))}")
+        text = "  \n".join(lines)
+        if text != self._shown:
+            self.status.content = text
+            self._shown = text
+        estop = bool(st and st.get("estop"))
+        if self.rearm_button.visible != estop:
+            self.rearm_button.visible = estop
+
+    def clear(self) -> None:
+        """Reset: nothing to forget (the plant is real)."""
+        self._sent = None
+
+    def close(self) -> None:
+        self.link.close()

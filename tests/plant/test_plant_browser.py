@@ -1,0 +1,92 @@
+"""RobUALab in a real browser against the reference plant on a real broker: the Simulation /
+Real plant switch, the queue position, the plant following the program, the e-stop button."""
+
+from __future__ import annotations
+
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import Broker, PlantProc
+from testkit import EXAMPLES
+from testkit.browser import ARTIFACTS, close_notifications, serving, wait_until
+
+pytestmark = pytest.mark.browser
+
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+@pytest.fixture
+def page(tmp_path_factory, request):
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as pw:
+        context = pw.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
+                                                        executable_path="/usr/bin/chromium", headless=True,
+                                                        args=ARGS, viewport={"width": 1280, "height": 800})
+        context.set_default_timeout(30_000)
+        page = context.new_page()
+        try:
+            yield page
+        finally:
+            ARTIFACTS.mkdir(exist_ok=True)
+            page.screenshot(path=str(ARTIFACTS / f"{request.node.name}.png"))
+            context.close()
+
+
+def _panel_text(page) -> str:
+    return page.evaluate("document.body.innerText")
+
+
+def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page, tmp_path: Path,
+                                              monkeypatch: pytest.MonkeyPatch) -> None:
+    from ejsgen.cli import build
+
+    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--slot", "300"])
+    request_finalizer = plant.stop
+
+    monkeypatch.setenv("EJSRL_PLANT_PORT", str(broker.port))
+    app_dir = build(EXAMPLES / "paper" / "robualab.ejs.yaml", tmp_path / "robualab")
+    other = link_factory(session="other-student")       # another student holds the robot first
+    other.request_lease()
+    assert other.wait_for(lambda l: l.holds_lease, 20)
+    with serving(app_dir) as (app, url):
+        page.goto(url)
+        page.get_by_role("button", name="EMERGENCY STOP").wait_for(timeout=45_000)
+        close_notifications(page)
+        wait_until(lambda: "Plant: idle" in _panel_text(page), timeout=30, what="the plant's status in the panel")
+        assert "Simulation:" in _panel_text(page)
+        # Real plant: this student waits for the other one
+        page.get_by_label("Plant mode").click()
+        page.get_by_role("option", name="Real plant").click()
+        wait_until(lambda: "number 1 in the queue" in _panel_text(page), timeout=30, what="the queue position")
+        other.release_lease()
+        wait_until(lambda: "You control the robot" in _panel_text(page), timeout=30, what="the lease")
+        # the same program as in simulation now drives the plant: planned and measured joints agree
+        page.get_by_role("button", name="Run program").click()
+        wait_until(lambda: other.state["status"] == "moving", timeout=30, what="the plant to move")
+        wait_until(lambda: abs(other.measured()[0]) > math.radians(5), timeout=30, what="joint 1 to turn")
+        wait_until(lambda: "Latency:" in _panel_text(page), timeout=10, what="the latency on screen")
+
+        def arrived() -> bool:  # the first move's end: the robot stands where the plan put the twin
+            with app.lock:
+                q, qm = app.model.q.copy(), app.model.q_meas.copy()
+            return q[0] > math.radians(26) and float(np.max(np.abs(q - qm))) < math.radians(1.0)
+
+        wait_until(arrived, timeout=30, what="the measured joints to reach the planned ones within 1 deg")
+        # the e-stop button stops the robot
+        page.get_by_role("button", name="EMERGENCY STOP").click()
+        pressed = time.monotonic()
+        wait_until(lambda: other.state["status"] == "estop" and max(map(abs, other.state["qd"])) == 0.0, timeout=10,
+                   what="the plant to stop")
+        stop_s = time.monotonic() - pressed
+        wait_until(lambda: "EMERGENCY STOP is on" in _panel_text(page), timeout=10, what="the e-stop on screen")
+        q_stop = other.measured()
+        time.sleep(1.0)                      # the program goes on in the simulation; the robot does not
+        assert np.max(np.abs(other.measured() - q_stop)) < math.radians(0.2)
+        assert stop_s < 3.0
+    request_finalizer()
