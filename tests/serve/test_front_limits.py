@@ -34,3 +34,47 @@ def test_the_front_caps_websockets_per_address_and_logs_it_once(built, tmp_path,
         served.stop()
     log = served.err.read_text() + served.out.read_text()
     assert log.count("refused websockets from 127.0.0.1: it has 3 open") == 1, log[-2000:]
+
+
+def test_a_student_whose_process_was_restarted_is_told_so(built, tmp_path):
+    """Issue #30: a student whose copy of the lab was killed (and started again by the front)
+    used to get a fresh lab in silence; the page now says the lab was restarted."""
+    import signal
+    import time
+
+    served = Served(built("pendulum"), tmp_path, "--processes", "2", "--max-sessions", "4", "--grace", "60")
+    cookie = "restarted-student-browser"
+    try:
+        async def first() -> str:
+            client = await Client.open(served.port, cookie=cookie)
+            await client.until(lambda: any(re.search(r"s/(\d+)x[A-Za-z0-9_-]+/'", t) for t in client.texts()),
+                               "the panel", timeout=90)
+            token = next(re.search(r"s/(\d+x[A-Za-z0-9_-]+)/'", t).group(1) for t in client.texts()
+                         if re.search(r"s/(\d+x[A-Za-z0-9_-]+)/'", t))
+            await client.close()
+            return token
+
+        token = run_async(first(), timeout=120)
+        workers = served.children()
+        index = int(token.split("x", 1)[0])
+        os.kill(workers[index], signal.SIGKILL)
+        deadline = time.monotonic() + 120
+        while not (len(served.children()) == 2 and workers[index] not in served.children()
+                   and "starting a new one" in served.err.read_text()):
+            assert time.monotonic() < deadline, served.err.read_text()
+            time.sleep(0.2)
+        time.sleep(0.5)
+
+        async def back() -> tuple[str, list[str]]:
+            client = await Client.open(served.port, path=f"/s/{token}/", cookie=cookie)
+            await client.until(lambda: any("This lab was restarted" in n for n in client.notifications()),
+                               "the note that the lab was restarted", timeout=90)
+            texts = " ".join(client.texts())
+            await client.close()
+            return texts, client.notifications()
+
+        texts, notes = run_async(back(), timeout=120)
+        assert f"s/{token}/" not in texts  # a new session, at a new address
+        assert any("restarted" in n and "This is a new simulation" in n for n in notes)
+    finally:
+        served.stop()
