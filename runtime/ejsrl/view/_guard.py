@@ -54,6 +54,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from ejsrl.view import _fair
+from ejsrl.view._browser import BROWSER_COOKIE, _cookie, _set_cookie, browser_of
 
 __all__ = [
     "MAX_MESSAGE_BYTES",
@@ -93,10 +94,6 @@ _WILDCARD_HOSTS = ("0.0.0.0", "", "::")
 #: finds its simulation again
 SESSION_PATH = re.compile(r"/s/([A-Za-z0-9_-]{8,64})/?")
 
-#: the cookie that names a browser (random, HttpOnly, SameSite=Strict): a session resumes
-#: only in the browser that created it (see :mod:`ejsrl.app._sessions`)
-BROWSER_COOKIE = "ejsrl_browser"
-_COOKIE_VALUE = re.compile(r"[A-Za-z0-9_-]{16,64}")
 
 
 # -- who may connect ---------------------------------------------------------------------------
@@ -510,35 +507,6 @@ def session_token(server: Any, client_id: int) -> str | None:
         return None
     match = SESSION_PATH.fullmatch(path.partition("?")[0])
     return match.group(1) if match is not None else None
-
-
-def browser_of(server: Any, client_id: int) -> str | None:
-    """The :data:`BROWSER_COOKIE` that client ``client_id``'s websocket handshake carried
-    (its browser), or None (a script, or a browser that has not loaded the page)."""
-    try:
-        connection = server._websock_server._live_connections.get(client_id)
-        headers = connection.request.headers if connection is not None and connection.request is not None else None
-    except AttributeError:
-        return None
-    return _cookie(headers) if headers is not None else None
-
-
-def _cookie(headers: Any) -> str | None:
-    """The well-formed :data:`BROWSER_COOKIE` in request ``headers``, or None."""
-    for line in headers.get_all("Cookie"):
-        for part in line.split(";"):
-            name, _, value = part.strip().partition("=")
-            if name == BROWSER_COOKIE and _COOKIE_VALUE.fullmatch(value):
-                return value
-    return None
-
-
-def _set_cookie(response: Any) -> None:
-    """Name a browser that has no :data:`BROWSER_COOKIE` yet (on the page's response)."""
-    import secrets
-
-    response.headers["Set-Cookie"] = (f"{BROWSER_COOKIE}={secrets.token_urlsafe(18)}; Path=/; HttpOnly; "
-                                      "SameSite=Strict")
 
 
 def _default_notify(client: Any, title: str, body: str) -> Any:
