@@ -76,6 +76,7 @@ _MODEL_LINKS = {
     "CodePage": ("code page", "code-pages"),
     "Ode": ("ODE", "ode-pages"),
     "Fmu": ("FMU", "fmus"),
+    "Plant": ("plant", "remote-laboratories-plant"),
 }
 
 
@@ -409,6 +410,7 @@ def _vision() -> str:
 def _sections() -> dict[str, Callable[[], str]]:
     from ejsgen import spec
     from ejsgen import _spec2d  # after spec, which registers the drawing element from it
+    from ejsgen import _spec_plant
 
     common = _scene_common()
     return {
@@ -423,6 +425,9 @@ def _sections() -> dict[str, Callable[[], str]]:
         "program": lambda: field_table(spec.Program),
         "simulation": lambda: field_table(spec.Simulation),
         "fmu": lambda: field_table(spec.Fmu),
+        "plant": lambda: field_table(spec.Plant),
+        "plant-command": lambda: field_table(_spec_plant.PlantCommand),
+        "plant-measurement": lambda: field_table(_spec_plant.PlantMeasurement),
         "view-elements": lambda: _kinds_table(spec.GUI_ELEMENT_MODELS, {"scene": "The 3D world: a list of 3D elements (see [3D elements](#3d-elements))."}),
         "view-properties": lambda: _per_kind(spec.GUI_ELEMENT_MODELS),
         "plot-series": lambda: field_table(spec.SeriesEl),
@@ -442,7 +447,7 @@ def _sections() -> dict[str, Callable[[], str]]:
 SECTIONS: tuple[str, ...] = (
     "top-level", "variable", "model", "code-page", "ode", "ode-methods", "events", "evolution-pages",
     "program", "simulation", "fmu", "view-elements", "view-properties", "plot-series", "drawing-elements", "drawing-properties", "drag", "scene-elements",
-    "scene-common", "scene-properties", "prelude", "reserved", "vision",
+    "scene-common", "scene-properties", "prelude", "reserved", "vision", "plant", "plant-command", "plant-measurement",
 )
 
 
