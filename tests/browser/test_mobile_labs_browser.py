@@ -228,3 +228,38 @@ def test_dstar_lab_repairs_the_path_when_an_obstacle_is_dragged_into_it(dstar_la
         save_shot(page, "mobile_dstar_replanning")
     finally:
         page.close()
+
+
+@pytest.fixture(scope="module")
+def slam_lab():
+    tmp, app, server = _serve("mobile_ekf_slam")
+    try:
+        yield app, f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+        tmp.cleanup()
+
+
+@pytest.mark.browser
+def test_slam_lab_draws_the_map_it_builds_with_its_ellipses(slam_lab, browser_context):
+    from ejsrl.mobile import ellipse_points
+    from testkit.browser import save_shot
+
+    app, url = slam_lab
+    page = open_tab(browser_context, url)
+    try:
+        lab = session_model(app, page)
+        m = lab.model
+        page.mouse.click(*css(page, 10.5, 10.5))  # an empty corner: the panel takes the keyboard
+        page.keyboard.press("Space")
+        wait_until(lambda: m.nmapped >= 12, timeout=120, what="a dozen landmarks mapped")
+        page.keyboard.press("Space")
+        wait_until(lambda: not lab.is_playing(), what="Space: pause")
+        with lab.lock:
+            first = min(m.ekf.landmarks, key=lambda i: m.ekf.landmarks[i][0])
+            ring = ellipse_points(m.magnification**2 * m.ekf.landmark_P(first), m.mapped[0], confidence=0.95, n=32)
+        wait_until(lambda: drawn(page, ring), what="the first landmark's 95 % ellipse on the panel")
+        save_shot(page, "mobile_ekf_slam")
+    finally:
+        page.close()

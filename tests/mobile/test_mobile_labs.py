@@ -109,3 +109,14 @@ def test_dstar_lab_drives_to_the_goal_clear_of_obstacles(built, tmp_path) -> Non
     assert math.hypot(d["x"][-1] - 27.0, d["y"][-1] - 17.0) < 0.71
     cells = np.round(np.column_stack([d["x"], d["y"]])).astype(int)
     assert not occ[cells[:, 1], cells[:, 0]].any()
+
+
+def test_slam_lab_maps_every_landmark_and_closing_the_loop_shrinks_the_error(built, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    app = built("mobile_ekf_slam")
+    out = tmp_path / "run.csv"
+    r = run_app(app, "--headless", "--duration", "80", "--csv", str(out), "--vars", "t,nmapped,map_error", "--every", "10")
+    assert r.returncode == 0, r.stderr
+    d = _csv(out)
+    assert d["nmapped"][-1] == 20 and np.all(np.diff(d["nmapped"]) >= 0)
+    worst = d["map_error"][(d["t"] > 20) & (d["t"] < 50)].max()  # before the loop closes
+    assert d["map_error"][-1] < 0.15 and d["map_error"][-1] < 0.5 * worst
