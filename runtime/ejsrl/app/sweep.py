@@ -285,7 +285,8 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     try:
         tally = assemble(journal, Path(args.out), summary_file, types, model_cls.INDEPENDENT, keep_summary=bool(args.plot))
     except CannotWrite as exc:
-        print(f"{exc.line()}; removed it; the finished runs are kept in {parts}: rerun with --resume once there is room",
+        print(f"error: cannot write {exc.path}: {exc.reason}; removed it; the finished runs are kept in {parts}: "
+              "rerun with --resume once there is room",
               file=err, flush=True)
         return EXIT_CANNOT_WRITE
     if not signum:

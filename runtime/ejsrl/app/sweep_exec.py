@@ -229,6 +229,10 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
         client = Client(cluster)
         payload = ref
     futures: list[Any] = []
+    # the client logs each failed reconnection with a traceback; a lost scheduler is said in one line instead
+    quiet = logging.getLogger("distributed")
+    level = quiet.level
+    quiet.setLevel(logging.CRITICAL)
     try:
         address = str(client.scheduler.address if client.scheduler is not None else ex.scheduler)
         ref_future = client.scatter(payload, broadcast=True)
@@ -248,6 +252,7 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
         client.close()
         if cluster is not None:
             cluster.close()
+        quiet.setLevel(level)
 
 
 def _scheduler_lost(client: Any, exc: BaseException) -> bool:
@@ -290,6 +295,10 @@ def execute(
             progress.update(out)
 
     work = batches(runs, ex.workers)
+    if not work:  # a resumed sweep whose runs are all done
+        if progress is not None:
+            progress.close()
+        return results, None
     stopper = _StopOnSignal()
     try:
         with stopper:
