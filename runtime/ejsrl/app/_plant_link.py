@@ -206,11 +206,13 @@ class PlantLink:
                     self.note = "the plant is offline"
                 self._changed.notify_all()
             return
+        now = time.perf_counter()
         try:
             st = json.loads(msg.payload)
         except (ValueError, UnicodeDecodeError):
             return
-        now = time.perf_counter()
+        if not isinstance(st, dict):
+            return
         with self._lock:
             ack = st.get("ack") or {}
             if ack.get("session") == self.session and ack.get("seq") in self._sent:

@@ -91,6 +91,8 @@ class MqttPlant:
         session = str(data.get("session", ""))
         if kind == "cmd":
             self.plant.command(data)
+            # the state at once, acknowledging it (one message: a second one right after it
+            # waits for paho's next loop turn and made the round trip 20x slower)
             self._publish_state()
         elif kind == "heartbeat":
             self.plant.heartbeat(session)
