@@ -263,3 +263,65 @@ def test_slam_lab_draws_the_map_it_builds_with_its_ellipses(slam_lab, browser_co
         save_shot(page, "mobile_ekf_slam")
     finally:
         page.close()
+
+
+@pytest.fixture(scope="module")
+def pf_lab():
+    tmp, app, server = _serve("mobile_particle_filter")
+    try:
+        yield app, f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+        tmp.cleanup()
+
+
+def marker_sets(page) -> list[np.ndarray]:  # type: ignore[no-untyped-def]
+    """Every point set (markers) of the panel's last frame, decoded (float32)."""
+    frame = json.loads(page.evaluate("Object.values(window.__ejs2d.panels)[0].text"))
+    out = []
+
+    def walk(node):  # type: ignore[no-untyped-def]
+        if isinstance(node, dict):
+            if node.get("t") == "markers" and "xy" in node:
+                out.append(np.frombuffer(base64.b64decode(node["xy"]), dtype="<f4").reshape(-1, 2).astype(float))
+            for v in node.values():
+                walk(v)
+        elif isinstance(node, list):
+            for v in node:
+                walk(v)
+
+    walk(frame)
+    return out
+
+
+@pytest.mark.browser
+def test_particle_lab_particles_gather_on_the_car_and_scatter_on_the_button(pf_lab, browser_context):
+    from testkit.browser import save_shot
+
+    app, url = pf_lab
+    page = open_tab(browser_context, url)
+    try:
+        lab = session_model(app, page)
+        m = lab.model
+
+        def particles_drawn() -> bool:
+            with lab.lock:
+                mine = m.particles.copy()
+            return any(s.shape == mine.shape and np.abs(s - mine).max() < 1e-4 for s in marker_sets(page))
+
+        assert m.spread > 4.0
+        page.mouse.click(*css(page, 10.5, 10.5))
+        page.keyboard.press("Space")
+        wait_until(lambda: m.t > 0.6, timeout=120, what="0.6 s of driving")
+        save_shot(page, "mobile_particle_filter")  # the particles gathering (the gallery's picture)
+        wait_until(lambda: m.t > 8.0, timeout=120, what="8 s of driving")
+        page.keyboard.press("Space")
+        wait_until(lambda: not lab.is_playing(), what="Space: pause")
+        assert m.spread < 0.5 and m.err < 0.3
+        wait_until(particles_drawn, what="the particles drawn where the filter has them")
+        page.get_by_role("button", name="Scatter the particles").click()
+        wait_until(lambda: m.spread > 4.0, what="Scatter: the particles over the whole map again")
+        wait_until(particles_drawn, what="the scattered particles drawn")
+    finally:
+        page.close()

@@ -120,3 +120,15 @@ def test_slam_lab_maps_every_landmark_and_closing_the_loop_shrinks_the_error(bui
     assert d["nmapped"][-1] == 20 and np.all(np.diff(d["nmapped"]) >= 0)
     worst = d["map_error"][(d["t"] > 20) & (d["t"] < 50)].max()  # before the loop closes
     assert d["map_error"][-1] < 0.15 and d["map_error"][-1] < 0.5 * worst
+
+
+def test_particle_filter_lab_converges_on_the_car(built, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    app = built("mobile_particle_filter")
+    out = tmp_path / "run.csv"
+    r = run_app(app, "--headless", "--duration", "20", "--csv", str(out), "--vars", "t,spread,err,xt,xe", "--every", "10")
+    assert r.returncode == 0, r.stderr
+    d = _csv(out)
+    assert d["spread"][0] > 4.0  # spread over the 20 m map
+    late = d["t"] > 10
+    assert d["spread"][late].max() < 0.5 and d["err"][late].max() < 0.3
+    np.testing.assert_allclose(d["err"], np.hypot(d["xe[0]"] - d["xt[0]"], d["xe[1]"] - d["xt[1]"]), atol=1e-12)
