@@ -12,7 +12,7 @@ import pytest
 
 from conftest import Broker, PlantProc
 from testkit import EXAMPLES
-from testkit.browser import ARTIFACTS, close_notifications, serving, wait_until
+from testkit.browser import ARTIFACTS, close_notifications, save_shot, serving, wait_until
 
 pytestmark = pytest.mark.browser
 
@@ -78,6 +78,7 @@ def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page
             return q[0] > math.radians(26) and float(np.max(np.abs(q - qm))) < math.radians(1.0)
 
         wait_until(arrived, timeout=30, what="the measured joints to reach the planned ones within 1 deg")
+        save_shot(page, "robualab")          # the gallery's picture with EJSGEN_GALLERY=1
         # the e-stop button stops the robot
         page.get_by_role("button", name="EMERGENCY STOP").click()
         pressed = time.monotonic()

@@ -178,3 +178,25 @@ def test_credentials_come_from_a_file_and_never_show(tmp_path: Path) -> None:
         b.kill()
     assert secret not in p.logs()
     assert secret not in (tmp_path / "mosquitto.log").read_text()
+
+
+def test_plant_killed_disables_commands_and_a_restarted_plant_starts_at_rest(broker: Broker, tmp_path: Path, link_factory) -> None:
+    args = ["--mqtt", f"127.0.0.1:{broker.port}"]
+    first = PlantProc(tmp_path, args)
+    link = link_factory()
+    link.request_lease()
+    assert link.wait_for(lambda l: l.holds_lease, 20)
+    boot = link.state["boot"]
+    first.proc.send_signal(signal.SIGKILL)          # the broker publishes the plant's last will
+    first.proc.wait()
+    assert link.wait_for(lambda l: not l.plant_online, 20)
+    assert link.note == "the plant is offline"
+    assert link.send(np.zeros(5)) == "the plant is offline: commands are disabled"
+    second = PlantProc(tmp_path, args)
+    try:
+        # the new plant (a new boot) grants the lease again; its epoch starts afresh and the arm at rest
+        assert link.wait_for(lambda l: l.state["boot"] != boot and l.holds_lease, 20)
+        assert link.send(np.array([5, 0, 0, 0, 0]) * DEG) is None
+        assert link.wait_for(lambda l: abs(l.measured()[0] - 5 * DEG) < 0.5 * DEG, 20)
+    finally:
+        second.stop()

@@ -144,6 +144,8 @@ class PlantLink:
                 return why
         if not self.connected:
             return "not connected to the plant: commands are disabled"
+        if not self.plant_online:
+            return "the plant is offline: commands are disabled"
         st = self.state
         if not st or st.get("holder") != self.session:
             return "this session does not hold the plant"
@@ -220,10 +222,13 @@ class PlantLink:
                 self.latency = rtt
                 self.latencies.append(rtt)
                 del self.latencies[:-1000]
+            rebooted = self.state is not None and st.get("boot") != self.state.get("boot")
             self.state, self.state_at, self.plant_online = st, time.monotonic(), True
             if self.connected:
                 self.note = "connected"
             self._changed.notify_all()
+        if rebooted and self.wants_lease:   # a restarted plant forgot the queue: ask again
+            self.request_lease()
 
     def _beat_loop(self) -> None:
         while not self._stop.wait(self.heartbeat_period):

@@ -56,7 +56,8 @@ class Plant:
         self.boot = uuid.uuid4().hex[:8]
         self._lock = threading.RLock()
         self.holder: str | None = None
-        self.epoch = 0
+        # a restarted plant starts its lease epochs elsewhere: no command of its former life matches
+        self.epoch = int(self.boot, 16) * 1000
         self.slot_end = 0.0
         self.queue: deque[str] = deque()
         self._beats: dict[str, float] = {}
