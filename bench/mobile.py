@@ -11,6 +11,7 @@ with a check that both give the same answer first.
 - EKF localisation and EKF-SLAM, 100 s at 10 Hz (1,000 steps, 20 landmarks) with the same
   seeds: the final estimates must be equal;
 - PRM (300 points) on the house: random on both sides, compared by path length;
+- pose-graph optimisation of the Toolbox's killian-small.toro: the optimised poses compared;
 - a particle filter (1,000 particles, uniform start, 20 s): random, so compared by the
   median final error over seeds;
 - a vehicle (Bicycle) stepped 1,000 times with odometry noise.
@@ -147,6 +148,28 @@ def main() -> None:
     r = report("PRM, house, kitchen -> br3 (plan + query)", res,
                f"path lengths {lr:.1f} m and {lo:.1f} m (the grid's shortest: {M.path_length(path_o):.1f} m)")
     met += [(r > 1, f"PRM faster: {r:.2f}x")]
+
+    # pose graph: the Toolbox's killian-small.toro (1,941 poses, 3,995 edges), Gauss-Newton
+    import rtbdata
+
+    toro = str(Path(rtbdata.__file__).parent / "data" / "killian-small.toro")
+
+    def pg_rtb():  # type: ignore[no-untyped-def]
+        g = rtb.PoseGraph(toro)
+        g.optimize()
+        return np.array([g.pose(i) for i in range(g.graph.n)])
+
+    def pg_ours():  # type: ignore[no-untyped-def]
+        g = M.PoseGraph.load(toro)
+        g.optimize()
+        return g.poses
+
+    res = interleaved({"Toolbox PoseGraph.optimize": pg_rtb, "ejsrl PoseGraph.optimize": pg_ours},
+                      max(1, args.repeat // 2))
+    dmax = float(np.abs(res["Toolbox PoseGraph.optimize"][1] - res["ejsrl PoseGraph.optimize"][1]).max())
+    r = report("Pose graph, killian-small.toro (load + optimise)", res,
+               f"largest difference of the optimised poses {dmax:.1e} (m, rad; sums in another order)")
+    met += [(dmax < 1e-3, f"pose graph: the Toolbox's poses within {dmax:.1e}"), (r > 1, f"pose graph faster: {r:.2f}x")]
 
     # EKF
     V = np.diag([0.02, math.radians(0.5)]) ** 2

@@ -10,7 +10,7 @@
   when cells change), :class:`PRMPlanner`, :class:`RRTPlanner` (car-like);
 - sensors: :class:`LandmarkMap`, :class:`RangeBearingSensor`, :class:`LaserScanner`;
 - estimation: :class:`EKF` (dead reckoning, localisation, EKF-SLAM), :class:`ParticleFilter`
-  (Monte Carlo localisation);
+  (Monte Carlo localisation), :class:`PoseGraph` (graph SLAM, g2o and TORO files);
 - :class:`SE2` poses; drawing helpers for the 2D panel: :func:`ellipse_points`,
   :func:`vehicle_outline`.
 
@@ -26,6 +26,7 @@ from .ekf import EKF
 from .grid import BinaryOccupancyGrid, OccupancyGrid
 from .particles import ParticleFilter
 from .planners import AStarPlanner, DistanceTransformPlanner, DstarPlanner, NoPathError, path_length
+from .posegraph import PoseGraph
 from .poses import SE2
 from .sampling import PRMPlanner, RRTPlanner
 from .sensors import LandmarkMap, LaserScanner, RangeBearingSensor
@@ -33,7 +34,7 @@ from .vehicles import Bicycle, DiffSteer, Omni, Unicycle, VehicleBase
 
 __all__ = [
     "AStarPlanner", "Bicycle", "BinaryOccupancyGrid", "DiffSteer", "DistanceTransformPlanner", "DstarPlanner",
-    "EKF", "LandmarkMap", "PRMPlanner", "RRTPlanner", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "ParticleFilter", "RangeBearingSensor", "SE2",
+    "EKF", "LandmarkMap", "PoseGraph", "PRMPlanner", "RRTPlanner", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "ParticleFilter", "RangeBearingSensor", "SE2",
     "Unicycle", "VehicleBase", "angdiff", "chi2_2dof", "ellipse_points", "follow_line", "lookahead_point",
     "move_to_point", "move_to_pose", "path_length", "pose_direction", "pure_pursuit", "vehicle_outline", "wrap",
 ]
