@@ -313,3 +313,89 @@ def test_a_curve_given_as_a_lambda(tmp_path) -> None:
     app, b = built(tmp_path, spec)
     b.drag("para", "move", 1.5, -7.0)  # on the parabola y = x^2 / 2, under the pointer
     assert (app.model.x, app.model.y) == (1.5, 1.125)
+
+
+RELAUNCH = """
+ejs: 1
+title: Relaunch
+model:
+  variables:
+    t: 0.0
+    dt: 0.01
+    x0: 0.0
+    x: 0.0
+    y: 0.0
+    vx: 1.0
+    vy: 2.0
+  evolution:
+    - ode:
+        equations: {x: vx, y: vy}
+  custom: |
+    def launch():
+        t = 0.0
+        x = x0
+        y = 0.0
+        CLEAR
+view:
+  - button: {label: Launch, action: "launch(); play()"}
+  - drawing:
+      x_range: [-1, 11]
+      y_range: [-1, 11]
+      children:
+        - trace: {point: [x, y]}
+        - trace: {name: other, point: [y, x]}
+        - point: {name: launcher, position: [x0, 0], drag: {bind: x0, along: x}}
+"""
+
+
+def _relaunch(tmp_path, clear: str):
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    app, b = built(tmp_path, RELAUNCH.replace("CLEAR", clear))
+    b.refresh()                       # t = 0, paused: the trace is the start (0, 0)
+    b.drag("launcher", "move", 5.0, 0.0)  # a new launch point; the ball has not moved
+    app.run_action(next(el for el in app.view if getattr(el, "label", "") == "Launch"))
+    app.frame()                       # playing: steps from the new point before the view sees it
+    b.refresh()
+    traces = [it for it in b.frame["items"] if it["t"] == "polyline"]
+    return app, b, xy(traces[0]), xy(traces[1])
+
+
+def test_clear_trace_starts_a_trace_again_when_time_does_not_go_back(tmp_path) -> None:
+    # the relaunch of the trial: t already 0 and paused, the launch point moved, then launch and
+    # play: without clear_trace() the trace runs from the old start (0, 0) to the new one (5, 0)
+    _app, _b, pts, _ = _relaunch(tmp_path, "pass")
+    assert np.allclose(pts[0], [0.0, 0.0]) and pts[-1][0] > 4.9  # the stray segment is there
+    app, b, pts, other = _relaunch(tmp_path / "2", "clear_trace('trace1')")
+    assert app.error is None
+    assert pts.min(axis=0)[0] >= 5.0 - 1e-9 and np.allclose(pts[-1], [app.model.x, app.model.y], atol=1e-5)
+    assert np.allclose(other[0], [0.0, 0.0])  # another trace is left alone
+    app, b, pts, other = _relaunch(tmp_path / "3", "clear_trace()")  # every trace
+    assert pts.min(axis=0)[0] >= 5.0 - 1e-9 and other.min(axis=0)[1] >= 5.0 - 1e-9
+
+
+def test_clear_trace_of_a_name_no_trace_has_is_an_error_with_a_hint(tmp_path) -> None:
+    app, b, _pts, _ = _relaunch(tmp_path, "clear_trace('trace')")
+    assert app.error is not None and "clear_trace('trace')" in app.error.message
+    assert "did you mean 'trace1'" in app.error.message
+
+
+def test_reset_and_time_going_back_start_a_trace_again(tmp_path) -> None:
+    app, b = built(tmp_path, RELAUNCH.replace("CLEAR", "pass"))
+    b.refresh()
+    app.play()
+    for _ in range(5):
+        app.frame()
+        b.refresh()
+    trace = lambda: xy([it for it in b.frame["items"] if it["t"] == "polyline"][0])  # noqa: E731
+    assert len(trace()) == 6
+    app.model.t = 0.0  # the independent variable goes back: a new trace from the point now
+    app.model.x, app.model.y = 7.0, 7.0
+    b.refresh()
+    assert np.allclose(trace(), [[7.0, 7.0]])
+    for _ in range(3):
+        app.frame()
+        b.refresh()
+    app.reset()  # Reset: the views' on_reset, then the first frame shows the start alone
+    b.clear()
+    b.refresh()
+    assert np.allclose(trace(), [[0.0, 0.0]])

@@ -580,6 +580,19 @@ class ModelBase:
         self._ejs_ctl.alert(str(text))
 
     @prelude("control")
+    def clear_trace(self, name: str | None = None) -> None:
+        """Erase the drawing panels' `trace` called `name` (every trace when left out): it starts again at its point's next position (EjsS's `trace.clear()`).
+
+        A trace also starts again after `reset()`/`initialize()` and when the independent
+        variable goes back; call this when a new run starts with the variable unchanged (a
+        relaunch at t = 0). An unnamed trace is `trace1`, `trace2`... in its panel. In a run
+        without a view (headless, a sweep) it does nothing.
+        """
+        from ejsrl.sim._traces import trace_clears
+
+        trace_clears(self._ejs_ctl).request(name)
+
+    @prelude("control")
     def print(self, *values: Any, sep: str | None = " ", end: str | None = "\n", file: Any = None, flush: bool = False) -> None:
         """Print as Python does (the terminal; a headless run's output), and in this tab's ``console`` element, if the lab has one.
 

@@ -118,6 +118,8 @@ class _ShapeState:
         self.time: float | None = None
         self.image_key: Any = None
         self.image_url: str | None = None
+        #: the revision of ``clear_trace`` requests last applied (``ejsrl.sim._traces``)
+        self.cleared = 0
 
 
 class DrawingBinding:
@@ -133,6 +135,13 @@ class DrawingBinding:
         self.shapes: dict[str, Shape2D] = {s.name: s for s in drawing.children}
         self.states: dict[str, _ShapeState] = {s.name: _ShapeState() for s in drawing.children}
         self.base_dir = getattr(app, "base_dir", None)
+        from ejsrl.sim._traces import trace_clears
+
+        #: the app's ``clear_trace`` requests (spec code's); a wrong name is refused there
+        self.trace_clears = trace_clears(app)
+        self.trace_clears.register(s.name for s in drawing.children if s.kind == "trace")
+        for name, st in self.states.items():
+            st.cleared = self.trace_clears.revision(name)
         #: the frame last built (tests read it)
         self.frame: dict[str, Any] | None = None
 
@@ -266,6 +275,10 @@ class DrawingBinding:
             now = self._time()
             if now is not None and st.time is not None and now < st.time:
                 st.trace.clear()  # the independent variable went back (a reset, a new launch): a new trace
+            cleared = self.trace_clears.revision(s.name)
+            if cleared != st.cleared:  # spec code called clear_trace(): a new trace from here
+                st.cleared = cleared
+                st.trace.clear()
             same_instant = now is not None and now == st.time and bool(st.trace)
             st.time = now
             if not np.all(np.isfinite(pt)):
