@@ -200,3 +200,31 @@ def test_plant_killed_disables_commands_and_a_restarted_plant_starts_at_rest(bro
         assert link.wait_for(lambda l: abs(l.measured()[0] - 5 * DEG) < 0.5 * DEG, 20)
     finally:
         second.stop()
+
+
+def test_only_who_pressed_the_estop_rearms(plant: PlantProc, link_factory) -> None:
+    teacher, student = link_factory(session="teacher"), link_factory(session="student")
+    teacher.estop()
+    assert student.wait_for(lambda l: l.state["estop"], 10)
+    student.estop(False)
+    assert student.wait_for(lambda l: "only who pressed" in l.state["event"], 10)
+    assert student.state["estop"]
+    teacher.estop(False)
+    assert student.wait_for(lambda l: not l.state["estop"], 10)
+
+
+def test_injected_latency_and_fault(broker: Broker, tmp_path: Path, link_factory) -> None:
+    p = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--latency", "0.2", "--fault-after", "4", "joint 3 encoder lost"])
+    try:
+        link = link_factory()
+        link.request_lease()
+        assert link.wait_for(lambda l: l.holds_lease, 20)
+        assert link.send(np.array([5, 0, 0, 0, 0]) * DEG) is None
+        assert link.wait_for(lambda l: l.latency is not None, 10)
+        assert link.latency >= 0.2                      # the command waited 0.2 s before the plant took it
+        assert link.wait_for(lambda l: l.state["status"] == "fault", 20)
+        assert link.state["fault"] == "joint 3 encoder lost"
+        assert link.send(np.zeros(5)) is None
+        assert link.wait_for(lambda l: "plant fault" in ((l.state.get("refused") or {}).get("reason") or ""), 10)
+    finally:
+        p.stop()

@@ -63,7 +63,7 @@ class PlantLink:
         self.session = session or uuid.uuid4().hex[:12]   # the plant's name for this session (not the tab's token)
         self.limits = limits
         self.heartbeat_period = heartbeat
-        #: ``alive()`` -> seconds since the session last showed a frame (None: always alive); the
+        #: ``alive()`` -> seconds since the session was last seen alive (None: always); the
         #: heartbeat stops after 1 s of it, and the link closes itself after 10 s
         self.alive = alive
         self.state: dict[str, Any] | None = None          # the plant's last state message
@@ -75,6 +75,7 @@ class PlantLink:
         self.latencies: list[float] = []
         self.wants_lease = False
         self._refused = False
+        self._asked = 0.0
         self._seq = 0
         self._sent: dict[int, float] = {}
         self._last_q: np.ndarray | None = None
@@ -124,6 +125,7 @@ class PlantLink:
     # ---- what the session does --------------------------------------------------------------
     def request_lease(self) -> None:
         self.wants_lease = True
+        self._asked = time.monotonic()
         self._publish("lease", {"op": "request"})
 
     def release_lease(self) -> None:
@@ -238,6 +240,11 @@ class PlantLink:
                 return
             if idle < 1.0:             # a session whose frames stopped stops beating: the watchdog stops the plant
                 self._publish("heartbeat", {})
+            st = self.state
+            if (self.wants_lease and st and self.connected and st.get("holder") != self.session
+                    and self.session not in (st.get("queue") or []) and time.monotonic() - self._asked > 1.0):
+                # the request was lost (the broker or the plant restarting) or the watchdog ended the lease
+                self.request_lease()
 
 
 # ---- the spec's plant: section, as the generated app declares it ----------------------------------

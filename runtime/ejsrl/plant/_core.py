@@ -7,7 +7,7 @@ runs in. Message schema (JSON over MQTT, the same fields as OPC UA method argume
 * command  ``{"session": str, "epoch": int, "seq": int, "t": float, "q": [5 x rad], "gripper": 0..1}``
 * lease    ``{"session": str, "op": "request" | "release"}``
 * heartbeat ``{"session": str}`` (every ``heartbeat`` s; the lease holder and everyone queued)
-* estop    ``{"session": str, "on": bool}`` (anyone; ``on: false`` re-arms the plant)
+* estop    ``{"session": str, "on": bool}`` (anyone; ``on: false`` re-arms, by whoever pressed it)
 * state    see :meth:`Plant.state`
 
 A command is executed only when it comes from the holder, carries the current lease epoch and a
@@ -157,7 +157,8 @@ class Plant:
 
     # ---- stops ------------------------------------------------------------------------------
     def estop(self, session: str, on: bool = True) -> None:
-        """Emergency stop (anyone may press it) or re-arm; the arm brakes to rest and holds."""
+        """Emergency stop (anyone may press it; the arm brakes to rest and holds) or re-arm (only
+        the session that pressed it: a teacher's stop is not undone by a student)."""
         with self._lock:
             if on:
                 if not self.estopped:
@@ -165,6 +166,8 @@ class Plant:
                 self.estopped, self.estop_by = True, str(session)[:64]
                 self.arm.braking = True
                 self.event = "emergency stop"
+            elif self.estopped and str(session)[:64] != self.estop_by:
+                self.event = "only who pressed the emergency stop can re-arm the plant"
             else:
                 self.estopped, self.estop_by = False, None
                 self.arm.braking = False
@@ -242,5 +245,5 @@ class Plant:
             status = ("fault" if self.fault else "estop" if self.estopped
                       else "stopping" if self.arm.braking and moving else "moving" if moving else "idle")
             return {"t": now, "boot": self.boot, "q": q.tolist(), "qd": qd.tolist(), "gripper": self.arm.gripper,
-                    "status": status, "estop": self.estopped, "fault": self.fault, "event": self.event,
+                    "status": status, "estop": self.estopped, "estop_by": self.estop_by, "fault": self.fault, "event": self.event,
                     "ack": self.ack, "refused": self.refused, **self._lease_state(now)}

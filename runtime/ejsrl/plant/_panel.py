@@ -11,6 +11,7 @@ they changed). The browser only picks the mode and presses buttons; it never tal
 from __future__ import annotations
 
 import time
+import weakref
 from typing import Any
 
 import numpy as np
@@ -28,8 +29,10 @@ class PlantPanel:
     def __init__(self, gui: Any, app: Any) -> None:
         self.app = app
         self.defn = app.model._plant()
-        self._last_frame = time.monotonic()
-        self.link = self.defn.connect(alive=lambda: time.monotonic() - self._last_frame)
+        # the link beats from its own thread, paused or not; it closes (giving the plant back)
+        # when this session's panel is gone, and stops beating when the app process dies
+        self.link = self.defn.connect()
+        weakref.finalize(self, self.link.close)
         self.real = False
         self._sent: tuple[float, ...] | None = None
         self._sent_at = 0.0
@@ -70,7 +73,6 @@ class PlantPanel:
 
     # ---- every frame (the caller holds app.lock) -----------------------------------------------
     def refresh(self) -> None:
-        self._last_frame = time.monotonic()
         model = self.app.model
         link = self.link
         st = link.state
@@ -167,7 +169,7 @@ class PlantPanel:
         if text != self._shown:
             self.status.content = text
             self._shown = text
-        estop = bool(st and st.get("estop"))
+        estop = bool(st and st.get("estop") and st.get("estop_by") == link.session)
         if self.rearm_button.visible != estop:
             self.rearm_button.visible = estop
 
