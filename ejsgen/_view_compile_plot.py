@@ -235,9 +235,28 @@ class _PlotCompiler:
         elif x_shape != y_shape:
             self.err(spath + ("y",), f"{name}'s x and y must have as many values, but {x_text} is {_describe(x_shape)} and its y '{s.y}' is {_describe(y_shape)}")
 
+    def uses_plot_x(self) -> bool:
+        """Whether a series draws against the plot's ``x`` (one that is not a histogram and has no x of its own)."""
+        return any(s.x is None and s.type != "histogram" for s in self.p.series)
+
+    def plot_x(self) -> tuple[Any, Shape | None]:
+        """The plot's compiled x and its shape; None (not compiled) when no series needs it.
+
+        The default ``x: t`` in a model without ``t`` is an error at the plot, naming the series that need an x.
+        """
+        p, path = self.p, self.path
+        if not self.uses_plot_x():
+            return None, None
+        if "x" not in p.model_fields_set and "t" not in self.c.var_decls:
+            need = [str(i + 1) for i, s in enumerate(p.series) if s.x is None and s.type != "histogram"]
+            which = f"series {need[0]} has" if len(need) == 1 else f"series {', '.join(need[:-1])} and {need[-1]} have"
+            self.c.errors.append(SpecError(self.c.doc.key_loc(path), f"the plot draws against its x, t by default, but this model has no variable t ({which} no x of its own)", "give the plot an x, or each series its own x"))
+            return None, None
+        return self.value(p.x, path + ("x",), "the plot's x")
+
     def compile(self) -> Call:
         p, path, c = self.p, self.path, self.c
-        x, x_shape = self.value(p.x, path + ("x",), "the plot's x")
+        x, x_shape = self.plot_x()
         series = [call for call in (self.series(i, s, x_shape) for i, s in enumerate(p.series)) if call is not None]
         y_range = self.range_("y_range", p.y_log)
         x_range = self.range_("x_range", p.x_log)
@@ -257,25 +276,58 @@ class _PlotCompiler:
         return Call("E.Plot", [], kw)
 
     def x_title(self) -> str:
-        """The x axis' title, with its unit: the plot's x, or the x every series has of its own
-        (a histogram's values); none when the series' own x's differ."""
+        """The x axis' title, with its unit: the plot's x when a series draws against it; else
+        the x every series has of its own (a histogram's values) when they are one variable
+        (``th1`` and ``[th1]`` alike); none when they differ."""
         series = self.p.series
-        if series and all(s.x is not None for s in series):
-            own = {str(s.x).strip() for s in series}
-            return self.vc._axis_title(own.pop()) if len(own) == 1 else ""  # x's of their own that differ: none fits
+        if series and not self.uses_plot_x():
+            return self._shared_title([s.x for s in series if s.x is not None])
         return self.vc._axis_title(self.p.x)
 
     def y_title(self) -> str:
-        """The y axis' title: "count" for histograms alone; the y and its unit for one x-y
-        series; else the unit the series' y share, if any."""
+        """The y axis' title: "count" for histograms alone; the y and its unit when every series
+        is x-y with one variable as y (``w1`` and ``[w1]``); else the unit the series' y share, if any."""
         series = self.p.series
         if series and all(s.type == "histogram" for s in series):
             return "count"
         ys = [s for s in series if s.y is not None]
-        if len(ys) == 1 and ys[0].x is not None:
-            return self.vc._axis_title(ys[0].y)
-        units = {self.vc._unit_of(s.y) for s in ys}
+        if ys and all(s.x is not None for s in ys):
+            title = self._shared_title([s.y for s in ys])
+            if title:
+                return title
+        units = {self.vc._unit_of(_plain(s.y)) for s in ys}
         return (units.pop() or "") if len(units) == 1 else ""
+
+    def _shared_title(self, exprs: list[Any]) -> str:
+        """The axis title of ``exprs`` when they are all one expression or one variable, else ""."""
+        keys = {_plain(e) for e in exprs}
+        return self.vc._axis_title(keys.pop()) if len(keys) == 1 else ""
+
+
+#: calls that wrap a value without changing what it is: np.array([th1]) is th1
+_WRAPPERS = {"array", "asarray", "atleast_1d", "ravel", "float", "list"}
+
+
+def _plain(expr: Any) -> Any:
+    """The variable an expression shows (``"[th1]"``, ``"np.array([th1])"`` -> ``"th1"``), or
+    the expression's own text (stripped); non-text as it is."""
+    if not isinstance(expr, str):
+        return expr
+    try:
+        node = ast.parse(expr.strip(), mode="eval").body
+    except SyntaxError:
+        return expr.strip()
+    while True:
+        if isinstance(node, (ast.List, ast.Tuple)) and len(node.elts) == 1:
+            node = node.elts[0]
+        elif isinstance(node, ast.Call) and len(node.args) == 1 and not node.keywords and (
+            (isinstance(node.func, ast.Attribute) and isinstance(node.func.value, ast.Name) and node.func.value.id == "np" and node.func.attr in _WRAPPERS)
+            or (isinstance(node.func, ast.Name) and node.func.id in _WRAPPERS)
+        ):
+            node = node.args[0]
+        else:
+            break
+    return node.id if isinstance(node, ast.Name) else expr.strip()
 
 
 def compile_plot(vc: ViewCompiler, item: ViewItem, n: int) -> Call:

@@ -143,7 +143,10 @@ class PlotBinding:
         self.labels = [str(s.label) for s in series] if labels is None else list(labels)
         self.x_name = x_label or "x"
         self.colors = [_css(s.color, i) for i, s in enumerate(series)]
-        self.x_axis = AxisConf(plot.x_label or self.x_name, bool(plot.x_log), plot.x_range)
+        # the plot's x names the axis only when a series draws against it (not a phase plot's
+        # series that each have an x of their own: their title, if any, is plot.x_label)
+        uses_x = any(s.x is None and s.kind != "histogram" for s in series)
+        self.x_axis = AxisConf(plot.x_label or (self.x_name if uses_x else ""), bool(plot.x_log), plot.x_range)
         self.y_axis = AxisConf(plot.y_label or "", bool(plot.y_log), plot.y_range)
         #: the last frame built (a dict of the 2D panel's contract), None before the first
         self.frame: dict[str, Any] | None = None
@@ -234,7 +237,8 @@ class PlotBinding:
     def record(self, app: Any) -> None:
         """Read and file this frame's values without sending anything (a tab that is behind)."""
         plot = self.plot
-        x = app.safe_value(plot.x, plot.where)
+        needs_x = any(s.x is None and s.kind != "histogram" for s in plot.series)
+        x = app.safe_value(plot.x, plot.where) if needs_x else None
         values = []
         for s in plot.series:
             where = s.where or plot.where
@@ -243,7 +247,6 @@ class PlotBinding:
             values.append((sx, sy))
         if getattr(app, "error", None) is not None:
             return
-        needs_x = any(s.x is None and s.kind != "histogram" for s in plot.series)
         if (needs_x and x is None) or any((s.x is not None and sx is None) or (s.y is not None and sy is None) for s, (sx, sy) in zip(plot.series, values)):
             return
         model = getattr(app, "model", None)
