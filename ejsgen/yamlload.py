@@ -94,7 +94,10 @@ class _Builder:
             return [self.build(item, path + (i,)) for i, item in enumerate(node.value)]
         assert isinstance(node, yaml.ScalarNode)
         value = yaml.SafeLoader.construct_scalar(_LOADER, node)  # raw text
-        resolved = _resolve(node)
+        try:
+            resolved = _resolve(node)
+        except _AmbiguousNumber as exc:
+            raise self.error(node.start_mark, exc.message, exc.hint) from None
         if isinstance(resolved, str):
             self.origins[path] = self._origin(node)
             return value
@@ -143,6 +146,9 @@ def _resolve(node: yaml.ScalarNode) -> Any:
     dropdown option ``off`` or a value ``on`` would silently become ``False``/``True``; in a
     spec, as in YAML 1.2, only ``true`` and ``false`` are booleans and those words are text.
     """
+    number = _number_12(node)
+    if number is not _NOT_A_NUMBER:
+        return number
     if node.tag == "tag:yaml.org,2002:str":
         return str(node.value)
     if node.tag == "tag:yaml.org,2002:bool" and node.value.lower() not in _BOOL_WORDS:
@@ -151,6 +157,65 @@ def _resolve(node: yaml.ScalarNode) -> Any:
         return _LOADER.construct_object(node, deep=True)
     except yaml.YAMLError:
         return str(node.value)
+
+
+# -- numbers, by YAML 1.2's core schema --------------------------------------------------------------
+
+_NOT_A_NUMBER = object()
+_NUMERIC_TAGS = ("tag:yaml.org,2002:str", "tag:yaml.org,2002:int", "tag:yaml.org,2002:float")
+_DIGITS = r"[0-9]+(?:_[0-9]+)*"  # digit groups as Python writes them: 1_000_000
+_INT_12 = re.compile(rf"[-+]?{_DIGITS}\Z")
+_RADIX_INT = re.compile(r"[-+]?0(?:o[0-7]+|x[0-9a-fA-F]+|b[01]+)\Z")
+_FLOAT_12 = re.compile(rf"[-+]?(?:\.{_DIGITS}|{_DIGITS}(?:\.(?:{_DIGITS})?)?)(?:[eE][-+]?[0-9]+)?\Z")
+_INF_12 = re.compile(r"([-+]?)\.(?:inf|Inf|INF)\Z")
+_NAN_12 = re.compile(r"\.(?:nan|NaN|NAN)\Z")
+_LEADING_ZERO = re.compile(r"[-+]?0[0-9_]+\Z")
+
+
+class _AmbiguousNumber(Exception):
+    """A plain scalar whose number YAML 1.1 and 1.2 read differently (``010``: 8 or 10)."""
+
+    def __init__(self, message: str, hint: str) -> None:
+        super().__init__(message)
+        self.message, self.hint = message, hint
+
+
+def _number_12(node: yaml.ScalarNode) -> Any:
+    """The number a plain, untagged scalar is by YAML 1.2's core schema, else ``_NOT_A_NUMBER``.
+
+    YAML 1.1 (PyYAML's default) needs a dot and a signed exponent (``1.0e+3``), so ``1e5``,
+    ``1E-3`` and ``3e8`` would silently be text; by YAML 1.2 they are floats, parsed as
+    Python's ``float`` parses them. Also floats: ``.5``, ``1.``, ``+1.0e3``, ``.inf``,
+    ``-.inf``, ``.nan``; ints: ``42``, ``-7``, ``0x1F``, ``0o17``, and (as PyYAML and
+    Python read them, so that no spec changes meaning) ``0b101`` and digit groups
+    ``1_000``. YAML 1.1's base-60 numbers (``1:30`` was 90) are text, as in YAML 1.2. An
+    int with a leading zero (``010``: 8 by YAML 1.1, 10 by YAML 1.2) raises
+    ``_AmbiguousNumber``. Quoted and explicitly tagged scalars (``!!str 1e5``) are left alone.
+    """
+    if node.style is not None or node.tag not in _NUMERIC_TAGS:
+        return _NOT_A_NUMBER
+    text = node.value
+    if node.end_mark.index - node.start_mark.index != len(text):
+        return _NOT_A_NUMBER  # a tag or an anchor before it, or spread over lines: not a plain number
+    if _LEADING_ZERO.match(text):
+        digits = text.lstrip("+-").lstrip("0_") or "0"
+        raise _AmbiguousNumber(
+            f"'{text}' is ambiguous: an int with a leading zero is octal in YAML 1.1 and decimal in YAML 1.2",
+            f"write {text[0] if text[0] in '+-' else ''}{digits} for the decimal number, "
+            f"0o{text.lstrip('+-').lstrip('0_') or '0'} for an octal one, or \"{text}\" for text",
+        )
+    if _INT_12.match(text) or _RADIX_INT.match(text):
+        return int(text, 0) if _RADIX_INT.match(text) else int(text)
+    if _FLOAT_12.match(text):
+        return float(text)
+    m = _INF_12.match(text)
+    if m:
+        return float(f"{m.group(1)}inf")
+    if _NAN_12.match(text):
+        return float("nan")
+    if node.tag != "tag:yaml.org,2002:str":
+        return str(text)  # a YAML 1.1-only number (base 60, odd underscores): text, as in YAML 1.2
+    return _NOT_A_NUMBER
 
 
 def load_yaml(path: str | Path, *, text: str | None = None, display_name: str | None = None) -> Document:
