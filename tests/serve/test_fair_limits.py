@@ -291,3 +291,44 @@ def test_a_tab_always_behind_is_not_starved(classroom, monkeypatch):
         await slow.close()
 
     run_async(scenario(), timeout=60)
+
+
+def test_a_link_from_another_site_keeps_the_browsers_name(classroom):
+    """A page reached from another site (a course page's link) is sent without the
+    SameSite=Strict cookie: it is given no new one (which would replace the browser's own),
+    and a browser's websocket without a name is named on the handshake's response."""
+    import http.client
+
+    app, server = classroom
+    port = server.get_port()
+
+    def page(headers: dict[str, str]):
+        conn = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
+        conn.request("GET", "/", headers={"Host": f"127.0.0.1:{port}", **headers})
+        r = conn.getresponse()
+        r.read()
+        conn.close()
+        return r.headers.get("Set-Cookie")
+
+    assert page({"Sec-Fetch-Site": "cross-site"}) is None
+    assert "ejsrl_browser=" in page({"Sec-Fetch-Site": "none"})
+    assert page({"Cookie": "ejsrl_browser=" + "g" * 24}) is None
+
+    async def scenario() -> None:
+        origin = f"http://127.0.0.1:{port}"
+        first = await Client.open(port, origin=origin)
+        cookie_line = first.ws.response.headers.get("Set-Cookie", "")
+        name = re.match(r"ejsrl_browser=([A-Za-z0-9_-]+); Path=/; HttpOnly; SameSite=Strict", cookie_line).group(1)
+        await first.until(lambda: token_of(first) is not None, "the panel", timeout=30)
+        token = token_of(first)
+        assert app.classroom.sessions[token].browser == name
+        await first.close()
+        await Client.until(lambda: app.classroom.sessions[token].client_id is None, "the tab to be gone")
+        # the browser comes back with the name it was given: its session
+        back = await Client.open(port, origin=origin, path=f"/s/{token}", cookie=name)
+        assert "Set-Cookie" not in back.ws.response.headers
+        await back.until(lambda: token_of(back) is not None, "the panel", timeout=30)
+        assert token_of(back) == token
+        await back.close()
+
+    run_async(scenario(), timeout=60)

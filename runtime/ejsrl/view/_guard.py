@@ -54,7 +54,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from ejsrl.view import _fair
-from ejsrl.view._browser import BROWSER_COOKIE, _cookie, _set_cookie, browser_of
+from ejsrl.view._browser import BROWSER_COOKIE, browser_of, handshake_cookie, name_browser, page_cookie
 
 __all__ = [
     "MAX_MESSAGE_BYTES",
@@ -567,10 +567,16 @@ class _Hook:
                 # a tab's own address (/s/<token>/): the lab's page, the same for every tab
                 query = request.path.partition("?")[2]
                 request.path = "/" + ("?" + query if query else "")
+            if upgrade:
+                name_browser(request)
             response = inner(connection, request) if inner is not None else None
-            if not upgrade and response is not None and request.path.partition("?")[0] in ("/", "/index.html") \
-                    and _cookie(request.headers) is None:
-                _set_cookie(response)
+            if not upgrade and response is not None and request.path.partition("?")[0] in ("/", "/index.html"):
+                page_cookie(request, response)
+            return response
+
+        def process_response(connection: Any, request: Any, response: Any) -> Any:
+            if response is not None and response.status_code == http.HTTPStatus.SWITCHING_PROTOCOLS:
+                handshake_cookie(request, response)
             return response
 
         async def guarded_handler(connection: Any) -> None:
@@ -599,6 +605,8 @@ class _Hook:
                     addresses.closed(address)
 
         kwargs["process_request"] = process_request
+        if kwargs.get("process_response") is None:  # viser 1.1 has none; never replace one it has
+            kwargs["process_response"] = process_response
         kwargs["max_size"] = self.max_bytes
         self.installed = True
         return self.original(guarded_handler, *args, **kwargs)
