@@ -1,7 +1,7 @@
 """The generated app's command line: ``main(Model, VIEW, ...)``, ``--set``, and stopping on signals.
 
 ``main`` parses the command line of the language's last section (``--host``, ``--port``,
-``--headless --duration T [--csv FILE] [--vars a,b,q] [--every N] [--set NAME=VALUE ...]``)
+``--headless --duration T | --steps N [--csv FILE] [--vars a,b,q[0]] [--every N] [--set NAME=VALUE ...]``)
 and serves the app in the browser or runs it headless. Served, every browser tab gets a
 simulation of its own (``--max-sessions N``, ``--grace SECONDS``, served from one process
 per core: ``--processes N``), or, with ``--shared``, every tab shows the same one.
@@ -24,7 +24,7 @@ import numpy as np
 from ejsrl._signals import SignalScope
 from ejsrl.app._front import WORKER_ENV, WorkerRole, default_processes, serve_front, worker_command
 from ejsrl.app._loop import App, AppMeta, SimConfig, announce
-from ejsrl.app.headless import csv_columns
+from ejsrl.app.headless import csv_columns, refusal, run_headless, split_vars
 from ejsrl.sim.model import ModelBase, SetValueError, UserCodeError
 
 __all__ = ["main", "parse_set"]
@@ -155,8 +155,12 @@ def _parser(title: str) -> argparse.ArgumentParser:
     )
     p.add_argument("--headless", action="store_true", help="run without a server")
     p.add_argument("--duration", type=float, help="headless: how long to run, in units of the independent variable")
+    p.add_argument("--steps", type=int, metavar="N",
+                   help="headless: run N steps (each: the evolution, then the fixed relations); with --duration, "
+                        "whichever ends first. A model with no independent variable runs for --steps only")
     p.add_argument("--csv", metavar="FILE", help="headless: write variables to this CSV file ('-' for standard output)")
-    p.add_argument("--vars", metavar="a,b,q", help="headless: the variables to write (default: every numeric variable)")
+    p.add_argument("--vars", metavar="a,b,q", help="headless: the variables to write (default: every numeric variable); "
+                                                   "array elements as the CSV header names them: q[0], m[1][2], q[1:3]")
     p.add_argument("--every", type=int, default=1, metavar="N", help="headless: write a row every N steps (default 1)")
     p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE", help="replace a variable's initial value (repeatable)")
     p.add_argument("--sweep", action="store_true", help="run many headless runs over parameter values (--sweep --help lists its options)")
@@ -267,24 +271,28 @@ def _main(
         print(f"error: {exc}", file=sys.stderr)
         return 2
     if args.headless:
-        if args.duration is None or not math.isfinite(args.duration) or args.duration < 0:
-            print("error: --headless needs --duration T (a number >= 0)", file=sys.stderr)
+        if args.duration is not None and (not math.isfinite(args.duration) or args.duration < 0):
+            print("error: --duration must be a number >= 0", file=sys.stderr)
+            return 2
+        if args.steps is not None and args.steps < 0:
+            print("error: --steps must be at least 0", file=sys.stderr)
             return 2
         if args.every < 1:
             print("error: --every must be at least 1", file=sys.stderr)
             return 2
         app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
         stop.defer_to(app)
-        names = [n.strip() for n in args.vars.split(",") if n.strip()] if args.vars else None
+        names = split_vars(args.vars) if args.vars else None
+        duration, steps = args.duration, args.steps
         try:
-            if app.error is not None or app.model.INDEPENDENT is None:
-                return app.run_headless(args.duration)  # says what is wrong; no file is written
+            if app.error is not None or refusal(app.model, duration, steps) is not None:
+                return run_headless(app, duration, steps=steps)  # says what is wrong; no file is written
             csv_columns(app.model, names)  # refuse bad --vars before any file is written
             if args.csv is None:
-                return app.run_headless(args.duration, variables=names, every=args.every)
+                return run_headless(app, duration, steps=steps, variables=names, every=args.every)
             if args.csv == "-":
                 try:
-                    return app.run_headless(args.duration, csv_file=sys.stdout, variables=names, every=args.every)
+                    return run_headless(app, duration, steps=steps, csv_file=sys.stdout, variables=names, every=args.every)
                 except BrokenPipeError:
                     # the reader (head, a pager) stopped reading: stop quietly, as command-line
                     # tools do, with the status of a SIGPIPE; later flushes go nowhere
@@ -296,12 +304,12 @@ def _main(
                 print(f"error: cannot write {args.csv}: {exc.strerror or exc}", file=sys.stderr)
                 return 2
             with fh:
-                return app.run_headless(args.duration, csv_file=fh, variables=names, every=args.every)
+                return run_headless(app, duration, steps=steps, csv_file=fh, variables=names, every=args.every)
         except UserCodeError as exc:
             print(f"error: {exc.message}", file=sys.stderr)
             return 2
-    if any(v is not None for v in (args.duration, args.csv, args.vars)):
-        print("error: --duration, --csv and --vars go with --headless", file=sys.stderr)
+    if any(v is not None for v in (args.duration, args.steps, args.csv, args.vars)):
+        print("error: --duration, --steps, --csv and --vars go with --headless", file=sys.stderr)
         return 2
     try:
         from ejsrl.view._guard import parse_origin
