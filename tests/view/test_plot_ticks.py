@@ -80,13 +80,60 @@ def test_ticks_are_exact_multiples_without_round_off():
 
 
 def test_a_log_axis_is_ticked_at_powers_of_ten_labelled_as_numbers():
-    ticks, labels = log_ticks(1e-3, 1e5)
+    ticks, labels = log_ticks(1e-3, 1e5)  # many decades: powers of ten, every other one
     assert all(math.log10(v) == round(math.log10(v)) for v in ticks)
-    assert labels[0] == "0.001" and labels[-1] in ("10000", "100000", "1e5")
-    ticks, labels = log_ticks(3.0, 70.0)  # less than two decades: 2 and 5 times them too
-    assert ticks == [5.0, 10.0, 20.0, 50.0] and labels == ["5", "10", "20", "50"]
-    ticks, labels = log_ticks(2.4, 14.0)  # within one decade: every whole multiple
-    assert labels == ["3", "4", "5", "6", "7", "8", "9", "10"]
+    assert labels == ["0.01", "1", "100", "10000"]
+    ticks, labels = log_ticks(1.0, 1000.0)
+    assert labels == ["1", "10", "100", "1000"]
+    ticks, labels = log_ticks(10.0, 100.0)  # one decade: 1-2-3-5
+    assert labels == ["10", "20", "30", "50", "100"]
     ticks, labels = log_ticks(1e-9, 1e-7)
-    assert labels[0] == "1e\u22129" and len(set(labels)) == len(labels)
+    assert labels[0] == "1e\u22129" and labels[-1] == "1e\u22127" and len(set(labels)) == len(labels)
+    assert log_ticks(1.5e-5, 3e-5)[1] == ["1.5e\u22125", "2e\u22125", "2.5e\u22125", "3e\u22125"]
+    assert log_ticks(2.1, 2.9)[1] == ["2.2", "2.4", "2.6", "2.8"]  # a sliver of a decade: nice linear steps
     assert log_ticks(0.0, 1.0) == ([], [])  # no log axis through zero
+
+
+def test_the_trials_energy_axis_from_2_to_19_is_labelled_up_to_its_top_and_nowhere_crowded():
+    # it was 2, 3, 4, 5, 6, 7, 8, 9, 10: 8, 9 and 10 nearly touching and nothing over the top 30 %
+    ticks, labels = log_ticks(2.0, 19.0, length_px=180.0)
+    assert labels == ["2", "3", "5", "7", "10", "15"]
+    ticks, labels = log_ticks(2.0, 19.0, length_px=90.0)  # a short plot: fewer
+    assert labels == ["2", "3", "5", "10"]
+
+
+def _log_rule_holds(lo: float, hi: float, length_px: float, horizontal: bool) -> float:
+    """The log axis rule, checked independently of how the ticks were chosen; returns the
+    share of the axis between an end and the tick nearest it (the larger of the two)."""
+    ticks, labels = log_ticks(lo, hi, length_px=length_px, horizontal=horizontal)
+    span = math.log10(hi / lo)
+    assert len(ticks) >= 2, (lo, hi, ticks)
+    assert len(set(labels)) == len(labels), (lo, hi, labels)  # distinct
+    assert all(lo * (1 - 1e-9) <= v <= hi * (1 + 1e-9) for v in ticks), (lo, hi, ticks)  # in range
+    assert ticks == sorted(ticks)
+    for v, s in zip(ticks, labels):
+        assert _read(s) == pytest.approx(v, rel=1e-9), (v, s)  # the label is the tick's value
+        assert "-" not in s
+    px = length_px / span
+    for a, b, sa, sb in zip(ticks, ticks[1:], labels, labels[1:]):
+        gap = math.log10(b / a) * px  # CSS px between two labels' centres
+        # labels 11 px high, about 6 px a character wide: never overlapping
+        need = 0.5 * (len(sa) + len(sb)) * 6.0 + 4 if horizontal else 13.0
+        assert gap >= need, (lo, hi, length_px, labels)
+    # a labelled tick near each end: within 45 % of the axis (in log space; a sliver of a decade on a narrow x axis
+    # with long labels), and 30 % where the labels leave room
+    ends = max(math.log10(ticks[0] / lo), math.log10(hi / ticks[-1])) / span
+    assert ends <= 0.45, (lo, hi, labels)
+    assert len(ticks) <= 12
+    return ends
+
+
+def test_random_log_axes_follow_the_rule():
+    rng = np.random.default_rng(24)
+    ends = []
+    for _ in range(3000):
+        lo = 10.0 ** rng.uniform(-12, 12)
+        hi = lo * 10.0 ** rng.choice([rng.uniform(0.02, 1.5), rng.uniform(1.5, 20)])
+        length_px, horizontal = (float(rng.uniform(300, 900)), True) if rng.random() < 0.5 else (float(rng.uniform(90, 700)), False)
+        ends.append(_log_rule_holds(lo, hi, length_px, horizontal))
+    assert np.mean(np.array(ends) <= 0.3) >= 0.99

@@ -41,6 +41,7 @@ __all__ = [
     "encode_xy",
     "decode_xy",
     "PAD",
+    "PLOT_AREA_PX",
 ]
 
 #: the margin an automatic range leaves on each side of the data, as a share of its span
@@ -161,14 +162,23 @@ def histogram(values: np.ndarray, bins: int, bin_range: tuple[float, float] | No
     return counts.astype(float), edges
 
 
-def axis_ticks(lo: float, hi: float, log: bool, *, long_at: int = 0) -> list[list[Any]]:
+#: the plot area a frame's ticks are chosen for when the caller does not say (CSS px): an
+#: x axis in the default 400 px panel, a y axis of the default 240 px plot
+PLOT_AREA_PX = (300.0, 180.0)
+
+
+def axis_ticks(lo: float, hi: float, log: bool, *, long_at: int = 0, length_px: float | None = None) -> list[list[Any]]:
     """``[[value, label], ...]`` of an axis over ``[lo, hi]`` (:mod:`ejsrl.view._ticks`).
 
     ``long_at``: when a label is longer than this many characters (0: never), the axis is
-    ticked more sparsely (about 3 ticks instead of 5), so that x labels do not run together.
+    ticked more sparsely (about 3 ticks instead of 5), so that x labels do not run together;
+    a nonzero ``long_at`` also marks a horizontal (x) axis. ``length_px``: the axis' length
+    on screen (CSS px), which a log axis spaces its labels by.
     """
     if log:
-        ticks, labels = log_ticks(lo, hi)
+        horizontal = bool(long_at)
+        px = length_px if length_px else PLOT_AREA_PX[0 if horizontal else 1]
+        ticks, labels = log_ticks(lo, hi, length_px=px, horizontal=horizontal)
         return [[v, s] for v, s in zip(ticks, labels)]
     ticks, step = linear_ticks(lo, hi)
     labels = tick_labels(ticks, step)
@@ -257,13 +267,15 @@ def plot_frame(
     legend: bool = True,
     grid: bool = True,
     previous: tuple[float, ...] | None = None,
+    area_px: tuple[float, float] = PLOT_AREA_PX,
 ) -> dict[str, Any]:
     """The 2D panel frame of a plot (a JSON-able dict, the contract of ``ejsrl.view._panel2d``).
 
     ``layers``: what each series draws, in order; ``x``/``y``: the axes' settings;
     ``x_auto``: a strip chart's x range (:func:`x_range`) when ``x`` has no fixed range;
     ``legend``: draw the labelled series' legend; ``previous``: the bounds of the frame
-    shown before (a flat range is kept while the values stay inside it).
+    shown before (a flat range is kept while the values stay inside it); ``area_px``: the
+    plot area's (width, height) on screen, CSS px, about (log axes space their labels by it).
     """
     xr, yr = _ranges(layers, x, y, x_auto, previous)
     items: list[dict[str, Any]] = []
@@ -296,8 +308,8 @@ def plot_frame(
         "background": None,
         "title": title,
         "axes": {
-            "x": {"title": x.title, "log": bool(x.log), "ticks": axis_ticks(xr[0], xr[1], x.log, long_at=7)},
-            "y": {"title": y.title, "log": bool(y.log), "ticks": axis_ticks(yr[0], yr[1], y.log)},
+            "x": {"title": x.title, "log": bool(x.log), "ticks": axis_ticks(xr[0], xr[1], x.log, long_at=7, length_px=area_px[0])},
+            "y": {"title": y.title, "log": bool(y.log), "ticks": axis_ticks(yr[0], yr[1], y.log, length_px=area_px[1])},
             "grid": bool(grid),
         },
         "legend": entries,

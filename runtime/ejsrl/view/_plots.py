@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ejsrl.view._plot_buffers import PlotBuffer, TraceBuffer
-from ejsrl.view._plot_frame import AxisConf, Layer, flat_range, min_span, plot_frame, x_range
+from ejsrl.view._plot_frame import PLOT_AREA_PX, AxisConf, Layer, flat_range, min_span, plot_frame, x_range
 from ejsrl.view._wire import set_markdown
 from ejsrl.view.elements import Image, Plot, escape_markdown
 from ejsrl.world.colors import to_rgb
@@ -307,7 +307,8 @@ class PlotBinding:
         layers, x_auto = self.layers()
         legend = self.plot.legend if self.plot.legend is not None else len(self.plot.series) >= 2
         previous = tuple(self.frame["bounds"]) if self.frame is not None else None
-        return plot_frame(self.title, layers, self.x_axis, self.y_axis, x_auto=x_auto, legend=legend, grid=self.plot.grid, previous=previous)
+        area = (PLOT_AREA_PX[0], max(40.0, self.height - 60.0))  # the panel's title and x axis take about 60 px of the height
+        return plot_frame(self.title, layers, self.x_axis, self.y_axis, x_auto=x_auto, legend=legend, grid=self.plot.grid, previous=previous, area_px=area)
 
     def push(self, *, force: bool = False) -> bool:
         """Build and send the frame if anything changed and the rate allows; True if sent."""

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["nice_step", "linear_ticks", "log_ticks", "tick_labels", "format_tick", "MINUS"]
+__all__ = ["nice_step", "linear_ticks", "log_ticks", "tick_labels", "format_tick", "label_extent", "MINUS"]
 
 #: the minus sign of tick labels
 MINUS = "\u2212"
@@ -104,37 +104,97 @@ def tick_labels(ticks: list[float], step: float) -> list[str]:
     return [format_tick(v, step, largest) for v in ticks]
 
 
-def log_ticks(lo: float, hi: float) -> tuple[list[float], list[str]]:
-    """``(ticks, labels)`` of a logarithmic axis over ``[lo, hi]`` (``0 < lo < hi``)."""
+#: the multiples of each power of ten a log axis may be ticked at, densest first: each set
+#: spaced nearly evenly in log space (a tick's neighbour is 1.2-1.3x, 1.3-1.7x, 1.5-2x, 2-2.5x, 3x away)
+LOG_SUBS: tuple[tuple[float, ...], ...] = (
+    (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0),
+    (1.0, 1.5, 2.0, 3.0, 5.0, 7.0),
+    (1.0, 2.0, 3.0, 5.0),
+    (1.0, 2.0, 5.0),
+    (1.0, 3.0),
+)
+
+#: what a tick label takes along its axis (CSS px, 11 px sans-serif as the panel draws it,
+#: with a little air): a line's height on a vertical axis, its width on a horizontal one
+LABEL_HEIGHT_PX = 15.0
+LABEL_CHAR_PX = 6.5
+LABEL_PAD_PX = 8.0
+
+
+def label_extent(label: str, horizontal: bool) -> float:
+    """How much of its axis (CSS px) a tick label needs, its neighbours kept clear."""
+    return len(label) * LABEL_CHAR_PX + LABEL_PAD_PX if horizontal else LABEL_HEIGHT_PX
+#: the most of a log axis (a share of it) between an end and the tick nearest it
+LOG_MAX_END_GAP = 0.3
+
+
+def _log_candidates(lo: float, hi: float) -> list[tuple[list[float], list[str]]]:
+    """Every tick set a log axis over ``[lo, hi]`` may use, with its labels."""
+    e0 = math.floor(math.log10(lo)) - 1
+    e1 = math.floor(math.log10(hi)) + 1
+    out: list[tuple[list[float], list[str]]] = []
+    for subs in LOG_SUBS:
+        ticks = [float(f"{m}e{e}") for e in range(e0, e1 + 1) for m in subs]  # exact decimals: 0.015, not 0.015000000000000001
+        ticks = [v for v in ticks if lo * (1 - 1e-9) <= v <= hi * (1 + 1e-9)]
+        out.append((ticks, [_log_label(v) for v in ticks]))
+    decades = e1 - e0
+    every = 1
+    while every <= decades:
+        ticks = [float(f"1e{e}") for e in range(e0, e1 + 1) if e % every == 0]
+        ticks = [v for v in ticks if lo * (1 - 1e-9) <= v <= hi * (1 + 1e-9)]
+        out.append((ticks, [_log_label(v) for v in ticks]))
+        every = {1: 2, 2: 3, 3: 5}.get(every, every * 2)
+    if math.log10(hi / lo) < 1.0:  # a narrow axis is nearly linear: 2.2, 2.4, 2.6 ...
+        for target in (2, 3, TARGET_TICKS, 8):
+            ticks, step = linear_ticks(lo, hi, target)
+            ticks = [v for v in ticks if v > 0]
+            out.append((ticks, tick_labels(ticks, step)))
+    return out
+
+
+def log_ticks(lo: float, hi: float, *, length_px: float = 200.0, horizontal: bool = False, target: int = TARGET_TICKS) -> tuple[list[float], list[str]]:
+    """``(ticks, labels)`` of a logarithmic axis over ``[lo, hi]`` (``0 < lo < hi``).
+
+    The rule (as matplotlib's ``LogLocator`` with ``subs``): among the tick sets of
+    :func:`_log_candidates` -- powers of ten (every one, every 2nd, 3rd, 5th ...), 1-3,
+    1-2-5, 1-2-3-5, 1-1.5-2-3-5-7 and 1-1.2-1.5-2-2.5-3-4-5-6-8 times them, and nice linear steps
+    on an axis of less than a decade -- the one whose neighbouring ticks are at least
+    their labels' extent apart on an axis ``length_px`` long (:func:`label_extent`: their
+    labels never touch; ``horizontal``: an x axis, where labels take their width), that has a tick within
+    :data:`LOG_MAX_END_GAP` of each end, and whose number of ticks is nearest ``target``
+    (then: the ends closest). Labels are numbers: "0.01", "150", "1e6", "2.5e-5".
+    """
     if not (math.isfinite(lo) and math.isfinite(hi)) or lo <= 0 or hi <= lo:
         return [], []
-    e0 = math.floor(math.log10(lo) + 1e-9)
-    e1 = math.floor(math.log10(hi) + 1e-9)
-    decades = math.log10(hi) - math.log10(lo)
-    if decades < 1:
-        mults = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
-        every = 1
-    elif decades < 2:
-        mults = (1.0, 2.0, 5.0)
-        every = 1
-    else:
-        mults = (1.0,)
-        every = max(1, math.ceil((e1 - e0 + 1) / 8))
-    ticks: list[float] = []
-    for e in range(e0, e1 + 1):
-        if (e - e0) % every:
+    span = math.log10(hi) - math.log10(lo)
+    if span < 1e-9:
+        return [], []
+    best: tuple[tuple[float, ...], list[float], list[str]] | None = None
+    for ticks, labels in _log_candidates(lo, hi):
+        if len(ticks) < 2 or len(set(labels)) != len(labels):
             continue
-        for m in mults:
-            v = float(f"{m}e{e}")  # exact decimal: 0.01, not 0.010000000000000002
-            if lo * (1 - 1e-9) <= v <= hi * (1 + 1e-9):
-                ticks.append(v)
-    labels = [_log_label(v) for v in ticks]
-    return ticks, labels
+        logs = [math.log10(v) for v in ticks]
+        px = length_px / span  # CSS px a decade
+        ends = max(logs[0] - math.log10(lo), math.log10(hi) - logs[-1]) / span
+        clear = all((b - a) * px >= 0.5 * (label_extent(s, horizontal) + label_extent(t, horizontal)) for a, b, s, t in zip(logs, logs[1:], labels, labels[1:]))
+        rank = 0.0 if clear and ends <= LOG_MAX_END_GAP else 1.0 if clear else 2.0
+        key = (rank, abs(len(ticks) - target), ends)
+        if best is None or key < best[0]:
+            best = (key, ticks, labels)
+    if best is None:  # not even two ticks fit (a sliver of an axis): its ends
+        return [lo, hi], [_log_label(lo, digits=3), _log_label(hi, digits=3)]
+    return best[1], best[2]
 
 
-def _log_label(v: float) -> str:
-    """A power of ten (or 2 or 5 times one) as a log axis labels it: "0.01", "100", "1e6"."""
-    e = math.floor(math.log10(v) + 1e-9)
-    if -3 <= e < 6:
-        return f"{v:.{max(0, -e)}f}"
-    return _pretty_exponent(f"{v:.0e}").replace("-", MINUS)
+def _log_label(v: float, digits: int = 2) -> str:
+    """A tick of a log axis as a number, with the significant digits it has (at most
+    ``digits``): "0.01", "150", "2.5", "1e6", "1.5e-5"."""
+    text = f"{v:.{digits}g}"
+    if "e" in text:
+        mant, _, exp = text.partition("e")
+        e = int(exp)
+        if -3 <= e < 6:
+            text = f"{v:.{max(0, digits - 1 - e)}f}".rstrip("0").rstrip(".") if "." in f"{v:.{max(0, digits - 1 - e)}f}" else f"{v:.0f}"
+        else:
+            text = f"{mant}e{e}"
+    return text.replace("-", MINUS)
