@@ -148,3 +148,54 @@ def test_steps_with_a_time_variable_and_none_at_all(apps) -> None:
     assert table(r.stdout) == [["t"], ["0.0"], ["0.5"], ["1.0"], ["1.5"]]
     r = run_app(apps["arrays"], "--headless", "--csv", "-", timeout=60)
     assert r.returncode == 2 and "--duration T" in r.stderr and "--steps N" in r.stderr
+
+
+TALKER = """\
+ejs: 1
+title: A lab that talks
+model:
+  variables:
+    t: 0.0
+    dt: 0.05
+    x: 1.0
+  init: |
+    print("init says hello")
+    alert("init alert")
+  evolution:
+    - code: |
+        t = t + dt
+        x = x * 0.99
+view:
+  - label: {text: "{x}"}
+"""
+
+
+@pytest.mark.parametrize(("args", "before"), [(("--processes", "2"), 0), (("--processes", "1"), 0), (("--shared",), 1)])
+def test_start_up_measurement_prints_nothing(tmp_path: Path, args: tuple[str, ...], before: int) -> None:
+    """Served per tab, the lab's start-up apps (the template, the cost measurement) print
+    nothing (the trial saw init's line four times before "serving on"); the tab's own
+    session still prints its init once. ``--shared``: the one simulation prints it once."""
+    from testkit.guard_client import Client, run_async
+    from testkit.served import Served
+
+    app = _build(tmp_path, "talker", TALKER)
+    served = Served(app, tmp_path, *args)
+    try:
+        text = served.out.read_text()
+        assert text.count("init says hello") == before, text
+        assert "init alert" not in text + served.err.read_text()
+
+        async def open_tab() -> None:
+            client = await Client.open(served.port)
+            try:
+                await client.until(lambda: "init says hello" in served.out.read_text(), "the session's init to print", 60.0)
+                await client.settle(0.5)
+            finally:
+                await client.ws.close()
+
+        run_async(open_tab())
+        final = served.out.read_text()
+        assert final.count("init says hello") == 1, final
+        assert "init alert" not in final
+    finally:
+        served.stop()

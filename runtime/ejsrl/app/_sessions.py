@@ -557,7 +557,15 @@ def measure_frame_cost(app: Any, frames: int = 12) -> float:
     """CPU seconds one display frame of ``app`` takes while playing: the steps, the world,
     and every value its view shows (plots, images, labels, controls), images counted at
     the rate the view reads them (``IMAGE_RATE`` of ``ejsrl.view._plots``). ``app`` is
-    played for ``frames`` frames at its frame rate, then reset."""
+    played for ``frames`` frames at its frame rate, then reset, its spec code's prints and
+    alerts silenced (``quiet_prints``: a throw-away run, not a student's)."""
+    from ejsrl.sim._console import quiet_prints
+
+    with quiet_prints():
+        return _frame_cost(app, frames)
+
+
+def _frame_cost(app: Any, frames: int) -> float:
     from ejsrl.view._plots import IMAGE_RATE
     from ejsrl.view.elements import Control, Dynamic, Folder, Image, Label, Plot, Tabs
 

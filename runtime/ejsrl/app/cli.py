@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import contextlib
 import math
 import os
 import signal
@@ -25,6 +26,7 @@ from ejsrl._signals import SignalScope
 from ejsrl.app._front import WORKER_ENV, WorkerRole, default_processes, serve_front, worker_command
 from ejsrl.app._loop import App, AppMeta, SimConfig, announce
 from ejsrl.app.headless import csv_columns, refusal, run_headless, split_vars
+from ejsrl.sim._console import quiet_prints
 from ejsrl.sim.model import ModelBase, SetValueError, UserCodeError
 
 __all__ = ["main", "parse_set"]
@@ -345,7 +347,10 @@ def _main(
         if args.processes is not None:
             print(f"warning: --processes {count}: this app was not started as a script (python app.py), so it cannot "
                   "start copies of itself; serving from one process", file=sys.stderr, flush=True)
-    app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
+    # served per tab, this app is only the template the sessions are made like: what its
+    # init prints or alerts is nobody's (each tab's session prints its own when it starts)
+    with contextlib.nullcontext() if args.shared else quiet_prints():
+        app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
     app.serve(args.host, args.port, allow_origins=origins, per_client=not args.shared,
               max_sessions=args.max_sessions, grace=args.grace, role=role)
     return 0

@@ -11,9 +11,33 @@ from __future__ import annotations
 
 import threading
 from collections import deque
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import Any
 
-__all__ = ["ConsoleLog", "console_log"]
+__all__ = ["ConsoleLog", "console_log", "quiet_prints", "prints_quiet"]
+
+_QUIET: ContextVar[bool] = ContextVar("ejsrl_quiet_prints", default=False)
+
+
+@contextmanager
+def quiet_prints() -> Iterator[None]:
+    """Within it, in this thread, spec code's ``print()`` and ``alert()`` go nowhere: not
+    to the terminal, not to a console, not to an alert. For throw-away runs nobody reads:
+    the served lab's template app, and the start-up measurement of its cost (a lab printed
+    its ``init`` line four times before "serving on"). Threads started within it print
+    as usual (a new thread starts with the default context)."""
+    token = _QUIET.set(True)
+    try:
+        yield
+    finally:
+        _QUIET.reset(token)
+
+
+def prints_quiet() -> bool:
+    """Whether this thread is inside :func:`quiet_prints`."""
+    return _QUIET.get()
 
 
 class ConsoleLog:

@@ -577,7 +577,10 @@ class ModelBase:
     @prelude("control")
     def alert(self, text: Any) -> None:
         """Show a message in the UI (printed in headless runs)."""
-        self._ejs_ctl.alert(str(text))
+        from ejsrl.sim._console import prints_quiet
+
+        if not prints_quiet():  # a throw-away run (a served lab's start-up measurement): nobody to tell
+            self._ejs_ctl.alert(str(text))
 
     @prelude("control")
     def clear_trace(self, name: str | None = None) -> None:
@@ -601,10 +604,12 @@ class ModelBase:
         """
         import builtins
 
+        from ejsrl.sim._console import console_log, prints_quiet
+
+        if prints_quiet():  # a throw-away run (a served lab's start-up measurement): nobody reads it
+            return
         builtins.print(*values, sep=sep, end=end, file=file, flush=flush)
         if file is None or file is sys.stdout:
-            from ejsrl.sim._console import console_log
-
             text = (" " if sep is None else str(sep)).join(str(v) for v in values) + ("\n" if end is None else str(end))
             console_log(self._ejs_ctl).write(text)
 
