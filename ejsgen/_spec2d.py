@@ -271,8 +271,8 @@ class DrawingEl(Strict):
     """[ymin, ymax] of the world shown."""
     aspect: Literal["equal", "free"] = "equal"
     """equal: a unit is as long on x as on y (the ranges grow to fill the panel, centred); free: each range fills the panel."""
-    height: int = Field(default=300, ge=60, le=2000)
-    """Height of the panel in pixels (it is as wide as the control panel)."""
+    height: int | None = Field(default=None, ge=60, le=2000)
+    """Height of the panel in pixels (it is as wide as the control panel). Left out: with aspect: equal, as high as the ranges need at the panel's width, so that they fill it (at most the window's height less 100 px, at least 120 px: beyond those the other range grows); with aspect: free, 300."""
     axes: bool = False
     """Draw a frame with ticks and numbers along x and y."""
     grid: bool = False

@@ -345,3 +345,50 @@ def test_the_projectile_lab_moved_by_mouse_and_keys_lands_where_physics_says(pro
         save_shot(page, "projectile_2d")
     finally:
         page.close()
+
+
+def _shown_x_range(page) -> tuple[float, float]:
+    """The world x range the panel shows, read from its pixels alone: the plot area's frame (the
+    dark columns that run down most of the canvas) and the three seagreen targets at x = 10, 14, 18
+    (a straight line through their centres maps x to pixels)."""
+    from PIL import Image
+
+    img = np.asarray(Image.open(io.BytesIO(page.locator("canvas.ejs2d-c").first.screenshot())).convert("RGB")).astype(int)
+    green = (np.abs(img - [46, 139, 87]).sum(axis=2) < 30)
+    cols = np.flatnonzero(green.any(axis=0))
+    groups = np.split(cols, np.flatnonzero(np.diff(cols) > 3) + 1)
+    assert len(groups) == 3, f"three targets expected, found {len(groups)}"
+    centres = [g.mean() for g in groups]
+    b, a = np.polyfit([10.0, 14.0, 18.0], centres, 1)
+    grey = ((img.max(axis=2) < 200) & (np.ptp(img, axis=2) < 30)).mean(axis=0)  # the frame's grey, maybe blurred over 2 px
+    frame = np.flatnonzero(grey > 0.5)
+    runs = np.split(frame, np.flatnonzero(np.diff(frame) > 1) + 1)
+    assert len(runs) >= 2, f"the plot area's frame not found ({frame})"
+    left, right = runs[0].mean(), runs[-1].mean()
+    return (left + 0.5 - a) / b, (right + 0.5 - a) / b
+
+
+@pytest.mark.browser
+def test_an_equal_aspect_panel_is_as_high_as_its_ranges_need(projectile, browser_context):
+    # the trial: x_range [-1, 21] in a panel 1,160 px wide and 340 high showed -17 ... 37; with no
+    # height given the panel follows the ranges' aspect, so they fill it (a few % at most beyond)
+    app, url = projectile
+    page = open_tab(browser_context, url)
+    try:
+        for width, height in ((1280, 800), (560, 800)):
+            page.set_viewport_size({"width": width, "height": height})
+            wait_until(lambda: page.locator("canvas.ejs2d-c").first.bounding_box()["width"] < width - 100, what="the panel's width")
+            last: list = []
+
+            def settled() -> bool:
+                box = page.locator("canvas.ejs2d-c").first.bounding_box()
+                last.append(box["height"])
+                return len(last) > 3 and len(set(last[-4:])) == 1
+
+            wait_until(settled, what="the panel's height to settle")
+            lo, hi = _shown_x_range(page)
+            assert abs(lo - -1.0) < 0.03 * 22 and abs(hi - 21.0) < 0.03 * 22, (width, lo, hi)
+            box = page.locator("canvas.ejs2d-c").first.bounding_box()
+            assert box["height"] <= height - 100 + 1  # within the window
+    finally:
+        page.close()

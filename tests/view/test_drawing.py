@@ -171,6 +171,39 @@ def test_a_set_of_the_wrong_shape_at_run_time_is_an_error_naming_the_element(tmp
     assert app.error is not None
     assert "N x 2" in app.error.message and "transpose" in app.error.message
     assert app.error.where.endswith(":23:21")  # the element's properties in the spec
+    # the other elements are still drawn (the trial's panel went blank), the error written on it
+    ids = [it.get("id") for it in b.frame["items"]]
+    assert ids.count("bead") == 1 and ids.count("cloud") == 1 and len(b.frame["items"]) == 3
+    assert "bad" in b.frame["error"] and "N x 2" in b.frame["error"] and b.frame["error"].startswith("\u26a0 ")
+    assert b.panel.last_frame == b.frame
+
+
+def test_an_error_after_good_frames_keeps_the_last_picture_with_the_error_on_it(tmp_path) -> None:
+    spec = CURVE.replace('position: "np.zeros((2, 5))"', 'position: "np.zeros((2, 5)) if x > 1.5 else [x, y]"')
+    app, b = built(tmp_path, spec)
+    b.panel.max_rate = float("inf")  # every frame sent (no rate between these refreshes)
+    b.refresh()
+    good = b.panel.last_frame
+    assert app.error is None and "error" not in good and len(good["items"]) == 4
+    app.model.x = 2.0  # the set now has the wrong shape: that element is left out, the rest drawn
+    b.refresh()
+    assert app.error is not None and "N x 2" in app.error.message
+    assert len(b.panel.last_frame["items"]) == 3 and "bad" in b.panel.last_frame["error"]
+    app.model.y = 1.0  # while the error is shown nothing is evaluated: the picture stays
+    b.refresh()
+    assert b.panel.last_frame["items"] == b.frame["items"] and "error" in b.panel.last_frame
+    app.reset()  # Reset clears the error: frames as before, without the note
+    b.refresh()
+    assert app.error is None and "error" not in b.panel.last_frame and len(b.panel.last_frame["items"]) == 4
+
+
+def test_an_error_elsewhere_before_the_first_frame_still_draws_the_panel(tmp_path) -> None:
+    spec = CURVE.replace('        - particle: {name: bad, position: "np.zeros((2, 5))"}\n', "").replace(
+        "    released: 0\n", "    released: 0\n  init: |\n    released = 1/0\n")
+    app, b = built(tmp_path, spec)
+    assert app.error is not None and "division by zero" in app.error.message
+    b.refresh()
+    assert len(b.panel.last_frame["items"]) == 3 and "division by zero" in b.panel.last_frame["error"]
 
 
 def test_spring_points_zig_zag_between_the_ends() -> None:

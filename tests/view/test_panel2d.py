@@ -219,3 +219,14 @@ def test_an_unlimited_rate_sends_every_new_frame() -> None:
     for i in range(5):  # the same instant: a caller that rate-limits itself
         assert panel.show(dict(FRAME, bounds=[0, 1 + i, 0, 1]))
     assert panel.sent == 5
+
+
+def test_a_panel_of_automatic_height_tells_the_engine_its_limits() -> None:
+    from ejsrl.view._panel2d import AUTO_HEIGHT_RESERVE, AUTO_MIN_HEIGHT
+
+    gui = FakeGui()
+    Panel2D(gui, "auto", height=300, auto_height=True)
+    Panel2D(gui, "fixed", height=340)
+    auto, _f1, fixed, _f2 = gui.htmls
+    assert f" data-auto-height={AUTO_MIN_HEIGHT},{AUTO_HEIGHT_RESERVE} " in auto.content
+    assert " data-auto-height=" not in fixed.content and "height:340px" in fixed.content

@@ -122,6 +122,13 @@ class _ShapeState:
         self.cleared = 0
 
 
+def _error_note(error: Any) -> str:
+    """The text written on a panel while the lab shows ``error`` (a ``UserCodeError``): where and what, cut to 300 characters."""
+    where = getattr(error, "where", "") or ""
+    text = f"\u26a0 {where}: {getattr(error, 'message', error)}" if where else f"\u26a0 {getattr(error, 'message', error)}"
+    return text if len(text) <= 300 else text[:299] + "\u2026"
+
+
 class DrawingBinding:
     """One ``Drawing`` element shown by a :class:`Panel2D` in ``gui``; ``app``: the running app
     (``lock``, ``model``, ``safe_value``, ``guard``, ``fail``, ``_after_change``, ``_wake``)."""
@@ -131,7 +138,9 @@ class DrawingBinding:
         self.app = app
         kw = {"clock": clock} if clock is not None else {}
         keys = [" " if k == "Space" else k for k in drawing.keys]  # the others scroll the page, as ever
-        self.panel = Panel2D(gui, key, height=drawing.height, on_event=self.on_event, keys=keys, **kw)
+        auto = drawing.height is None and drawing.aspect == "equal"  # as high as the ranges need (the client sizes it)
+        height = drawing.height if drawing.height is not None else 300
+        self.panel = Panel2D(gui, key, height=height, on_event=self.on_event, keys=keys, auto_height=auto, **kw)
         self.shapes: dict[str, Shape2D] = {s.name: s for s in drawing.children}
         self.states: dict[str, _ShapeState] = {s.name: _ShapeState() for s in drawing.children}
         self.base_dir = getattr(app, "base_dir", None)
@@ -147,7 +156,20 @@ class DrawingBinding:
 
     # -- every frame ----------------------------------------------------------------------------
     def refresh(self) -> None:
-        """Build this frame's picture and send it if it changed (the caller holds the app lock)."""
+        """Build this frame's picture and send it if it changed (the caller holds the app lock).
+
+        An element whose expression fails (a set of the wrong shape, an exception) is left
+        out of the picture, the error is recorded (the lab pauses and shows it) and the
+        other elements are drawn, with the error written on the panel. While the lab shows
+        an error the panel keeps its last picture, the error written on it.
+        """
+        app = self.app
+        if app.error is not None and self.frame is not None:
+            note = _error_note(app.error)
+            if self.frame.get("error") != note:
+                self.frame = dict(self.frame, error=note)
+                self.panel.show(self.frame)
+            return
         frame = self.build()
         if frame is not None:
             self.frame = frame
@@ -168,25 +190,35 @@ class DrawingBinding:
             return None
 
     def _value(self, prop: Any, where: str) -> Any:
-        return self.app.safe_value(prop, where)
+        """A property's value now; raises what its expression raises (the caller records it)."""
+        return prop(self.app.model) if isinstance(prop, Dynamic) else prop
 
     def build(self) -> dict[str, Any] | None:
-        """The frame of the panel now, or None after an error in an expression (recorded)."""
+        """The frame of the panel now, or None when its ranges cannot be had (the error recorded).
+
+        An element that fails is left out and its error recorded (the first one, if the lab
+        shows none yet); the frame then carries ``error``, the text written on the panel.
+        """
         d, app = self.drawing, self.app
-        xr = self._value(d.x_range, d.where)
-        yr = self._value(d.y_range, d.where)
-        if xr is None or yr is None:
-            return None
         try:
+            xr = self._value(d.x_range, d.where)
+            yr = self._value(d.y_range, d.where)
             x0, x1 = (float(v) for v in np.asarray(xr, dtype=float).reshape(2))
             y0, y1 = (float(v) for v in np.asarray(yr, dtype=float).reshape(2))
-        except (TypeError, ValueError):
-            app.fail(ValueError("x_range and y_range must be [min, max]"), d.where)
+        except Exception as exc:  # noqa: BLE001 - user code may raise anything
+            if app.error is None:
+                app.fail(ValueError(f"x_range and y_range must be [min, max] ({exc})") if isinstance(exc, (TypeError, ValueError)) else exc, d.where)
             return None
         if not (x1 > x0 and y1 > y0):
-            app.fail(ValueError(f"x_range and y_range must be [min, max] with min < max (got x {x0:g}..{x1:g}, y {y0:g}..{y1:g})"), d.where)
+            if app.error is None:
+                app.fail(ValueError(f"x_range and y_range must be [min, max] with min < max (got x {x0:g}..{x1:g}, y {y0:g}..{y1:g})"), d.where)
             return None
-        title = self._value(d.title, d.where) if isinstance(d.title, Dynamic) else d.title
+        try:
+            title = self._value(d.title, d.where) if isinstance(d.title, Dynamic) else d.title
+        except Exception as exc:  # noqa: BLE001
+            title = ""
+            if app.error is None:
+                app.fail(exc, d.where)
         items: list[dict[str, Any]] = []
         bounds = (x0, x1, y0, y1)
         for shape in d.children:
@@ -195,15 +227,13 @@ class DrawingBinding:
                 if vis is None or not bool(vis):
                     continue
                 item = self._item(shape, bounds)
-            except (TypeError, ValueError) as exc:
-                app.fail(exc, shape.where)
-                return None
-            if item is None:
-                if app.error is not None:
-                    return None
+            except Exception as exc:  # noqa: BLE001 - the others are still drawn
+                if app.error is None:
+                    app.fail(exc, shape.where)
                 continue
-            items.append(item)
-        return {
+            if item is not None:
+                items.append(item)
+        frame: dict[str, Any] = {
             "bounds": [x0, x1, y0, y1],
             "aspect": d.aspect,
             "background": d.background or None,
@@ -212,6 +242,9 @@ class DrawingBinding:
             "legend": [],
             "items": items,
         }
+        if app.error is not None:
+            frame["error"] = _error_note(app.error)
+        return frame
 
     def _axes(self, bounds: tuple[float, float, float, float]) -> dict[str, Any]:
         """Ticks over three times the window each way (the client shows those inside the window it grows to)."""

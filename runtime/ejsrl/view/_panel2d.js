@@ -59,6 +59,11 @@
     p.root = root;
     p.input = root.getAttribute("data-ev");
     p.only = root.getAttribute("data-keys") ? JSON.parse(root.getAttribute("data-keys")) : null;
+    p.auto = root.getAttribute("data-auto-height") ? root.getAttribute("data-auto-height").split(",").map(Number) : null;
+    if (p.auto && !p.autoResize) {   // the window's height bounds the panel's: follow it
+      p.autoResize = true;
+      window.addEventListener("resize", function () { p.autoFrozen = false; p.autoSets = []; request(p); });
+    }
     if (p.canvas === c) return;
     p.canvas = c;
     c.addEventListener("pointerdown", function (e) { down(p, e); });
@@ -137,6 +142,21 @@
     }
     return { l: m.l, t: m.t, w: pw, h: ph, x0: x0, x1: x1, y0: y0, y1: y1, sx: sx, sy: sy, lx: lx, ly: ly };
   }
+  // a panel of automatic height (equal aspect): as high as the requested window needs at this
+  // width (its plot area's height / width = the ranges' ratio), within [min, window height - reserve]
+  function autoHeight(p, f, h, M) {
+    var bd = f.bounds || [], sx = +bd[1] - +bd[0], sy = +bd[3] - +bd[2];
+    if (!(fin(sx) && fin(sy) && sx > 0 && sy > 0) || p.autoFrozen || !p.root) return false;
+    var lo = p.auto[0], hi = Math.max(lo, window.innerHeight - p.auto[1]);
+    var want = Math.min(Math.max(Math.round(M.w * sy / sx + (h - M.h)), lo), hi);
+    if (Math.abs(want - h) < 2) return false;
+    var now = Date.now();
+    p.autoSets = (p.autoSets || []).filter(function (t) { return now - t < 2000; });
+    if (p.autoSets.length >= 6) { p.autoFrozen = true; return false; }   // flip-flopping (a scrollbar coming and going): keep this height
+    p.autoSets.push(now);
+    p.root.style.height = want + "px";
+    return true;
+  }
   function X(M, x) { return M.l + ((M.lx ? Math.log10(x) : x) - M.x0) * M.sx; }
   function Y(M, y) { return M.t + (M.y1 - (M.ly ? Math.log10(y) : y)) * M.sy; }
   E.toPx = function (id, x, y) { var M = (E.panels[id] || {}).map; return M ? [X(M, x), Y(M, y)] : null; };
@@ -160,6 +180,7 @@
     if (!f) return;
     if (f.background) { ctx.fillStyle = f.background; ctx.fillRect(0, 0, w, h); }
     var M = p.map = layout(p, f, w, h, ctx);
+    if (p.auto && f.aspect !== "free") autoHeight(p, f, h, M);   // a new height: the observer draws again
     if (f.axes) axes(ctx, M, f.axes, true);
     ctx.save();
     ctx.beginPath(); ctx.rect(M.l, M.t, M.w, M.h); ctx.clip();
@@ -172,6 +193,7 @@
     if (f.axes) axes(ctx, M, f.axes, false);
     if (f.title) text(ctx, f.title, M.l + M.w / 2, 11, 13, "#222", "center", "bold ");
     if (f.legend && f.legend.length) legend(ctx, M, f.legend);
+    if (f.error) note(ctx, M, String(f.error));
     p.drawn++; E.draws++;
     c.setAttribute("data-drawn", String(p.drawn));
   }
@@ -209,6 +231,21 @@
       ctx.save(); ctx.translate(9, M.t + M.h / 2); ctx.rotate(-Math.PI / 2);
       text(ctx, ax.y.title, 0, 0, 12, "#222", "center"); ctx.restore();
     }
+  }
+
+  // the lab's error, written over the top of the plot area (as text: never markup), at most 3 lines
+  function note(ctx, M, msg) {
+    ctx.font = "12px sans-serif";
+    var words = msg.split(/\s+/), lines = [], line = "", room = Math.max(40, M.w - 16);
+    for (var i = 0; i < words.length && lines.length < 3; i++) {
+      var next = line ? line + " " + words[i] : words[i];
+      if (line && ctx.measureText(next).width > room) { lines.push(line); line = words[i]; } else line = next;
+    }
+    if (line && lines.length < 3) lines.push(line);
+    var bh = lines.length * 16 + 8;
+    ctx.fillStyle = "rgba(253,232,232,0.92)"; ctx.fillRect(M.l + 1, M.t + 1, M.w - 2, bh);
+    ctx.strokeStyle = "#e03131"; ctx.lineWidth = 1; ctx.strokeRect(M.l + 1.5, M.t + 1.5, M.w - 3, bh - 1);
+    for (var j = 0; j < lines.length; j++) text(ctx, lines[j], M.l + 8, M.t + 12 + j * 16, 12, "#c92a2a", "left");
   }
 
   function legend(ctx, M, entries) {

@@ -72,6 +72,10 @@ ALLOWED_KEYS = frozenset(
     + [str(d) for d in range(10)]
     + ["ArrowUp", "ArrowDown", "ArrowLeft", "ArrowRight", " ", "Enter", "Escape", "+", "-"]
 )
+#: a panel of automatic height is at least this high (CSS px) ...
+AUTO_MIN_HEIGHT = 120
+#: ... and at most the window's height less this (CSS px: the panel's header and a margin)
+AUTO_HEIGHT_RESERVE = 100
 _ID = re.compile(r"[A-Za-z0-9_.:\-]{1,64}")
 _DRAG_PHASES = ("start", "move", "release")
 _KEY_PHASES = ("down", "up")
@@ -201,10 +205,13 @@ def parse_events(raw: Any) -> tuple[int, list[dict[str, Any]]] | None:
 
 
 def _canvas_html(dom_id: str, key: str, input_uuid: str, height: int, scene_keys: bool = False,
-                 keys: list[str] | None = None) -> str:
+                 keys: list[str] | None = None, auto_height: bool = False) -> str:
     """The canvas (and the engine, installed once per page), never changed afterwards;
     ``scene_keys``: no canvas to see (height 0), the keys of the 3D view instead; ``keys``:
-    the only keys reported (browser names), None for all of :data:`ALLOWED_KEYS`."""
+    the only keys reported (browser names), None for all of :data:`ALLOWED_KEYS`;
+    ``auto_height``: the engine sets the height from each frame's bounds (equal aspect: the
+    requested window fills the plot area; within :data:`AUTO_MIN_HEIGHT` and the window's
+    height less :data:`AUTO_HEIGHT_RESERVE`), ``height`` being the first guess."""
     only = "" if keys is None else f' data-keys="{html.escape(json.dumps(sorted(k for k in keys if k in ALLOWED_KEYS)))}"'
     engine = html.escape(engine_js() + ";window.__ejs2d.mount(this);", quote=True)
     hide = f'div:has(> div > div > p > label[for="{input_uuid}"]){{display:none!important}}'
@@ -213,7 +220,8 @@ def _canvas_html(dom_id: str, key: str, input_uuid: str, height: int, scene_keys
         f"<style>{hide}.ejs2d-c:focus{{outline:2px solid #4dabf7;outline-offset:-2px}}"
         "div:has(> script[data-ejs2d-frame]){contain:strict;height:0;overflow:hidden}</style>"
         f'<div data-ejs2d="{html.escape(dom_id)}" data-key="{html.escape(key)}" data-ev="{html.escape(input_uuid)}"'
-        f'{" data-scene-keys=1" if scene_keys else ""}{only} '
+        f'{" data-scene-keys=1" if scene_keys else ""}{only}'
+        f'{f" data-auto-height={AUTO_MIN_HEIGHT},{AUTO_HEIGHT_RESERVE}" if auto_height else ""} '
         f'style="width:100%;height:{int(height)}px;position:relative">'
         f'<canvas class="{"ejs2d-k" if scene_keys else "ejs2d-c"}" tabindex="{-1 if scene_keys else 0}" '
         f'style="width:100%;height:100%;display:block;touch-action:none"></canvas></div>'
@@ -243,7 +251,8 @@ class Panel2D:
     ``scene_keys``: a panel of height 0 that reports the keys pressed while the 3D view has
     the focus (the 3D view was clicked last) instead of its own; ``keys``: the only keys the
     browser reports and takes from the page (browser names, ``" "`` for Space; None: every
-    allowed key), so that the 3D view's own keys (its camera's) keep working.
+    allowed key), so that the 3D view's own keys (its camera's) keep working;
+    ``auto_height``: the browser sets the panel's height from each frame (see :func:`_canvas_html`).
     """
 
     def __init__(
@@ -257,6 +266,7 @@ class Panel2D:
         clock: Callable[[], float] = time.monotonic,
         scene_keys: bool = False,
         keys: list[str] | None = None,
+        auto_height: bool = False,
     ) -> None:
         self.gui = gui
         self.key = str(key)
@@ -281,7 +291,7 @@ class Panel2D:
         # the events input first: the canvas names its uuid (the engine writes it, a style hides it)
         self.events = gui.add_text("ejs2d events", "")
         self.dom_id = f"{_slug(self.key)}-{self.events._impl.uuid[:8]}"
-        self.canvas = gui.add_html(_canvas_html(self.dom_id, self.key, self.events._impl.uuid, self.height, scene_keys, keys))
+        self.canvas = gui.add_html(_canvas_html(self.dom_id, self.key, self.events._impl.uuid, self.height, scene_keys, keys, auto_height))
         self.frame = gui.add_html(_frame_html(self.dom_id, "null"))
         self.events.on_update(self._on_message)
 

@@ -109,7 +109,9 @@ class Drawing(Element):
     """A 2D drawing panel (EjsS's DrawingPanel).
 
     ``title``: text or ``Dynamic``; ``x_range``/``y_range``: ``(min, max)`` world window,
-    constant or ``Dynamic``; ``aspect``: ``equal`` or ``free``; ``height``: pixels;
+    constant or ``Dynamic``; ``aspect``: ``equal`` or ``free``; ``height``: pixels (None:
+    with ``equal``, as high as the ranges need at the panel's width, within the window; with
+    ``free``, 300);
     ``axes``/``grid``: a frame with ticks / grid lines; ``x_label``/``y_label``: axis
     titles; ``background``: CSS colour; ``keys``: key name (``"ArrowUp"``, ``"a"``,
     ``"Space"``, ...) -> ``action(model)`` run on key-down while the panel has the focus
@@ -121,7 +123,7 @@ class Drawing(Element):
     x_range: Any = (-1.0, 1.0)
     y_range: Any = (-1.0, 1.0)
     aspect: str = "equal"
-    height: int = 300
+    height: int | None = None
     axes: bool = False
     grid: bool = False
     x_label: str = ""
