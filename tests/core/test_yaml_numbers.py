@@ -90,6 +90,10 @@ model:
     ratio = p / c + a * d
 view:
   - label: {text: "{ratio}"}
+  - slider: {bind: a, min: 1e-4, max: 1E-2, step: 1e-4, label: a}
+simulation:
+  fps: 2.5e1
+  steps_per_display: 2
 """
 
 
@@ -99,6 +103,9 @@ def test_lab_with_exponent_numbers_builds_and_runs(tmp_path: Path) -> None:
     spec = tmp_path / "expo.ejs.yaml"
     spec.write_text(SPEC, encoding="utf-8")
     app = build(spec, tmp_path / "app")
+    text = (app / "app.py").read_text()
+    # a view property and a simulation setting in exponent form are the numbers too
+    assert "min=0.0001, max=0.01, step=0.0001" in text and "fps=25.0" in text
     r = run_app(app, "--headless", "--duration", "1", "--csv", "-", "--vars", "p,c,a,d,ratio", timeout=60)
     assert r.returncode == 0, r.stderr
     rows = list(csv.reader(io.StringIO(r.stdout)))
