@@ -21,21 +21,26 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
 
 
 @pytest.fixture
-def page(tmp_path_factory, request):
+def context(tmp_path_factory):
     from playwright.sync_api import sync_playwright
 
     with sync_playwright() as pw:
-        context = pw.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
-                                                        executable_path="/usr/bin/chromium", headless=True,
-                                                        args=ARGS, viewport={"width": 1280, "height": 800})
-        context.set_default_timeout(30_000)
-        page = context.new_page()
+        ctx = pw.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
+                                                    executable_path="/usr/bin/chromium", headless=True,
+                                                    args=ARGS, viewport={"width": 1280, "height": 800})
+        ctx.set_default_timeout(60_000)
         try:
-            yield page
+            yield ctx
         finally:
-            ARTIFACTS.mkdir(exist_ok=True)
-            page.screenshot(path=str(ARTIFACTS / f"{request.node.name}.png"))
-            context.close()
+            ctx.close()
+
+
+@pytest.fixture
+def page(context, request):
+    page = context.new_page()
+    yield page
+    ARTIFACTS.mkdir(exist_ok=True)
+    page.screenshot(path=str(ARTIFACTS / f"{request.node.name}.png"))
 
 
 def _panel_text(page) -> str:
@@ -91,3 +96,64 @@ def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page
         assert np.max(np.abs(other.measured() - q_stop)) < math.radians(0.2)
         assert stop_s < 3.0
     request_finalizer()
+
+
+def _real_mode(page) -> None:
+    page.bring_to_front()
+    page.get_by_label("Plant mode").click()
+    page.get_by_role("option", name="Real plant").click()
+
+
+def test_two_tabs_in_two_worker_processes_share_one_lease_and_a_spectator_stops_the_robot(
+        broker: Broker, link_factory, context, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``python app.py --processes 2``: a tab in each process; the plant's lease is class-wide."""
+    import re
+
+    from ejsgen.cli import build
+    from testkit.served import Served
+
+    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--slot", "300"])
+    monkeypatch.setenv("EJSRL_PLANT_PORT", str(broker.port))
+    app_dir = build(EXAMPLES / "paper" / "robualab.ejs.yaml", tmp_path / "robualab")
+    server = Served(app_dir, tmp_path, "--processes", "2", "--max-sessions", "4")
+    watcher = link_factory(session="watcher")
+    try:
+        url = f"http://127.0.0.1:{server.port}"
+        tabs = []
+        for _ in range(2):
+            tab = context.new_page()
+            tab.goto(url)
+            tab.get_by_role("button", name="EMERGENCY STOP").wait_for(timeout=90_000)
+            wait_until(lambda: "/s/" in tab.evaluate("location.href"), timeout=60, what="the tab's session")
+            tabs.append(tab)
+        a, b = tabs
+        tokens = [re.search(r"/s/([A-Za-z0-9_-]+)/", t.evaluate("location.href")).group(1) for t in tabs]
+        assert sorted(t[:2] for t in tokens) == ["0x", "1x"]           # one tab in each worker process
+        _real_mode(a)
+        try:
+            wait_until(lambda: "You control the robot" in _panel_text(a), timeout=60, what="A to get the robot")
+        except AssertionError:
+            raise AssertionError(f"{_panel_text(a)[-600:]}\n{server.err.read_text()[-3000:]}\n{watcher.state}")
+        _real_mode(b)
+        wait_until(lambda: "number 1 in the queue" in _panel_text(b), timeout=60, what="B to wait its turn")
+        assert watcher.state["holder"] is not None and len(watcher.state["queue"]) == 1
+        # A drives; B, waiting, presses the e-stop: the robot stops for everyone
+        a.bring_to_front()
+        a.get_by_role("button", name="Run program").click()
+        wait_until(lambda: watcher.state["status"] == "moving", timeout=60, what="the plant to move")
+        b.bring_to_front()
+        b.get_by_role("button", name="EMERGENCY STOP").click()
+        wait_until(lambda: watcher.state["status"] == "estop" and max(map(abs, watcher.state["qd"])) == 0.0,
+                   timeout=20, what="the plant to stop")
+        wait_until(lambda: "EMERGENCY STOP is on" in _panel_text(b), timeout=30, what="B's panel to say so")
+        # B re-arms; A gives the robot back by switching to Simulation: B gets it
+        b.get_by_role("button", name="Re-arm the plant").click()
+        wait_until(lambda: not watcher.state["estop"], timeout=20, what="the plant re-armed")
+        a.bring_to_front()
+        a.get_by_label("Plant mode").click()
+        a.get_by_role("option", name="Simulation").click()
+        b.bring_to_front()
+        wait_until(lambda: "You control the robot" in _panel_text(b), timeout=60, what="B to get the robot")
+    finally:
+        server.stop()
+        plant.stop()

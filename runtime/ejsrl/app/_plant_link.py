@@ -66,6 +66,8 @@ class PlantLink:
         #: ``alive()`` -> seconds since the session was last seen alive (None: always); the
         #: heartbeat stops after 1 s of it, and the link closes itself after 10 s
         self.alive = alive
+        #: ``on_state()`` is called (from the network thread) after every state message or connection change
+        self.on_state: Any = None
         self.state: dict[str, Any] | None = None          # the plant's last state message
         self.state_at = 0.0                               # monotonic time it arrived
         self.plant_online = False
@@ -201,6 +203,8 @@ class PlantLink:
             if not self._refused:
                 self.note = "connection to the plant lost: commands disabled, reconnecting"
             self._changed.notify_all()
+        if self.on_state is not None:
+            self.on_state()
 
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
         if msg.topic.endswith("/online"):
@@ -231,6 +235,8 @@ class PlantLink:
             self._changed.notify_all()
         if rebooted and self.wants_lease:   # a restarted plant forgot the queue: ask again
             self.request_lease()
+        if self.on_state is not None:
+            self.on_state()
 
     def _beat_loop(self) -> None:
         while not self._stop.wait(self.heartbeat_period):

@@ -33,6 +33,9 @@ class PlantPanel:
         # when this session's panel is gone, and stops beating when the app process dies
         self.link = self.defn.connect()
         weakref.finalize(self, self.link.close)
+        self._woken_key: tuple[Any, ...] | None = None
+        me = weakref.ref(self)
+        self.link.on_state = lambda: (p := me()) is not None and p._maybe_wake()
         self.real = False
         self._sent: tuple[float, ...] | None = None
         self._sent_at = 0.0
@@ -60,12 +63,29 @@ class PlantPanel:
         def _(_e: Any) -> None:
             self.link.estop(False)
 
+    def _wake(self) -> None:
+        """Ask for frames (a paused session in a class gets none until something changes)."""
+        wake = getattr(self.app, "on_wake", None)
+        if wake is not None:
+            wake()
+
+    def _maybe_wake(self) -> None:
+        """On a state message: frames while the robot moves, in Real plant mode, and when what
+        the panel shows changed; a paused spectator of an idle plant costs nothing."""
+        link, st = self.link, self.link.state or {}
+        key = (link.connected, link.plant_online, st.get("status"), st.get("estop"), st.get("event"),
+               st.get("holder") == link.session, link.queue_position)
+        if self.real or st.get("status") != "idle" or key != self._woken_key:
+            self._woken_key = key
+            self._wake()
+
     def set_real(self, real: bool) -> None:
         """Switch this session to Real plant mode (join the queue for the lease) or back."""
         if real == self.real:
             return
         self.real = real
         self._sent = None
+        self._wake()
         if real:
             self.link.request_lease()
         else:
