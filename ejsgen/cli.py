@@ -289,7 +289,7 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
 
 #: the served app's options that take a value (``python app.py --help`` lists them all)
 _APP_OPTIONS_WITH_VALUE = (
-    "--port", "--host", "--allow-origin", "--max-sessions", "--processes", "--grace", "--duration", "--csv", "--vars", "--set", "--every",
+    "--port", "--host", "--allow-origin", "--max-sessions", "--processes", "--grace", "--duration", "--steps", "--csv", "--vars", "--set", "--every",
     "--grid", "--values", "--table", "--samples", "--sampling", "--seed", "--out", "--summary", "--plot", "--plot-y",
     "--plot-x", "--workers", "--scheduler",
 )

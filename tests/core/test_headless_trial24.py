@@ -199,3 +199,16 @@ def test_start_up_measurement_prints_nothing(tmp_path: Path, args: tuple[str, ..
         assert "init alert" not in final
     finally:
         served.stop()
+
+
+def test_ejsgen_run_passes_steps_to_the_app(tmp_path: Path) -> None:
+    """``ejsgen run --headless --steps 2 SPEC``: 2 is --steps' value, not the spec."""
+    import subprocess
+    import sys
+
+    spec = tmp_path / "counter.ejs.yaml"
+    spec.write_text(COUNTER, encoding="utf-8")
+    r = subprocess.run([sys.executable, "-m", "ejsgen", "run", "--headless", "--steps", "2", str(spec), "--csv", "-",
+                        "--vars", "n"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert table(r.stdout) == [["n"], ["0"], ["1"], ["2"]]
