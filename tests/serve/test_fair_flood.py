@@ -134,6 +134,11 @@ def test_a_flood_and_copies_of_a_live_address_do_not_slow_the_other_students(ser
             c = await Client.open(served.port, path=f"/s/{evil_token}", camera=False)
             await c.send(CAMERA)
             copies.append(c)
+        # measured once they are settled: each waits up to 2 s for the address's tab to close,
+        # holding no thread, then gets a lab of its own while places are left (max-sessions
+        # 12), else the "lab is full" page; making those labs is a one-off cost of new tabs
+        await Client.until(lambda: all(token_of(c) is not None or "This lab is full" in " ".join(c.texts())
+                                       for c in copies), "the copies to be settled", timeout=90)
         await asyncio.sleep(1.0)
         loud_fps = await frames_per_second(students, MEASURE_SECONDS)
         loud_rt = await response_times(students[0]) + await response_times(students[1])
