@@ -387,7 +387,8 @@ class Panel:
                         if is_dynamic(s.label):
                             self.texts.append(TextBinding(s.label, s.where or el.where, lambda t, b=binding, i=i: b.set_label(i, t), labels[i]))
                 elif isinstance(el, Image):
-                    binding = ImageBinding(gui, el, label=self._text(el.label, el.where), clock=self.clock)
+                    binding = ImageBinding(gui, el, label=self._text(el.label, el.where), clock=self.clock,
+                                           first=lambda el=el: self._image_now(el))
                     self.images.append(binding)
                     self._track(el.label, el.where, binding.handle, "label")
                 elif isinstance(el, Drawing):
@@ -426,6 +427,13 @@ class Panel:
         """A property's value read now, the model lock held (while the panel is built)."""
         with self.app.lock:
             return self.app.safe_value(prop, where)
+
+    def _image_now(self, el: Image) -> tuple[Any, Any]:
+        """An image element's source and points read now (its first picture), the model lock held."""
+        with self.app.lock:
+            src = self.app.safe_value(el.source, el.where)
+            pts = self.app.safe_value(el.points, el.where) if el.points is not None and src is not None else None
+        return src, pts
 
     def _track(self, prop: Any, where: str, handle: Any, attr: str) -> None:
         """Keep ``handle.<attr>`` showing ``prop`` if it changes at run time."""
@@ -563,7 +571,7 @@ class Panel:
                 b.last = shown
         playing = bool(app.is_playing())
         for p in self.plots:
-            p.update(app, playing=playing)
+            p.update(app, playing=playing, now=now)  # one clock reading: the plots are sent in the same frames
         for d in self.drawings:
             d.refresh()
         for tv in self.text_views:

@@ -33,6 +33,7 @@ import numpy as np
 
 from ejsrl.view._plot_buffers import PlotBuffer, TraceBuffer
 from ejsrl.view._plot_frame import PLOT_AREA_PX, AxisConf, Layer, flat_range, min_span, plot_frame, x_range
+from ejsrl.view._ticks import readout_text
 from ejsrl.view._wire import set_markdown
 from ejsrl.view.elements import Image, Plot, escape_markdown
 from ejsrl.world.colors import to_rgb
@@ -72,14 +73,17 @@ def _css(color: Any, i: int) -> str:
     return f"rgb({r}, {g}, {b})"
 
 
-def _value_text(v: float) -> str:
-    """A value to four significant digits, without an exponent between 0.001 and 10^6."""
-    mag = abs(v)
-    if 1e-3 <= mag < 1e6:
-        text = f"{v:.{max(0, 3 - int(np.floor(np.log10(mag))))}f}"
-    else:
-        text = f"{v:.4g}"
-    return text.replace("-", "\u2212")
+#: how many of the latest values a readout looks at for its digits
+READOUT_RECENT = 20
+
+
+def _value_text(v: float, recent: Any = None, axis: dict[str, Any] | None = None) -> str:
+    """A value in the line below a plot: with the digits that tell the ``recent`` values
+    apart, written as its ``axis`` (of the frame sent) writes its labels
+    (:func:`ejsrl.view._ticks.readout_text`)."""
+    ticks = [float(t[0]) for t in axis.get("ticks", [])] if axis else None
+    tail = None if recent is None else [float(r) for r in np.asarray(recent, dtype=float)[-READOUT_RECENT:]]
+    return readout_text(float(v), tail, ticks, bool(axis and axis.get("log")))
 
 
 def _numbers(value: Any, what: str) -> np.ndarray:
@@ -228,11 +232,13 @@ class PlotBinding:
         if problem is not None:
             raise problem
 
-    def update(self, app: Any, *, playing: bool) -> None:
+    def update(self, app: Any, *, playing: bool, now: float | None = None) -> None:
         """Read this frame's values from ``app``'s model (the caller holds ``app.lock``) and
-        push; a shape that cannot be drawn pauses the app with its message."""
+        push; a shape that cannot be drawn pauses the app with its message. ``now``: the
+        panel's clock for this frame, the same for each of its plots (so they are sent in
+        the same frames and their readouts agree)."""
         self.record(app)
-        self.push(force=not playing)
+        self.push(force=not playing, now=now)
 
     def record(self, app: Any) -> None:
         """Read and file this frame's values without sending anything (a tab that is behind)."""
@@ -310,14 +316,19 @@ class PlotBinding:
         area = (PLOT_AREA_PX[0], max(40.0, self.height - 60.0))  # the panel's title and x axis take about 60 px of the height
         return plot_frame(self.title, layers, self.x_axis, self.y_axis, x_auto=x_auto, legend=legend, grid=self.plot.grid, previous=previous, area_px=area)
 
-    def push(self, *, force: bool = False) -> bool:
-        """Build and send the frame if anything changed and the rate allows; True if sent."""
-        now = self.clock()
+    def push(self, *, force: bool = False, now: float | None = None) -> bool:
+        """Build and send the frame if anything changed and the rate allows; True if sent.
+
+        The rate allows one frame in each 1/``max_rate`` s slot of the clock (slots counted
+        from 0, not from this plot's last push): plots updated with one ``now`` are sent in
+        the same frames, never one a frame behind another."""
+        now = self.clock() if now is None else now
         rev = self.rev
         if rev == self._sent_rev:
             return False
-        if not force and now - self._last_push < 1.0 / self.max_rate:
-            return False
+        if not force and math.isfinite(self.max_rate) and math.isfinite(self._last_push):
+            if math.floor(now * self.max_rate) == math.floor(self._last_push * self.max_rate):
+                return False
         self.frame = self.build()
         self.handle.show(self.frame)
         text = self._values_text()
@@ -332,20 +343,22 @@ class PlotBinding:
         (the x and y of an x-y series), then the strip chart's x."""
         parts = []
         data = self.buffer.data() if len(self.buffer) else None
+        axes = self.frame["axes"] if self.frame is not None else {}
+        ax_x, ax_y = axes.get("x"), axes.get("y")
         for i, s in enumerate(self.plot.series):
             name = escape_markdown(self.labels[i] or f"y{i + 1}")
             swatch = f'<span style="color:{self.colors[i]}">&#9632;</span>&nbsp;{name}'
             if i in self._strip:
-                value = f" = {_value_text(data[i + 1][-1])}" if data is not None else ""
+                value = f" = {_value_text(data[i + 1][-1], data[i + 1], ax_y)}" if data is not None else ""
             elif s.kind != "histogram" and i in self.traces and len(self.traces[i]) and i not in self.arrays:
-                x, y = self.traces[i].data()[-1]
-                value = f" = {_value_text(y)} at {_value_text(x)}"
+                xy = self.traces[i].data()
+                value = f" = {_value_text(xy[-1, 1], xy[:, 1], ax_y)} at {_value_text(xy[-1, 0], xy[:, 0], ax_x)}"
             else:
                 continue
             parts.append(swatch + value)
         if not parts:
             return ""
-        x = f" &nbsp;at {escape_markdown(self.x_name)} = {_value_text(data[0][-1])}" if data is not None and self._strip else ""
+        x = f" &nbsp;at {escape_markdown(self.x_name)} = {_value_text(data[0][-1], data[0], ax_x)}" if data is not None and self._strip else ""
         return " &nbsp; ".join(parts) + x
 
     # -- titles, reset, tabs ----------------------------------------------------------------------
@@ -426,22 +439,43 @@ def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
 IMAGE_RATE = 20.0
 
 
+#: seconds after an image element is made before its picture is replaced: the browser is still
+#: loading the first one (viser's client revokes a picture's blob: URL when the next comes, and
+#: one revoked while loading logs "net::ERR_FILE_NOT_FOUND")
+IMAGE_SETTLE = 0.5
+
+
 class ImageBinding:
-    """One ``Image`` element: sends the picture only when the source or the points changed."""
+    """One ``Image`` element: sends the picture only when the source or the points changed.
+
+    ``first()``: the source and points now, ``(src, pts)``, read once to make the element
+    with the lab's first picture (a grey placeholder if it gives none); the next picture is
+    sent :data:`IMAGE_SETTLE` seconds later at the earliest, then at most ``max_rate`` a second.
+    """
 
     def __init__(
-        self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = IMAGE_RATE, clock: Callable[[], float] = time.monotonic
+        self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = IMAGE_RATE, clock: Callable[[], float] = time.monotonic,
+        first: Callable[[], tuple[Any, Any]] | None = None,
     ) -> None:
         self.image = image
         self.max_rate = max_rate
         self.clock = clock
         self._last_src: np.ndarray | None = None
         self._last_pts: np.ndarray | None = None
-        self._last_push = -math.inf
+        #: no new picture before the first has had time to load (a placeholder too)
+        self._last_push = clock() + IMAGE_SETTLE - 1.0 / max_rate
         #: when a source was last looked at (sent or not): read again at most max_rate a second
         self._last_read = -math.inf
         self.pushes = 0
-        placeholder = np.full((2, 2, 3), 40, dtype=np.uint8)
+        shown = None
+        if first is not None:
+            src, pts = first()
+            if src is not None:
+                a, p = np.asarray(src), None if pts is None else np.asarray(pts, dtype=float)
+                shown = prepare_image(a, p)
+                if shown is not None:
+                    self._last_src, self._last_pts = a.copy(), None if p is None else p.copy()
+        placeholder = np.full((2, 2, 3), 40, dtype=np.uint8) if shown is None else shown
         label = str(image.label or "") if label is None else label
         self.handle = gui.add_image(placeholder, label=label or None, format="jpeg", jpeg_quality=85)
 

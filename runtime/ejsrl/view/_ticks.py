@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["nice_step", "linear_ticks", "log_ticks", "tick_labels", "format_tick", "label_extent", "MINUS"]
+__all__ = ["nice_step", "linear_ticks", "log_ticks", "tick_labels", "format_tick", "label_extent", "readout_text", "MINUS"]
 
 #: the minus sign of tick labels
 MINUS = "\u2212"
@@ -197,4 +197,66 @@ def _log_label(v: float, digits: int = 2) -> str:
             text = f"{v:.{max(0, digits - 1 - e)}f}".rstrip("0").rstrip(".") if "." in f"{v:.{max(0, digits - 1 - e)}f}" else f"{v:.0f}"
         else:
             text = f"{mant}e{e}"
+    return text.replace("-", MINUS)
+
+
+#: the most significant digits a readout shows (float64 holds about 15)
+READOUT_MAX_DIGITS = 12
+#: a readout's last digit is never finer than this share of its axis' tick step
+READOUT_STEP_SHARE = 1e-6
+
+
+def readout_resolution(value: float, recent: list[float] | None = None) -> float:
+    """The last digit a readout of ``value`` shows: four significant digits, or finer when
+    the recent values (the last few frames', in order) change by less than that from one
+    frame to the next -- then one digit below their typical (median) change, so that
+    3e8 + 12 sin t reads 300000011, not 3e+08; at most :data:`READOUT_MAX_DIGITS` digits."""
+    mag = abs(value)
+    res = 10.0 ** (math.floor(math.log10(mag)) - 3) if mag > 0 else math.inf
+    if recent is not None and len(recent) >= 2:
+        steps = [abs(b - a) for a, b in zip(recent, recent[1:]) if math.isfinite(a) and math.isfinite(b) and b != a]
+        if steps:
+            steps.sort()
+            typical = steps[len(steps) // 2]
+            res = min(res, 10.0 ** (math.floor(math.log10(typical)) - 1))
+    if not math.isfinite(res):
+        return 1.0
+    if mag > 0:
+        res = max(res, 10.0 ** (math.floor(math.log10(mag)) - READOUT_MAX_DIGITS + 1))
+    return res
+
+
+def readout_text(value: float, recent: list[float] | None = None, ticks: list[float] | None = None, log: bool = False) -> str:
+    """A value shown beside a plot (the latest of a series, or its x), in its axis' notation.
+
+    Digits: :func:`readout_resolution`. Notation: a linear axis' (``ticks``, :func:`format_tick`):
+    fixed ("0.001022", "48.40") where its labels are fixed, else in units of its largest
+    tick's power of ten like its labels ("-0.8801e-5" beside ticks "-0.5e-5", "3.00000011e8");
+    a log axis or none: fixed between 10^-3 and 10^6, else "1.234e-5". Never "-0".
+    """
+    if not math.isfinite(value):
+        return str(value)
+    res = readout_resolution(value, recent)
+    ticks = [v for v in (ticks or []) if math.isfinite(v)]
+    largest = max((abs(v) for v in ticks), default=0.0)
+    if not log and len(ticks) >= 2:
+        step = abs(ticks[1] - ticks[0])
+        if step > 0:
+            # never finer than a millionth of the axis' step: round-off about 0 reads 0
+            res = max(res, step * READOUT_STEP_SHARE)
+            if abs(value) < 0.5 * res:
+                return "0"
+        fixed = step > 0 and _fixed(step, largest)
+        exp_l = math.floor(math.log10(largest) + 1e-12) if largest > 0 else 0
+    else:
+        mag = abs(value)
+        fixed = mag == 0 or 1e-3 <= mag < 1e6
+        exp_l = math.floor(math.log10(mag) + 1e-12) if mag > 0 else 0
+    exp_r = math.floor(math.log10(res) + 1e-9)
+    if fixed and -exp_r <= 9:
+        text = f"{value:.{max(0, -exp_r)}f}"
+    else:
+        text = f"{value / 10.0**exp_l:.{max(0, exp_l - exp_r)}f}e{exp_l}"
+    if text.startswith("-") and not any(c in "123456789" for c in text.partition("e")[0]):
+        text = text[1:]  # a value that rounds to zero reads 0, never -0
     return text.replace("-", MINUS)
