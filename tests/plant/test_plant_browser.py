@@ -105,18 +105,31 @@ def _real_mode(page) -> None:
 
 
 def test_two_tabs_in_two_worker_processes_share_one_lease_and_a_spectator_stops_the_robot(
-        broker: Broker, link_factory, context, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """``python app.py --processes 2``: a tab in each process; the plant's lease is class-wide."""
+        context, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``python app.py --processes 2``: a tab in each process; the plant's lease is class-wide.
+    The broker wants a password: the app has it from its environment, and it shows nowhere."""
     import re
 
+    from conftest import free_port
     from ejsgen.cli import build
+    from ejsrl.app._plant_link import PlantLink
+    from ejsrl.plant import load_credentials
     from testkit.served import Served
 
-    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--slot", "300"])
+    secret = "cl4ss-br0ker-pw"
+    (tmp_path / "broker").mkdir()
+    broker = Broker(tmp_path / "broker", free_port(), passwd={"robualab": secret})
+    broker.start()
+    creds = tmp_path / "plant.creds"
+    creds.write_text(f"username = robualab\npassword = {secret}\n")
+    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--slot", "300", "--credentials", str(creds)])
     monkeypatch.setenv("EJSRL_PLANT_PORT", str(broker.port))
+    monkeypatch.setenv("EJSRL_PLANT_USERNAME", "robualab")
+    monkeypatch.setenv("EJSRL_PLANT_PASSWORD", secret)
     app_dir = build(EXAMPLES / "paper" / "robualab.ejs.yaml", tmp_path / "robualab")
     server = Served(app_dir, tmp_path, "--processes", "2", "--max-sessions", "4")
-    watcher = link_factory(session="watcher")
+    watcher = PlantLink("127.0.0.1", broker.port, session="watcher", creds=load_credentials(creds))
+    assert watcher.wait_for(lambda l: l.state is not None, 30), watcher.note
     try:
         url = f"http://127.0.0.1:{server.port}"
         tabs = []
@@ -154,6 +167,13 @@ def test_two_tabs_in_two_worker_processes_share_one_lease_and_a_spectator_stops_
         a.get_by_role("option", name="Simulation").click()
         b.bring_to_front()
         wait_until(lambda: "You control the robot" in _panel_text(b), timeout=60, what="B to get the robot")
+        for tab in tabs:
+            assert secret not in tab.content() and secret not in _panel_text(tab)
     finally:
+        watcher.close()
         server.stop()
         plant.stop()
+        broker.kill()
+    for f in [*app_dir.rglob("*.py"), server.out, server.err, tmp_path / "broker" / "mosquitto.log"]:
+        assert secret not in f.read_text(), f
+    assert secret not in plant.logs()
