@@ -194,8 +194,11 @@ def _same_value(a: Any, b: Any) -> bool:
         return False
 
 
-def _display_fn(control: Control) -> Callable[[Any], Any]:
-    """How a model value is shown by the control's handle (None: cannot show it)."""
+def _display_fn(control: Control, digits: int | None = None) -> Callable[[Any], Any]:
+    """How a model value is shown by the control's handle (None: cannot show it).
+
+    ``digits``: the decimals a number box shows (its viser ``precision``); a value that
+    would read -0.0 there (-0.0 itself, or -1e-9 at one decimal) is shown as 0."""
     if isinstance(control, Dropdown):
         options = list(control.options)
 
@@ -232,7 +235,11 @@ def _display_fn(control: Control) -> Callable[[Any], Any]:
             x = max(x, float(lo))
         if hi is not None:
             x = min(x, float(hi))
-        return int(round(x)) if is_int else x
+        if is_int:
+            return int(round(x))
+        if digits is not None and abs(x) < 0.5 * 10.0**-digits:
+            x = 0.0  # round-off about zero (a joint at -1e-15 deg) reads 0.0, not -0.0
+        return x + 0.0  # -0.0 -> 0.0
 
     return show_number
 
@@ -491,7 +498,8 @@ class Panel:
             handle = gui.add_dropdown(label, options, initial_value=shown if shown in options else options[0], hint=hint)
         else:
             handle = gui.add_text(label, "" if shown is None else str(shown), hint=hint)
-        binding = ControlBinding(c, handle, _display_fn(c))
+        precision = getattr(handle, "precision", None)
+        binding = ControlBinding(c, handle, _display_fn(c, precision if isinstance(precision, int) else None))
         self.controls.append(binding)
         self.handles_by_label[_key(c.label) or c.bind] = handle
         self._track(c.label, c.where, handle, "label")

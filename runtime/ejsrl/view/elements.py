@@ -11,6 +11,7 @@ error its expressions raise.
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -99,13 +100,23 @@ def format_value(value: Any, spec: str = "") -> str:
     if isinstance(value, np.ndarray) and value.ndim in (1, 2) and value.dtype.kind in "biuf":
         if not spec:
             spec = "g" if value.dtype.kind == "f" else "d"
-        cells = [[format(x.item(), spec) for x in row] for row in np.atleast_2d(value)]
+        cells = [[_format_number(x.item(), spec) for x in row] for row in np.atleast_2d(value)]
         width = max((len(c) for row in cells for c in row), default=0)
         rows = ["[" + " ".join(c.rjust(width) for c in row) + "]" for row in cells]
         if value.ndim == 1:
             return rows[0]
         return "\n".join(rows)
-    return format(value, spec)
+    return _format_number(value, spec)
+
+
+def _format_number(value: Any, spec: str) -> str:
+    """``format(value, spec)``, but a float that rounds to zero reads 0, never -0 ("-0.000" -> "0.000", "+0.000")."""
+    text = format(value, spec)
+    if isinstance(value, (float, np.floating)) and "-" in text and math.isfinite(value):
+        mantissa = text.lower().partition("e")[0]
+        if not any(c in "123456789" for c in mantissa):
+            text = format(0.0 * abs(float(value)), spec)  # +0.0 written the same way
+    return text
 
 
 _MD_SPECIAL = re.compile(r"[^\w\s\u00a0-\uffff]|_", re.ASCII)
