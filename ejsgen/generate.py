@@ -298,6 +298,7 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
     fmi = ["fmpy>=0.3.20"] if "from ejsrl.fmi import" in app_text else []  # the spec's fmus: run through FMPy
     plant = ["paho-mqtt>=2.0"] if "from ejsrl.app._plant_link import" in app_text else []  # the spec's plant: over MQTT
     reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf + fmi + plant, fast=fast)
+    app_text += _script_metadata(REQUIREMENTS + urdf + fmi + plant)  # at the end: app.py's line numbers stay
     out_dir = out_dir.resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
@@ -318,6 +319,16 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return sorted(p for p in out_dir.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+
+
+def _script_metadata(requirements: list[str]) -> str:
+    """Inline script metadata (PEP 723): ``uv run app.py`` and ``pipx run app.py`` install these."""
+    deps = "".join(f'#     "{r}",\n' for r in requirements)
+    return (
+        "\n\n# The packages this app needs, as inline script metadata (PEP 723): `uv run app.py` or\n"
+        "# `pipx run app.py` installs them and runs it; requirements.txt lists the same for pip.\n"
+        f'# /// script\n# requires-python = ">=3.11"\n# dependencies = [\n{deps}# ]\n# ///\n'
+    )
 
 
 def _umask() -> int:

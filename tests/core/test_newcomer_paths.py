@@ -54,3 +54,44 @@ def test_python_m_ejsgen_from_a_checkout_root_prints_its_docs(tmp_path: Path) ->
     r = subprocess.run([sys.executable, "-c", RUN_MODULE, "docs", "reference"], cwd=root, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert "they are **not a sandbox**" in r.stdout
+
+
+def test_an_app_and_its_pyz_without_their_packages_name_them_and_the_one_command(tmp_path: Path) -> None:
+    from ejsgen.cli import build
+
+    from testkit import EXAMPLES
+
+    app = build(EXAMPLES / "bouncing_ball.ejs.yaml", tmp_path / "ball", bundle=True)
+    wanted = [line for line in (app / "requirements.txt").read_text().splitlines() if line and not line.startswith("#")]
+    # python3 -S: no site-packages, as on a machine with only Python
+    for target, command in ((app / "app.py", f"-m pip install -r {app / 'requirements.txt'}"),
+                            (app / "ball.pyz", "-m pip install " + " ".join(f"'{w}'" if "<" in w or ">" in w else w for w in wanted))):
+        r = subprocess.run([sys.executable, "-S", str(target), "--headless", "--duration", "1"], capture_output=True, text=True,
+                           timeout=120, cwd=tmp_path)
+        assert r.returncode == 1, r.stderr
+        assert "Traceback" not in r.stderr and "ModuleNotFoundError" not in r.stderr, r.stderr
+        assert r.stderr.startswith(f"{target.name}: this app needs Python packages that are not installed: numpy, "), r.stderr
+        assert command in r.stderr, r.stderr
+
+
+def test_app_py_carries_its_packages_as_pep_723_inline_script_metadata(tmp_path: Path) -> None:
+    import re
+    import tomllib
+
+    from ejsgen.cli import build
+
+    from testkit import EXAMPLES
+
+    app = build(EXAMPLES / "bouncing_ball.ejs.yaml", tmp_path / "ball")
+    text = (app / "app.py").read_text(encoding="utf-8")
+    # PEP 723's reference regular expression, and its way of reading the block's TOML
+    blocks = list(re.finditer(r"(?m)^# /// (?P<type>[a-zA-Z0-9-]+)$\s(?P<content>(^#(| .*)$\s)+)^# ///$", text))
+    assert [b.group("type") for b in blocks] == ["script"]
+    content = "".join(line[2:] if line.startswith("# ") else line[1:] for line in blocks[0].group("content").splitlines(keepends=True))
+    meta = tomllib.loads(content)
+    wanted = [line for line in (app / "requirements.txt").read_text().splitlines() if line and not line.startswith("#")]
+    assert meta["dependencies"] == wanted and meta["requires-python"] == ">=3.11"
+    # with its packages present the app runs as before
+    run = subprocess.run([sys.executable, str(app / "app.py"), "--headless", "--duration", "0.02", "--csv", "-", "--vars", "y"],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0 and run.stdout.splitlines()[:2] == ["y", "1.0"], run.stderr
