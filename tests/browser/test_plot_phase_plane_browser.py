@@ -43,7 +43,16 @@ def test_the_phase_plane_lab_draws_its_orbit_curves_energy_and_histogram(built, 
         energy = plot(page, "Energy")
         assert energy["y"]["log"]
         _, y_ticks = tick_labels(energy["texts"])
-        assert y_ticks and all(np.log10(tick_number(s)) == round(np.log10(tick_number(s))) for s in y_ticks), y_ticks
+        assert len(y_ticks) >= 2 and len(set(y_ticks)) == len(y_ticks), y_ticks
+        values = sorted(tick_number(s) for s in y_ticks)
+        lo, hi = energy["bounds"][2:]
+        assert all(lo <= v <= hi for v in values), (y_ticks, lo, hi)
+        # the log axis' labels never touch: 11 px text at least 12 px apart on the canvas
+        rows = sorted(t[2] for t in energy["texts"] if t[0] in y_ticks)
+        assert min(b - a for a, b in zip(rows, rows[1:])) >= 12, (y_ticks, rows)
+        # and one sits near each end of the axis (within 30 % of its decades)
+        span = np.log10(hi / lo)
+        assert np.log10(values[0] / lo) <= 0.3 * span and np.log10(hi / values[-1]) <= 0.3 * span, (y_ticks, lo, hi)
 
         hist = plot(page, "Time spent at each angle")
         bars = decode_xy([it for it in hist["items"] if it["t"] == "rects"][0]["xy"], 4)
