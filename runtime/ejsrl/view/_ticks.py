@@ -15,10 +15,13 @@ The rule for a label's text (``specs/reference.md``, "Plots"):
   ("0.5e-5" is 0.5 x 10^-5). SI prefixes ("15µ") are not used: next to a unit
   in the axis title they read as part of it (is "2m" 2 milli or 2 metres?).
 - A minus sign is the typographic one (U+2212), as in print.
-- A logarithmic axis is ticked at the powers of ten it spans (every 2nd, 3rd ... when it
-  spans many decades), with 2 and 5 times them when it spans less than two decades, and
-  every whole multiple (2, 3, ... 9 times them) within one decade; its labels are numbers
-  ("0.01", "100", "1e6", "2e-5").
+- A logarithmic axis (:func:`log_ticks`) is ticked as matplotlib's ``LogLocator`` with
+  ``subs``: powers of ten (every one, or every 2nd, 3rd, 5th ...), or 1-3, 1-2-5, 1-2-3-5,
+  1-1.5-2-3-5-7, 1-1.2-...-8 times them, or nice linear steps on a sliver of a decade: the
+  set with about five ticks whose labels do not touch at the axis' length in pixels and
+  that has a tick near each end. Its labels are numbers ("0.01", "150", "1e6", "2.5e-5").
+- A readout beside a plot (:func:`readout_text`) has the digits that tell the last frames'
+  values apart and is written in its axis' notation ("-0.8801e-5" beside "0.5e-5").
 """
 
 from __future__ import annotations
