@@ -61,12 +61,12 @@ class PlantMeasurement(Strict):
 class Plant(Strict):
     """The real plant a remote laboratory drives (the paper's RobUALab); run `python -m ejsrl.plant` for the reference plant."""
 
-    transport: Literal["mqtt"] = "mqtt"
-    """How the app reaches the plant: ``mqtt`` through a broker (the reference plant also serves OPC UA to industrial clients)."""
+    transport: Literal["mqtt", "opcua"] = "mqtt"
+    """How the app reaches the plant: ``mqtt`` through a broker (paho-mqtt), or ``opcua`` straight to the plant's OPC UA server (asyncua; the port is then the server's, e.g. 4840)."""
     host: str = "127.0.0.1"
-    """The broker's host (the environment's EJSRL_PLANT_HOST wins, so a lab moves without editing its spec)."""
+    """The broker's host, or the OPC UA server's (the environment's EJSRL_PLANT_HOST wins, so a lab moves without editing its spec)."""
     port: int = Field(default=1883, ge=1, le=65535)
-    """The broker's port (EJSRL_PLANT_PORT wins)."""
+    """The broker's port, or the OPC UA server's (EJSRL_PLANT_PORT wins)."""
     topic: str = Field(default="ejsrl/plant", pattern=r"^[A-Za-z0-9_\-/]+$")
     """The plant's topic prefix (letters, digits, _, - and /)."""
     heartbeat: float = Field(default=0.1, gt=0, le=5)
@@ -142,6 +142,7 @@ def compile_plant(c: Compiler) -> None:
         c.errors.append(SpecError(c.loc(("plant", "commands")), "more than one variable drives the joints", "keep one command with to: joints"))
     lines = [Line("from ejsrl.app._plant_link import PlantCommand, PlantDef, PlantMeasurement"), Line(""),
              Line(f"return PlantDef({plant.host!r}, {plant.port!r}, topic={plant.topic!r}, heartbeat={plant.heartbeat!r}, rate={plant.rate!r},"),
+             *([Line(f"    transport={plant.transport!r},")] if plant.transport != "mqtt" else []),
              Line("    commands=["), *[Line("        " + s) for s in cmds], Line("    ],"),
              Line("    measurements=["), *[Line("        " + s) for s in meas], Line("    ],"), Line(")")]
     c.add_method("_plant", "self", "The real plant this lab drives (plant:); the plant panel connects to it, never the browser.", lines)

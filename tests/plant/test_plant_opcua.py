@@ -57,3 +57,53 @@ def test_opcua_lease_command_measure_and_estop(tmp_path: Path) -> None:
             assert measured.read_value()[0] < 2.4
     finally:
         plant.stop()
+
+
+def test_the_apps_opcua_link_drives_the_plant_and_sees_it_go(tmp_path: Path) -> None:
+    from ejsrl.app._plant_opcua import OpcUaLink
+
+    port = free_port()
+    plant = PlantProc(tmp_path, ["--opcua", f"127.0.0.1:{port}"])
+    try:
+        link = OpcUaLink("127.0.0.1", port)
+        spectator = OpcUaLink("127.0.0.1", port, session="spectator")
+        assert link.wait_for(lambda l: l.connected and l.state is not None, 30), link.note
+        link.request_lease()
+        assert link.wait_for(lambda l: l.holds_lease, 20)
+        target = np.array([20, 10, -10, 5, 30]) * DEG
+        assert link.send(target) is None
+        assert link.latency is not None and link.latency < 2.0
+        assert link.wait_for(lambda l: np.max(np.abs(l.measured() - target)) < 1 * DEG, 20)
+        assert "joint 2" in link.send(np.array([0, 170, 0, 0, 0]) * DEG)   # refused by the plant
+        assert spectator.wait_for(lambda l: l.connected, 30)
+        spectator.estop()
+        assert link.wait_for(lambda l: l.state["status"] == "estop", 10)
+        assert link.send(target) == "emergency stop is on"
+        plant.stop()                                      # the plant goes away: shown at once
+        assert link.wait_for(lambda l: not l.connected, 20)
+        assert "lost" in link.note or "failed" in link.note
+        assert link.send(target) == "not connected to the plant: commands are disabled"
+        link.close()
+        spectator.close()
+    finally:
+        plant.stop()
+
+
+def test_a_lab_with_transport_opcua_connects_over_opcua(tmp_path: Path, monkeypatch) -> None:
+    from ejsgen.cli import build
+    from ejsrl.app._plant_link import PlantCommand, PlantDef
+
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text("ejs: 1\ntitle: cell\nmodel:\n  variables:\n    q: {expr: 'np.zeros(5)'}\n"
+                    "plant:\n  transport: opcua\n  port: 4840\n  commands:\n    q: {to: joints}\n")
+    assert "transport='opcua'" in (build(spec, tmp_path / "app") / "app.py").read_text()
+    port = free_port()
+    plant = PlantProc(tmp_path, ["--opcua", f"127.0.0.1:{port}"])
+    monkeypatch.setenv("EJSRL_PLANT_PORT", str(port))
+    try:
+        link = PlantDef("127.0.0.1", 4840, transport="opcua", commands=[PlantCommand("q", "joints")]).connect()
+        assert type(link).__name__ == "OpcUaLink"
+        assert link.wait_for(lambda l: l.state is not None and l.state["status"] == "idle", 30), link.note
+        link.close()
+    finally:
+        plant.stop()

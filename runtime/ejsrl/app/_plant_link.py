@@ -288,6 +288,7 @@ class PlantDef:
     rate: float = 20.0
     commands: list[PlantCommand] | None = None
     measurements: list[PlantMeasurement] | None = None
+    transport: str = "mqtt"
 
     def joints(self) -> PlantCommand | None:
         return next((c for c in self.commands or [] if c.to == "joints"), None)
@@ -309,5 +310,10 @@ class PlantDef:
         host = os.environ.get("EJSRL_PLANT_HOST") or self.host
         port = int(os.environ.get("EJSRL_PLANT_PORT") or self.port)
         creds = load_credentials(os.environ.get("EJSRL_PLANT_CREDENTIALS") or None)
+        if self.transport == "opcua":
+            from ejsrl.app._plant_opcua import OpcUaLink
+
+            return OpcUaLink(host, port, limits=self.limits(), heartbeat=self.heartbeat,
+                             username=creds.username, password=creds.password)  # type: ignore[return-value]
         return PlantLink(host, port, prefix=self.topic, limits=self.limits(), creds=creds,
                          heartbeat=self.heartbeat, alive=alive)

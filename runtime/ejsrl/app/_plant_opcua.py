@@ -1,0 +1,189 @@
+"""The app's side of a remote laboratory over OPC UA (asyncua): the same interface as
+:class:`ejsrl.app._plant_link.PlantLink`, for a plant served as an OPC UA server.
+
+One thread of its own connects (backoff 0.1 s doubling to 2 s), reads the plant's ``State``
+variable ``rate`` times a second and calls ``Heartbeat`` every ``heartbeat`` s; a command is a
+``Command`` method call, whose duration is the round trip shown. A lost connection disables
+commands at once; nothing is queued across it.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+import uuid
+from typing import Any, Sequence
+
+import numpy as np
+
+from ejsrl.app._plant_link import Limits
+
+__all__ = ["OpcUaLink"]
+
+
+class OpcUaLink:
+    """One session's OPC UA link to the plant at ``opc.tcp://host:port/ejsrl/plant/``."""
+
+    def __init__(self, host: str, port: int, *, limits: Limits | None = None, heartbeat: float = 0.1,
+                 session: str | None = None, rate: float = 50.0, username: str | None = None, password: str | None = None) -> None:
+        try:
+            from asyncua.sync import Client  # noqa: F401
+        except ImportError as e:  # pragma: no cover
+            raise ImportError("the OPC UA transport needs asyncua: python3 -m pip install 'ejsgen[plant]'") from e
+        self.url = f"opc.tcp://{host}:{port}/ejsrl/plant/"
+        self.session = session or uuid.uuid4().hex[:12]
+        self.limits, self.heartbeat_period, self.rate = limits, heartbeat, rate
+        self._user, self._password = username, password
+        self.state: dict[str, Any] | None = None
+        self.state_at = 0.0
+        self.plant_online = False
+        self.connected = False
+        self.note = "connecting to the plant"
+        self.latency: float | None = None
+        self.latencies: list[float] = []
+        self.wants_lease = False
+        self.on_state: Any = None
+        self._seq = 0
+        self._last_q: np.ndarray | None = None
+        self._last_t: float | None = None
+        self._client: Any = None
+        self._obj: Any = None
+        self._idx = 0
+        self._changed = threading.Condition()
+        self._stop = threading.Event()
+        threading.Thread(target=self._run, name="ejsrl-plant-opcua", daemon=True).start()
+
+    # ---- the same read-outs as PlantLink ------------------------------------------------------
+    @property
+    def holds_lease(self) -> bool:
+        st = self.state
+        return bool(self.connected and st and st.get("holder") == self.session)
+
+    @property
+    def queue_position(self) -> int | None:
+        st = self.state
+        if not st or self.session not in st.get("queue", []):
+            return None
+        return st["queue"].index(self.session) + 1
+
+    def measured(self) -> np.ndarray | None:
+        return None if self.state is None else np.asarray(self.state["q"], dtype=float)
+
+    def wait_for(self, pred: Any, timeout: float = 10.0) -> bool:
+        end = time.monotonic() + timeout
+        with self._changed:
+            while not pred(self):
+                left = end - time.monotonic()
+                if left <= 0:
+                    return False
+                self._changed.wait(min(left, 0.05))
+        return True
+
+    # ---- what the session does ----------------------------------------------------------------
+    def _call(self, name: str, *args: Any) -> Any:
+        obj = self._obj
+        if obj is None or not self.connected:
+            return None
+        try:
+            return obj.call_method(f"{self._idx}:{name}", *args)
+        except Exception as e:  # noqa: BLE001 - the connection's thread notices and reconnects
+            self.note = f"a call to the plant failed: {type(e).__name__}"
+            return None
+
+    def request_lease(self) -> None:
+        self.wants_lease = True
+        self._call("Lease", self.session, "request")
+
+    def release_lease(self) -> None:
+        self.wants_lease = False
+        self._call("Lease", self.session, "release")
+
+    def estop(self, on: bool = True) -> None:
+        self._call("EStop", self.session, bool(on))
+
+    def send(self, q: Sequence[float], gripper: float | None = None) -> str | None:
+        qa = np.asarray(q, dtype=float).reshape(-1)
+        now = time.monotonic()
+        if self.limits is not None:
+            why = self.limits.check(qa, self._last_q, None if self._last_t is None else now - self._last_t)
+            if why:
+                return why
+        if not self.connected:
+            return "not connected to the plant: commands are disabled"
+        st = self.state
+        if not st or st.get("holder") != self.session:
+            return "this session does not hold the plant"
+        if st.get("estop"):
+            return "emergency stop is on"
+        self._seq += 1
+        t0 = time.perf_counter()
+        grip = float(st.get("gripper", 0.0) if gripper is None else gripper)
+        why = self._call("Command", self.session, int(st["epoch"]), self._seq, t0, [float(x) for x in qa], grip)
+        if why is None:
+            return "not connected to the plant: commands are disabled"
+        self.latency = time.perf_counter() - t0
+        self.latencies.append(self.latency)
+        del self.latencies[:-1000]
+        self._last_q, self._last_t = qa, now
+        return why or None
+
+    def close(self) -> None:
+        if self.wants_lease:
+            self.release_lease()
+        self._stop.set()
+
+    # ---- the connection's thread --------------------------------------------------------------
+    def _set(self, **kw: Any) -> None:
+        with self._changed:
+            for k, v in kw.items():
+                setattr(self, k, v)
+            self._changed.notify_all()
+        if self.on_state is not None:
+            self.on_state()
+
+    def _run(self) -> None:
+        from asyncua.sync import Client
+
+        delay = 0.1
+        while not self._stop.is_set():
+            client = Client(self.url, timeout=5)
+            if self._user:
+                client.set_user(self._user)
+                client.set_password(self._password or "")
+            try:
+                client.connect()
+            except Exception as e:  # noqa: BLE001
+                self._set(note=f"connecting to the plant failed ({type(e).__name__}); retrying in {delay:.1f} s")
+                self._stop.wait(delay)
+                delay = min(delay * 2, 2.0)
+                continue
+            delay = 0.1
+            try:
+                self._idx = client.get_namespace_index("urn:ejsrl:plant")
+                self._obj = client.nodes.objects.get_child(f"{self._idx}:Plant")
+                state = self._obj.get_child(f"{self._idx}:State")
+                self._set(connected=True, note="connected")
+                if self.wants_lease:
+                    self._call("Lease", self.session, "request")
+                next_beat = 0.0
+                while not self._stop.is_set():
+                    now = time.monotonic()
+                    if now >= next_beat:
+                        self._obj.call_method(f"{self._idx}:Heartbeat", self.session)
+                        next_beat = now + self.heartbeat_period
+                    st = json.loads(state.read_value())
+                    if (self.wants_lease and st.get("holder") != self.session
+                            and self.session not in (st.get("queue") or [])):
+                        self._obj.call_method(f"{self._idx}:Lease", self.session, "request")
+                    self._set(state=st, state_at=time.monotonic(), plant_online=True)
+                    self._stop.wait(1.0 / self.rate)
+            except Exception as e:  # noqa: BLE001 - lost: say so at once, then reconnect
+                self._set(connected=False, plant_online=False,
+                          note=f"connection to the plant lost ({type(e).__name__}): commands disabled, reconnecting")
+            finally:
+                self._obj = None
+                try:
+                    client.disconnect()
+                except Exception:  # noqa: BLE001
+                    pass
