@@ -25,6 +25,7 @@ shows each history series' colour, label and latest value.
 from __future__ import annotations
 
 import math
+import threading
 import time
 from collections.abc import Callable
 from typing import Any
@@ -439,9 +440,9 @@ def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
 IMAGE_RATE = 20.0
 
 
-#: seconds after an image element is made before its picture is replaced: the browser is still
-#: loading the first one (viser's client revokes a picture's blob: URL when the next comes, and
-#: one revoked while loading logs "net::ERR_FILE_NOT_FOUND")
+#: seconds an image element stays hidden after it is made: viser's client mounts a new panel's
+#: elements twice while it lays the panel out, and an image shown then has its picture's blob:
+#: URL revoked while it loads (the console logs "net::ERR_FILE_NOT_FOUND"); a hidden one makes none
 IMAGE_SETTLE = 0.5
 
 
@@ -449,8 +450,10 @@ class ImageBinding:
     """One ``Image`` element: sends the picture only when the source or the points changed.
 
     ``first()``: the source and points now, ``(src, pts)``, read once to make the element
-    with the lab's first picture (a grey placeholder if it gives none); the next picture is
-    sent :data:`IMAGE_SETTLE` seconds later at the earliest, then at most ``max_rate`` a second.
+    with the lab's first picture (a grey placeholder if it gives none). The element is shown
+    :data:`IMAGE_SETTLE` seconds after it is made (by a timer, or the first :meth:`update`
+    then, whichever comes first: a paused lab is not refreshed); pictures are sent from then
+    on, at most ``max_rate`` a second.
     """
 
     def __init__(
@@ -462,8 +465,10 @@ class ImageBinding:
         self.clock = clock
         self._last_src: np.ndarray | None = None
         self._last_pts: np.ndarray | None = None
-        #: no new picture before the first has had time to load (a placeholder too)
-        self._last_push = clock() + IMAGE_SETTLE - 1.0 / max_rate
+        #: shown (and sent pictures) from this time on
+        self._show_at = clock() + IMAGE_SETTLE
+        self._shown = False
+        self._last_push = self._show_at - 1.0 / max_rate
         #: when a source was last looked at (sent or not): read again at most max_rate a second
         self._last_read = -math.inf
         self.pushes = 0
@@ -477,7 +482,26 @@ class ImageBinding:
                     self._last_src, self._last_pts = a.copy(), None if p is None else p.copy()
         placeholder = np.full((2, 2, 3), 40, dtype=np.uint8) if shown is None else shown
         label = str(image.label or "") if label is None else label
-        self.handle = gui.add_image(placeholder, label=label or None, format="jpeg", jpeg_quality=85)
+        self.handle = gui.add_image(placeholder, label=label or None, format="jpeg", jpeg_quality=85, visible=False)
+        self._reveal_lock = threading.Lock()
+        timer = threading.Timer(IMAGE_SETTLE, self._reveal)
+        timer.daemon = True
+        timer.start()
+
+    def _reveal(self) -> None:
+        """Show the element (once)."""
+        with self._reveal_lock:
+            if self._shown:
+                return
+            self._shown = True
+        import warnings
+
+        with warnings.catch_warnings():  # the tab may be gone (viser warns of a closed connection)
+            warnings.simplefilter("ignore")
+            try:
+                self.handle.visible = True
+            except Exception:  # noqa: BLE001 - the tab is gone
+                pass
 
     def due(self) -> bool:
         """Whether the rate allows a new picture now: if not, the source need not be read
@@ -486,9 +510,11 @@ class ImageBinding:
 
     def update(self, src: Any, pts: Any) -> bool:
         """Send the image if it changed (at most ``max_rate`` a second); True if sent."""
+        now = self.clock()
+        if not self._shown and now >= self._show_at:
+            self._reveal()
         if src is None:
             return False
-        now = self.clock()
         if now - self._last_push < 1.0 / self.max_rate:
             return False
         self._last_read = now

@@ -1,0 +1,87 @@
+"""Labs with an ``image`` element load without an error in the browser's console.
+
+viser's client mounts a new panel's elements twice while it lays the panel out; an image shown
+then had its picture's ``blob:`` URL revoked while it loaded, and every such lab logged
+``Failed to load resource: net::ERR_FILE_NOT_FOUND`` (six_axis_arm, six_axis_kinematics,
+marker_servoing). The image element is now shown once the panel is laid out.
+"""
+
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from testkit.browser import wait_until
+
+SLOW = 120_000
+
+CHANGING = """
+ejs: 1
+title: A picture that changes
+model:
+  variables:
+    t: 0.0
+    dt: 0.05
+    u: 0.0
+  evolution:
+    - ode:
+        equations: {u: 1}
+view:
+  - image: {source: "np.full((48, 64, 3), [0, int(u*50) % 255, 0], dtype=np.uint8)", label: Picture}
+  - scene:
+      - sphere: {position: [0, 0, 0], radius: 0.3, color: gray}
+simulation:
+  autoplay: true
+"""
+
+
+def _console_errors(browser_context, spec: Path, frames: int) -> list[str]:
+    """Serve ``spec`` (a simulation per tab), open it, wait until its picture is loaded and the lab
+    ran ``frames`` more frames; the console's errors and the failed requests meanwhile."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+
+    with tempfile.TemporaryDirectory() as tmp:
+        app = load_app(build(spec, Path(tmp) / "app"))
+        server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=5.0)
+        errors: list[str] = []
+        page = browser_context.new_page()
+        try:
+            page.set_default_timeout(SLOW)
+            page.on("console", lambda m: errors.append(m.text) if m.type == "error" else None)
+            page.on("requestfailed", lambda r: errors.append(f"{r.url}: {r.failure}"))
+            page.goto(f"http://127.0.0.1:{server.get_port()}")
+            page.wait_for_function(
+                "() => [...document.querySelectorAll(\"img[src^='blob:']\")].some(i => i.complete && i.naturalWidth > 0)",
+                timeout=SLOW)
+            wait_until(lambda: app.classroom is not None and len(app.classroom.sessions) == 1, what="the tab's session")
+            lab = next(iter(app.classroom.sessions.values())).app
+            if not lab.is_playing():
+                page.get_by_role("button", name="Play").click()
+                wait_until(lab.is_playing, what="Play")
+            start = lab.frame_count
+            wait_until(lambda: lab.frame_count >= start + frames, timeout=60, what=f"{frames} more frames")
+            page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+        finally:
+            page.close()
+            app.stop()
+            server.stop()
+    return errors
+
+
+@pytest.mark.browser
+def test_a_lab_whose_picture_changes_every_frame_logs_no_error(browser_context, tmp_path):
+    spec = tmp_path / "changing.ejs.yaml"
+    spec.write_text(CHANGING)
+    errors = _console_errors(browser_context, spec, frames=30)
+    assert errors == []
+
+
+@pytest.mark.browser
+def test_the_six_axis_kinematics_lab_logs_no_error(browser_context):
+    from testkit import EXAMPLES
+
+    errors = _console_errors(browser_context, EXAMPLES / "paper" / "six_axis_kinematics.ejs.yaml", frames=10)
+    assert errors == []
