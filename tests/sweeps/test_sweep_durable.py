@@ -211,3 +211,49 @@ def test_the_parents_memory_stays_flat_from_2000_to_20000_runs(springs: Path, tm
     assert "20000 runs (20000 ok, 0 failed)" in err
     assert read(tmp_path / "large.summary.parquet")["run"] == list(range(20000))
     assert large <= 1.25 * small, (small, large)
+
+
+ENDLESS = """\
+ejs: 1
+title: Endless
+model:
+  variables:
+    t: 0.0
+    dt: 0.1
+    x: 1.0
+    n: 0
+  init: |
+    while x > 0:
+        try:
+            n = n + 1
+        except Exception:
+            n = 0
+  evolution:
+    - ode:
+        equations:
+          x: -x
+view: []
+"""
+
+
+@pytest.mark.parametrize("workers", ["0", "1"])
+def test_sigterm_stops_a_sweep_whatever_the_spec_code_is_doing(tmp_path: Path, workers: str) -> None:
+    from ejsgen.cli import build
+
+    spec = tmp_path / "endless.ejs.yaml"
+    spec.write_text(ENDLESS, encoding="utf-8")
+    app = build(spec, tmp_path / "app")
+    proc = subprocess.Popen(sweep_cmd(app, "--values", "x=1,2,3", "--duration", "1", "--workers", workers, "--out", str(tmp_path / "runs.csv")),
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    assert proc.stderr is not None
+    seen = ""
+    deadline = time.monotonic() + 120
+    while "3 runs" not in seen and time.monotonic() < deadline:  # the sweep has started its runs
+        seen += proc.stderr.readline()
+    time.sleep(2.0)  # inside the endless init: (a loop that catches Exception, as spec code may)
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    _, rest = proc.communicate(timeout=60)
+    assert time.monotonic() - t0 < 30
+    assert proc.returncode == 143, seen + rest
+    assert "stopped by SIGTERM after 0 of 3 runs" in rest and "Traceback" not in rest

@@ -137,7 +137,7 @@ class SchedulerLost(Exception):
         self.address = address
 
 
-class _Stop(Exception):
+class _Stop(BaseException):  # not an Exception: spec code and the run guard catch those
     def __init__(self, signum: int) -> None:
         super().__init__(signal.Signals(signum).name)
         self.signum = signum
