@@ -392,3 +392,58 @@ def test_an_equal_aspect_panel_is_as_high_as_its_ranges_need(projectile, browser
             assert box["height"] <= height - 100 + 1  # within the window
     finally:
         page.close()
+
+
+WRONG_SHAPE = """
+ejs: 1
+title: A set of the wrong shape
+model:
+  variables:
+    P: {expr: "np.zeros((20, 3))"}
+view:
+  - drawing:
+      x_range: [-2, 2]
+      y_range: [-2, 2]
+      children:
+        - particle: {name: ball, position: [1, 1], radius: 0.4, color: "#ff0000"}
+        - point: {name: spray, position: P, size: 4}
+"""
+
+
+@pytest.mark.browser
+def test_an_element_of_the_wrong_shape_leaves_the_rest_drawn_and_the_error_in_sight(browser_context, tmp_path):
+    # the trial: an N x 3 set where N x 2 is needed blanked the whole panel, and in a lab without a
+    # 3D scene the error box sat under the notifications, its left part hidden
+    from PIL import Image
+
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+
+    spec = tmp_path / "wrong.ejs.yaml"
+    spec.write_text(WRONG_SHAPE)
+    app = load_app(build(spec, tmp_path / "app"))
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=5.0)
+    page = open_tab(browser_context, f"http://127.0.0.1:{server.get_port()}")
+    try:
+        lab = session_model(app, page)
+        assert lab.error is not None and "spray" in lab.error.message and "(20, 3)" in lab.error.message
+        box = page.get_by_text("Error at", exact=False).first
+        box.wait_for(timeout=SLOW)
+        page.wait_for_selector(".mantine-Notification-root", timeout=SLOW)  # the error's notification (and the browser's)
+        err = page.locator("div:has(> b:text('Error at'))").first.bounding_box()
+        for i in range(page.locator(".mantine-Notification-root").count()):
+            note = page.locator(".mantine-Notification-root").nth(i).bounding_box()
+            overlap_x = min(err["x"] + err["width"], note["x"] + note["width"]) - max(err["x"], note["x"])
+            overlap_y = min(err["y"] + err["height"], note["y"] + note["height"]) - max(err["y"], note["y"])
+            assert overlap_x <= 0 or overlap_y <= 0, (err, note)
+        # the red ball is drawn where it belongs, and the panel writes the error on itself
+        img = np.asarray(Image.open(io.BytesIO(page.locator("canvas.ejs2d-c").first.screenshot())).convert("RGB")).astype(int)
+        pos = page.evaluate("window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], 1, 1)")
+        r, g, b = img[int(pos[1]), int(pos[0])]
+        assert r > 200 and g < 60 and b < 60, (r, g, b)
+        reddish_note = (np.abs(img - [201, 42, 42]).sum(axis=2) < 60).sum()  # the note's text colour (#c92a2a)
+        assert reddish_note > 50
+    finally:
+        page.close()
+        app.stop()
+        server.stop()

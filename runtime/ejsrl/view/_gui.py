@@ -91,7 +91,10 @@ CLIENT_TWEAKS = (
 #: 3D view, 120 px, and gives the panel the rest), holds the About text itself, and the
 #: empty 3D view (and its axes gizmo) are hidden.
 NO_SCENE_WIDTH = 100_000.0
-NO_SCENE_TWEAKS = '<style>div[style*="inset"]:has(canvas[data-engine]){visibility:hidden}</style>'
+#: Notifications (an error's, the browser's) go to the bottom-left corner there: at the top-left
+#: they covered the left part of the panel's error box and of its controls.
+NO_SCENE_TWEAKS = ('<style>div[style*="inset"]:has(canvas[data-engine]){visibility:hidden}'
+                   ".mantine-Notifications-root{top:auto!important;bottom:1em!important}</style>")
 #: the height (pixels) of a plot in a panel that has the window (else the panel's width / 1.6)
 NO_SCENE_PLOT_HEIGHT = 300
 
