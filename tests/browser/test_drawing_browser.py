@@ -312,7 +312,7 @@ def projectile():
 
 @pytest.mark.browser
 def test_the_projectile_lab_moved_by_mouse_and_keys_lands_where_physics_says(projectile, browser_context):
-    from testkit.browser import save_shot
+    from testkit.browser import close_notifications, save_shot
 
     app, url = projectile
     page = open_tab(browser_context, url)
@@ -324,6 +324,9 @@ def test_the_projectile_lab_moved_by_mouse_and_keys_lands_where_physics_says(pro
         def css(x: float, y: float) -> tuple[float, float]:
             return tuple(page.evaluate(f"window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], {x}, {y})"))
 
+        _settle_height(page)  # as high as its ranges need: scrolled into the window, all of it
+        page.locator("canvas.ejs2d-c").first.scroll_into_view_if_needed()
+        close_notifications(page)  # a GPU-less browser's notice, at the bottom-left here, covers the launcher
         box = canvas_box(page)
         sx, sy = css(m.x0, m.y0)
         tx, ty = css(3.0, 2.0)
@@ -345,6 +348,17 @@ def test_the_projectile_lab_moved_by_mouse_and_keys_lands_where_physics_says(pro
         save_shot(page, "projectile_2d")
     finally:
         page.close()
+
+
+def _settle_height(page) -> None:
+    """Wait until the panel's height (set by the page from its ranges) stays the same."""
+    last: list = []
+
+    def settled() -> bool:
+        last.append(page.locator("canvas.ejs2d-c").first.bounding_box()["height"])
+        return len(last) > 3 and len(set(last[-4:])) == 1
+
+    wait_until(settled, what="the panel's height to settle")
 
 
 def _shown_x_range(page) -> tuple[float, float]:
@@ -378,14 +392,7 @@ def test_an_equal_aspect_panel_is_as_high_as_its_ranges_need(projectile, browser
         for width, height in ((1280, 800), (560, 800)):
             page.set_viewport_size({"width": width, "height": height})
             wait_until(lambda: page.locator("canvas.ejs2d-c").first.bounding_box()["width"] < width - 100, what="the panel's width")
-            last: list = []
-
-            def settled() -> bool:
-                box = page.locator("canvas.ejs2d-c").first.bounding_box()
-                last.append(box["height"])
-                return len(last) > 3 and len(set(last[-4:])) == 1
-
-            wait_until(settled, what="the panel's height to settle")
+            _settle_height(page)
             lo, hi = _shown_x_range(page)
             assert abs(lo - -1.0) < 0.03 * 22 and abs(hi - 21.0) < 0.03 * 22, (width, lo, hi)
             box = page.locator("canvas.ejs2d-c").first.bounding_box()
