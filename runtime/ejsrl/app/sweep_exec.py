@@ -230,9 +230,11 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
         payload = ref
     futures: list[Any] = []
     # the client logs each failed reconnection with a traceback; a lost scheduler is said in one line instead
-    quiet = logging.getLogger("distributed")
-    level = quiet.level
-    quiet.setLevel(logging.CRITICAL)
+    quiet = [logging.getLogger(name) for name in ["distributed", *logging.root.manager.loggerDict] if name.startswith("distributed")]
+    levels = [q.level for q in quiet]
+    for q in quiet:
+        q.setLevel(logging.CRITICAL)
+    lost = False
     try:
         address = str(client.scheduler.address if client.scheduler is not None else ex.scheduler)
         ref_future = client.scatter(payload, broadcast=True)
@@ -243,6 +245,7 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
                 out = fut.result()
             except Exception as exc:  # noqa: BLE001 - a worker died, the app could not be imported, ...
                 if _scheduler_lost(client, exc):
+                    lost = True
                     raise SchedulerLost(address) from None
                 out = _failed_batch(batch_of[fut.key], exc)
             on_results(out)
@@ -252,16 +255,19 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
         client.close()
         if cluster is not None:
             cluster.close()
-        quiet.setLevel(level)
+        if not lost:  # a lost client keeps logging its reconnections' tracebacks from its own thread
+            for q, level in zip(quiet, levels):
+                q.setLevel(level)
 
 
 def _scheduler_lost(client: Any, exc: BaseException) -> bool:
     """Whether a future failed because the scheduler went away (not because its runs failed)."""
-    from asyncio import CancelledError
+    from asyncio import CancelledError as TaskCancelled
+    from concurrent.futures import CancelledError  # distributed's FutureCancelledError is one
 
     from distributed.comm.core import CommClosedError
 
-    if isinstance(exc, (CancelledError, CommClosedError, OSError, TimeoutError)):
+    if isinstance(exc, (CancelledError, TaskCancelled, CommClosedError)):
         return True
     return getattr(client, "status", "running") != "running"
 
