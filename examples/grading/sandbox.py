@@ -22,6 +22,7 @@ import resource
 import shutil
 import signal
 import subprocess
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -56,6 +57,20 @@ def bwrap_hint() -> str | None:
     return None
 
 
+def _python_under_tmp() -> list[Path]:
+    """This Python's installation and import path where they lie under ``/tmp`` (a venv made
+    there), which the sandbox's empty ``/tmp`` would hide: shown read-only."""
+    tmp = Path("/tmp").resolve()
+    found: list[Path] = []
+    for entry in (sys.prefix, sys.exec_prefix, sys.base_prefix, *sys.path):
+        if not entry:
+            continue
+        path = Path(entry).resolve()
+        if path.is_dir() and path != tmp and tmp in path.parents and not any(f == path or f in path.parents for f in found):
+            found.append(path)
+    return found
+
+
 def contained(
     cmd: Sequence[str], *, writable: Path, readable: Sequence[Path] = (), limits: Limits = Limits(), cwd: Path | None = None
 ) -> Contained:
@@ -69,7 +84,7 @@ def contained(
     writable = writable.resolve()
     args = [
         bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp",
-        *[arg for r in readable for arg in ("--ro-bind", str(r.resolve()), str(r.resolve()))],
+        *[arg for r in [*readable, *_python_under_tmp()] for arg in ("--ro-bind", str(r.resolve()), str(r.resolve()))],
         "--bind", str(writable), str(writable), "--unshare-all", "--die-with-parent", "--new-session",
         "--chdir", str((cwd or writable).resolve()), "--", *cmd,
     ]
