@@ -10,38 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import Broker, PlantProc
+from testkit.plant import Broker, PlantProc
 from testkit import EXAMPLES
 from testkit.browser import ARTIFACTS, close_notifications, save_shot, serving, wait_until
 
 pytestmark = pytest.mark.browser
-
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-
-
-@pytest.fixture
-def context(tmp_path_factory):
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as pw:
-        ctx = pw.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
-                                                    executable_path="/usr/bin/chromium", headless=True,
-                                                    args=ARGS, viewport={"width": 1280, "height": 800})
-        ctx.set_default_timeout(60_000)
-        try:
-            yield ctx
-        finally:
-            ctx.close()
-
-
-@pytest.fixture
-def page(context, request):
-    page = context.new_page()
-    yield page
-    ARTIFACTS.mkdir(exist_ok=True)
-    page.screenshot(path=str(ARTIFACTS / f"{request.node.name}.png"))
-
 
 def _panel_text(page) -> str:
     return page.evaluate("document.body.innerText")
@@ -105,12 +78,12 @@ def _real_mode(page) -> None:
 
 
 def test_two_tabs_in_two_worker_processes_share_one_lease_and_a_spectator_stops_the_robot(
-        context, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+        browser_context, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """``python app.py --processes 2``: a tab in each process; the plant's lease is class-wide.
     The broker wants a password: the app has it from its environment, and it shows nowhere."""
     import re
 
-    from conftest import free_port
+    from testkit.plant import free_port
     from ejsgen.cli import build
     from ejsrl.app._plant_link import PlantLink
     from ejsrl.plant import load_credentials
@@ -134,7 +107,7 @@ def test_two_tabs_in_two_worker_processes_share_one_lease_and_a_spectator_stops_
         url = f"http://127.0.0.1:{server.port}"
         tabs = []
         for _ in range(2):
-            tab = context.new_page()
+            tab = browser_context.new_page()
             tab.goto(url)
             tab.get_by_role("button", name="EMERGENCY STOP").wait_for(timeout=90_000)
             wait_until(lambda: "/s/" in tab.evaluate("location.href"), timeout=60, what="the tab's session")

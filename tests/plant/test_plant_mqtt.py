@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import Broker, PlantProc
+from testkit.plant import Broker, PlantProc
 
 HERE = Path(__file__).parent
 DEG = math.pi / 180
@@ -155,7 +155,7 @@ def test_limits_are_refused_by_the_app_and_by_the_plant(plant: PlantProc, link_f
 
 
 def test_credentials_come_from_a_file_and_never_show(tmp_path: Path) -> None:
-    from conftest import free_port
+    from testkit.plant import free_port
     from ejsrl.app._plant_link import PlantLink
     from ejsrl.plant import load_credentials
 

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from conftest import PlantProc, free_port
+from testkit.plant import PlantProc, free_port
 
 DEG = math.pi / 180
 
