@@ -140,3 +140,39 @@ def test_gains_changed_while_the_lab_runs_reach_the_fmu_as_in_the_plain_ode_mode
     (t_a, q_a), (t_b, q_b) = runs
     assert t_a == pytest.approx(2.0) and t_b == pytest.approx(2.0)
     np.testing.assert_allclose(q_a, q_b, rtol=0, atol=1e-6)
+
+
+def test_two_instances_of_the_lab_in_one_process_each_get_their_fmus_own_messages(lab, capfd):
+    """FMPy's formatting shim keeps one logger per process: each instance must still get its own
+    FMU's messages (two class sessions), and FMPy's own default logger must still print after."""
+    from ejsrl.app import load_app
+    from fmpy import extract, read_model_description
+    from fmpy.fmi2 import FMU2Model
+
+    apps = [load_app(lab), load_app(lab)]
+    try:
+        for app in apps:
+            app.step_once()
+        drives = [app.model._ejs_fmus.runs[0].inst for app in apps]
+        assert len(drives) == 2
+        for d in drives:
+            start = len(d.log)
+            with pytest.raises(Exception):
+                d.call("fmi2NewDiscreteStates", d._fmu.newDiscreteStates)  # in continuous time: refused
+            assert d.said(start) == ["fmi2NewDiscreteStates: Illegal call sequence (the FMU is in continuous-time mode)"]
+    finally:
+        for app in apps:
+            app.stop()
+    fmu = lab / "fmu_motor_control" / "joint_drives.fmu"
+    md = read_model_description(str(fmu))
+    model = FMU2Model(guid=md.guid, unzipDirectory=extract(str(fmu)), modelIdentifier=md.modelExchange.modelIdentifier, instanceName="after")
+    model.instantiate()
+    model.setupExperiment(startTime=0.0)
+    model.enterInitializationMode()
+    model.exitInitializationMode()
+    model.enterContinuousTimeMode()
+    with pytest.raises(Exception):
+        model.newDiscreteStates()
+    model.terminate()
+    model.freeInstance()
+    assert "Illegal call sequence" in capfd.readouterr().out

@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import atexit
 import shutil
+import itertools
 import threading
+import weakref
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -27,6 +29,53 @@ INSTALL_HINT = "FMUs need FMPy: pip install 'ejsgen[fmu]' (or pip install fmpy)"
 
 #: messages of the FMU's log kept (the latest), characters kept of each, messages shown with an error
 LOG_KEEP, LOG_CHARS, LOG_SHOWN = 50, 300, 5
+
+
+#: FMI 2 logging. FMPy's printf-formatting shim (fmpy.logging.addLoggerProxy) keeps ONE logger
+#: per process, replaced at every call: a second instance (a second lab in the same process,
+#: or FMPy's own default callbacks) would take over the first's messages, or get none. So the
+#: shim is given one dispatcher, once per process, which routes each message by the
+#: componentEnvironment the FMU hands back (a key per instance) and passes any other (FMPy's
+#: default callbacks, whose environment is NULL) to FMPy's own printLogMessage, as FMPy would.
+_LOG_KEYS = itertools.count(1)
+_LOGGERS: dict[int, Any] = {}
+_PROXY: list[Any] = []  # [the shim's logger function pointer, the dispatcher kept alive] or [None]
+
+
+def _dispatch_fmi2_log(env: Any, instance_name: bytes | None, status: int, category: bytes | None, message: bytes | None) -> None:
+    ref = _LOGGERS.get(env) if env else None
+    target = ref() if ref is not None else None
+    if target is not None:
+        target._logger_text(status, category, message)
+        return
+    try:
+        from fmpy.fmi1 import printLogMessage
+
+        printLogMessage(env, instance_name, status, category, message)
+    except Exception:  # noqa: BLE001 - a logger must never raise into the FMU
+        pass
+
+
+def _fmi2_log_proxy(fmi2: Any) -> Any:
+    """The logger to give an FMI 2 FMU: FMPy's formatting shim routed to ``_dispatch_fmi2_log``
+    (installed again before each instance, should other code have replaced the shim's logger);
+    None without the shim."""
+    from ctypes import byref
+
+    try:
+        from fmpy.logging import addLoggerProxy
+    except Exception:  # noqa: BLE001
+        return None
+    if not _PROXY:
+        dispatcher = fmi2.fmi2CallbackLoggerTYPE(_dispatch_fmi2_log)
+        _PROXY.append(dispatcher)
+    holder = fmi2.fmi2CallbackFunctions()
+    holder.logger = _PROXY[0]
+    try:
+        addLoggerProxy(byref(holder))  # the shim keeps the dispatcher, gives back its own function
+    except Exception:  # noqa: BLE001
+        return None
+    return holder.logger
 
 
 _INTEGERS = {"Integer", "Enumeration", "Int8", "UInt8", "Int16", "UInt16", "Int32", "UInt32", "Int64", "UInt64"}
@@ -191,15 +240,17 @@ class FmuInstance(FastCalls):
             cls = fmi2.FMU2Slave if cs else fmi2.FMU2Model
             fmu = self.call("loading the binary", lambda: cls(**common))
             callbacks = fmi2.fmi2CallbackFunctions()
-            callbacks.logger = fmi2.fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: self._logger_text(status, cat, msg))
             callbacks.allocateMemory = fmi2.fmi2CallbackAllocateMemoryTYPE(fmpy.calloc)
             callbacks.freeMemory = fmi2.fmi2CallbackFreeMemoryTYPE(fmpy.free)
-            try:
-                from fmpy.logging import addLoggerProxy
-
-                addLoggerProxy(byref(callbacks))  # formats the FMU's printf-style messages
-            except Exception:  # noqa: BLE001 - FMPy without its logging shim: messages unformatted
-                pass
+            # the FMU hands componentEnvironment back to the logger: the key of this instance
+            self._log_key = next(_LOG_KEYS)
+            callbacks.componentEnvironment = self._log_key
+            proxy = _fmi2_log_proxy(fmi2)
+            if proxy is not None:
+                callbacks.logger = proxy
+                _LOGGERS[self._log_key] = weakref.ref(self)
+            else:  # FMPy without its logging shim: messages unformatted, this instance's own callback
+                callbacks.logger = fmi2.fmi2CallbackLoggerTYPE(lambda env, inst, status, cat, msg: self._logger_text(status, cat, msg))
             self._callbacks = callbacks
             self.call("fmi2Instantiate", fmu.instantiate, False, callbacks, True)
         else:
@@ -499,6 +550,7 @@ class FmuInstance(FastCalls):
             self._fmu.freeInstance()
         except Exception:  # noqa: BLE001
             pass
+        _LOGGERS.pop(getattr(self, "_log_key", None), None)
         if self._once:
             _release_once(self.folder)
 
