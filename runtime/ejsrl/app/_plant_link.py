@@ -53,6 +53,25 @@ class Limits:
         return None
 
 
+def refusal(link: Any, qa: np.ndarray, now: float, st: dict[str, Any] | None, online: bool = True) -> str | None:
+    """Why the link (MQTT or OPC UA) must not send the set points ``qa`` now, or None: the
+    joint limits, the connection, the plant online, the lease held in its state ``st`` and no
+    emergency stop."""
+    if link.limits is not None:
+        why = link.limits.check(qa, link._last_q, None if link._last_t is None else now - link._last_t)
+        if why:
+            return why
+    if not link.connected:
+        return "not connected to the plant: commands are disabled"
+    if not online:
+        return "the plant is offline: commands are disabled"
+    if not st or st.get("holder") != link.session:
+        return "this session does not hold the plant"
+    if st.get("estop"):
+        return "emergency stop is on"
+    return None
+
+
 class PlantLink:
     """One session's MQTT link to the plant at ``host:port`` under topic ``prefix``."""
 
@@ -142,19 +161,11 @@ class PlantLink:
         """Send joint set points ``q`` (rad); returns why it was not sent, or None when it was."""
         qa = np.asarray(q, dtype=float).reshape(-1)
         now = time.monotonic()
-        if self.limits is not None:
-            why = self.limits.check(qa, self._last_q, None if self._last_t is None else now - self._last_t)
-            if why:
-                return why
-        if not self.connected:
-            return "not connected to the plant: commands are disabled"
-        if not self.plant_online:
-            return "the plant is offline: commands are disabled"
         st = self.state
-        if not st or st.get("holder") != self.session:
-            return "this session does not hold the plant"
-        if st.get("estop"):
-            return "emergency stop is on"
+        why = refusal(self, qa, now, st, self.plant_online)
+        if why:
+            return why
+        assert st is not None
         with self._lock:
             self._seq += 1
             seq = self._seq

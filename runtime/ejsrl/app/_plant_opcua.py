@@ -17,7 +17,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ejsrl.app._plant_link import Limits
+from ejsrl.app._plant_link import Limits, refusal
 
 __all__ = ["OpcUaLink"]
 
@@ -105,17 +105,11 @@ class OpcUaLink:
     def send(self, q: Sequence[float], gripper: float | None = None) -> str | None:
         qa = np.asarray(q, dtype=float).reshape(-1)
         now = time.monotonic()
-        if self.limits is not None:
-            why = self.limits.check(qa, self._last_q, None if self._last_t is None else now - self._last_t)
-            if why:
-                return why
-        if not self.connected:
-            return "not connected to the plant: commands are disabled"
         st = self.state
-        if not st or st.get("holder") != self.session:
-            return "this session does not hold the plant"
-        if st.get("estop"):
-            return "emergency stop is on"
+        why = refusal(self, qa, now, st)
+        if why:
+            return why
+        assert st is not None
         self._seq += 1
         t0 = time.perf_counter()
         grip = float(st.get("gripper", 0.0) if gripper is None else gripper)

@@ -137,7 +137,20 @@ class VehicleBase:
         return self.x.copy()
 
 
-class Bicycle(VehicleBase):
+class _SpeedTurnLimited(VehicleBase):
+    """A vehicle whose controls are ``(speed, turn)``: the speed limited as a speed, the turn
+    (steering angle or turn rate) clipped to +-``steer_max``."""
+
+    steer_max: float
+
+    def u_limited(self, u: ArrayLike) -> Array:
+        ul = np.array(u, dtype=float)
+        ul[0] = self._limit_speed(ul[0], self._v_prev)
+        ul[1] = min(max(ul[1], -self.steer_max), self.steer_max)
+        return ul
+
+
+class Bicycle(_SpeedTurnLimited):
     """Car-like vehicle (kinematic bicycle): controls ``u = (v, gamma)``, speed (m/s) and
     steering angle (rad) clipped to +-``steer_max``; wheel base ``L`` (m).
     ``xdot = v cos(theta), ydot = v sin(theta), thetadot = v tan(gamma) / L``."""
@@ -156,12 +169,6 @@ class Bicycle(VehicleBase):
     def curvature_max(self) -> float:
         return 1.0 / self.radius_min
 
-    def u_limited(self, u: ArrayLike) -> Array:
-        ul = np.array(u, dtype=float)
-        ul[0] = self._limit_speed(ul[0], self._v_prev)
-        ul[1] = min(max(ul[1], -self.steer_max), self.steer_max)
-        return ul
-
     def deriv(self, x: ArrayLike, u: ArrayLike, limits: bool = True) -> Array:
         if limits:
             u = self.u_limited(u)
@@ -170,7 +177,7 @@ class Bicycle(VehicleBase):
         return v * np.array([math.cos(th), math.sin(th), math.tan(g) / self.l])
 
 
-class Unicycle(VehicleBase):
+class Unicycle(_SpeedTurnLimited):
     """Unicycle: controls ``u = (v, omega)``, speed (m/s) and turn rate (rad/s, clipped to
     +-``steer_max``); ``W`` the wheel separation (m) for drawing."""
 
@@ -178,12 +185,6 @@ class Unicycle(VehicleBase):
         self.W = float(W)
         self.steer_max = float(steer_max)
         super().__init__(**kwargs)
-
-    def u_limited(self, u: ArrayLike) -> Array:
-        ul = np.array(u, dtype=float)
-        ul[0] = self._limit_speed(ul[0], self._v_prev)
-        ul[1] = min(max(ul[1], -self.steer_max), self.steer_max)
-        return ul
 
     def deriv(self, x: ArrayLike, u: ArrayLike, limits: bool = True) -> Array:
         if limits:
