@@ -139,37 +139,59 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+def _wait_for_port(port: int, proc: subprocess.Popen, timeout: float) -> None:
+    """Until something listens on ``port`` (``proc`` must stay alive meanwhile)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        assert proc.poll() is None, f"the process for port {port} ended with {proc.returncode}"
+        try:
+            with socket.create_connection(("127.0.0.1", port), timeout=5):
+                return
+        except OSError:
+            time.sleep(0.1)
+    raise AssertionError(f"nothing listened on port {port} within {timeout:g} s")
+
+
 @pytest.mark.slow
 def test_a_lost_dask_scheduler_ends_the_sweep_with_one_line_and_a_status_of_its_own(springs: Path, tmp_path: Path) -> None:
+    from ejsrl.app.sweep_journal import Journal
+
     port = _free_port()
     address = f"tcp://127.0.0.1:{port}"
     env = dict(os.environ, DASK_DISTRIBUTED__WORKER__DAEMON="False")
     scheduler = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", str(port),
                                   "--dashboard-address", ":0", "--no-show"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
-    worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1", "--nthreads", "1",
-                               "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
+    worker = sweep = None
     out = tmp_path / "runs.parquet"
     parts = tmp_path / "runs.parquet.parts"
     many = ["--grid", "k=1:4:400", "--duration", "0.5"]
     try:
+        # generous waits for a loaded 2-core machine: each step waits on state, not on time
+        _wait_for_port(port, scheduler, 300)
+        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", address, "--nworkers", "1", "--nthreads", "1",
+                                   "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)
         sweep = subprocess.Popen(sweep_cmd(springs, *many, "--scheduler", address, "--quiet", "--out", str(out)),
                                  stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        deadline = time.monotonic() + 300
-        while time.monotonic() < deadline and len(list(parts.glob("b*.npz"))) < 2 and sweep.poll() is None:
+        # the scheduler is killed only once the sweep has demonstrably finished runs (batches kept on disk)
+        deadline = time.monotonic() + 600
+        while time.monotonic() < deadline and sweep.poll() is None:
+            if parts.is_dir() and len(Journal(parts, "", 400).files()) >= 2:
+                break
             time.sleep(0.05)
         assert sweep.poll() is None, sweep.communicate()[1]
+        assert parts.is_dir() and len(Journal(parts, "", 400).files()) >= 2, "no finished batch within 600 s"
         scheduler.kill()
-        scheduler.wait(30)
-        _, err = sweep.communicate(timeout=300)
+        scheduler.wait(60)
+        _, err = sweep.communicate(timeout=600)
     finally:
-        for p in (worker, scheduler):
-            if p.poll() is None:
+        for p in (sweep, worker, scheduler):
+            if p is not None and p.poll() is None:
                 p.kill()
-                p.wait(30)
+                p.wait(60)
     assert sweep.returncode == 69, err
     lines = [x for x in err.strip().splitlines() if x.startswith("error:")]
     assert len(lines) == 1 and "Traceback" not in err, err
-    done = len(__import__("ejsrl.app.sweep_journal", fromlist=["Journal"]).Journal(parts, "", 400).done())
+    done = len(Journal(parts, "", 400).done())
     assert lines[0] == (f"error: the Dask scheduler at {address} was lost after {done} of 400 runs; "
                         f"finished runs are in {parts}; rerun with --resume")
     assert 0 < done < 400

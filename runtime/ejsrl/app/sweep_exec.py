@@ -212,47 +212,77 @@ def _run_pool(ref: AppRef, work: list[list[Run]], options: RunOptions, workers: 
 
 
 def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Executor, on_results: Callable[[list[RunResult]], None]) -> None:
+    """Run the batches on Dask. Every loss of the scheduler -- while connecting, scattering the
+    app, submitting, waiting or gathering -- raises :class:`SchedulerLost`, never Dask's own error
+    (and Dask's loggers stay silent: the lost client logs its reconnections from its own thread)."""
     try:
         import logging
 
         from distributed import Client, LocalCluster, as_completed
     except ImportError:
         raise RuntimeError(DASK_HINT) from None
-    cluster = None
-    if ex.scheduler:
-        client = Client(ex.scheduler, timeout="20s")
-        payload = ref.with_archive()  # the workers may be on other machines
-    else:
-        cluster = LocalCluster(
-            n_workers=max(ex.workers, 1), threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
-        )
-        client = Client(cluster)
-        payload = ref
-    futures: list[Any] = []
-    # the client logs each failed reconnection with a traceback; a lost scheduler is said in one line instead
+    # the client logs each failed (re)connection with a traceback; a lost scheduler is said in one line instead
     quiet = [logging.getLogger(name) for name in ["distributed", *logging.root.manager.loggerDict] if name.startswith("distributed")]
     levels = [q.level for q in quiet]
     for q in quiet:
         q.setLevel(logging.CRITICAL)
+    cluster = None
+    client: Any = None
+    futures: list[Any] = []
     lost = False
+    address = str(ex.scheduler or "")
     try:
-        address = str(client.scheduler.address if client.scheduler is not None else ex.scheduler)
-        ref_future = client.scatter(payload, broadcast=True)
-        futures = [client.submit(run_batch, ref_future, batch, options, pure=False) for batch in work]
-        batch_of = {f.key: batch for f, batch in zip(futures, work)}
-        for fut in as_completed(futures):
+        if ex.scheduler:
             try:
-                out = fut.result()
-            except Exception as exc:  # noqa: BLE001 - a worker died, the app could not be imported, ...
-                if _scheduler_lost(client, exc):
+                client = Client(ex.scheduler, timeout="30s")
+            except Exception as exc:  # noqa: BLE001 - refused, timed out, closed while connecting
+                if _scheduler_lost(None, exc, address):
                     lost = True
                     raise SchedulerLost(address) from None
+                raise
+            payload = ref.with_archive()  # the workers may be on other machines
+        else:
+            cluster = LocalCluster(
+                n_workers=max(ex.workers, 1), threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+            )
+            client = Client(cluster)
+            payload = ref
+        try:
+            address = str(client.scheduler.address if client.scheduler is not None else ex.scheduler)
+            ref_future = client.scatter(payload, broadcast=True)
+            futures = [client.submit(run_batch, ref_future, batch, options, pure=False) for batch in work]
+            batch_of = {f.key: batch for f, batch in zip(futures, work)}
+            finished = as_completed(futures)
+        except Exception as exc:  # noqa: BLE001
+            if _scheduler_lost(client, exc, address):
+                lost = True
+                raise SchedulerLost(address) from None
+            raise
+        while True:
+            try:
+                fut = next(finished, None)
+                if fut is None:
+                    break
+                out = fut.result()
+            except Exception as exc:  # noqa: BLE001 - a worker died, the app could not be imported, ...
+                if _scheduler_lost(client, exc, address):
+                    lost = True
+                    raise SchedulerLost(address) from None
+                if fut is None:
+                    raise
                 out = _failed_batch(batch_of[fut.key], exc)
-            on_results(out)
+            on_results(out)  # its own errors (CannotWrite) are not the scheduler's
     finally:
         for f in futures:
-            f.cancel()
-        client.close()
+            try:
+                f.cancel()
+            except Exception:  # noqa: BLE001, S110 - a lost client cannot cancel; nothing runs on without its scheduler
+                pass
+        try:
+            if client is not None:
+                client.close(timeout=10)
+        except Exception:  # noqa: BLE001, S110 - closing a client whose scheduler is gone
+            pass
         if cluster is not None:
             cluster.close()
         if not lost:  # a lost client keeps logging its reconnections' tracebacks from its own thread
@@ -260,8 +290,23 @@ def _run_dask(ref: AppRef, work: list[list[Run]], options: RunOptions, ex: Execu
                 q.setLevel(level)
 
 
-def _scheduler_lost(client: Any, exc: BaseException) -> bool:
-    """Whether a future failed because the scheduler went away (not because its runs failed)."""
+def _answers(address: str, timeout: float = 10.0) -> bool:
+    """Whether the scheduler at ``tcp://host:port`` still accepts connections."""
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        parts = urlsplit(address if "://" in address else f"tcp://{address}")
+        if parts.hostname is None or parts.port is None:
+            return True  # not an address this can check: let the client's state decide
+        with socket.create_connection((parts.hostname, parts.port), timeout=timeout):
+            return True
+    except (OSError, ValueError):
+        return False
+
+
+def _scheduler_lost(client: Any, exc: BaseException, address: str = "") -> bool:
+    """Whether a Dask call failed because the scheduler went away (not because its runs failed)."""
     from asyncio import CancelledError as TaskCancelled
     from concurrent.futures import CancelledError  # distributed's FutureCancelledError is one
 
@@ -269,7 +314,12 @@ def _scheduler_lost(client: Any, exc: BaseException) -> bool:
 
     if isinstance(exc, (CancelledError, TaskCancelled, CommClosedError)):
         return True
-    return getattr(client, "status", "running") != "running"
+    if client is not None and getattr(client, "status", "running") != "running":
+        return True
+    # refused, reset or timed out: the scheduler may be gone before the client has noticed
+    if isinstance(exc, (OSError, TimeoutError)) or client is None:
+        return bool(address) and not _answers(address)
+    return False
 
 
 # -- the whole sweep -----------------------------------------------------------------------------------
