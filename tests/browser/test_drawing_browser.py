@@ -312,7 +312,7 @@ def projectile():
 
 @pytest.mark.browser
 def test_the_projectile_lab_moved_by_mouse_and_keys_lands_where_physics_says(projectile, browser_context):
-    from testkit.browser import close_notifications, save_shot
+    from testkit.browser import hide_notifications, save_shot
 
     app, url = projectile
     page = open_tab(browser_context, url)
@@ -326,7 +326,7 @@ def test_the_projectile_lab_moved_by_mouse_and_keys_lands_where_physics_says(pro
 
         _settle_height(page)  # as high as its ranges need: scrolled into the window, all of it
         page.locator("canvas.ejs2d-c").first.scroll_into_view_if_needed()
-        close_notifications(page)  # a GPU-less browser's notice, at the bottom-left here, covers the launcher
+        hide_notifications(page)  # a GPU-less browser's notice, at the bottom-left here, covers the launcher
         box = canvas_box(page)
         sx, sy = css(m.x0, m.y0)
         tx, ty = css(3.0, 2.0)

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from testkit.browser import ARTIFACTS, serving, wait_until
+from testkit.browser import ARTIFACTS, hide_notifications, serving, wait_until
 from testkit.charts import RECORD_TEXT, near_color, plot, plot_pixels, tick_labels, tick_number, to_px
 
 SPEC = """\
@@ -60,6 +60,8 @@ def shown(lab: Path, browser_context):
     page.add_init_script(RECORD_TEXT)
     with serving(lab) as (app, url):
         page.goto(url)
+        page.wait_for_load_state()
+        hide_notifications(page)  # at the bottom-left of a lab with no scene, over the plots' pixels
         wait_until(lambda: app.model.t > 8.0, timeout=90, what="the pendulum to swing past one period")
         page.get_by_role("button", name="Stop").first.click()
         wait_until(lambda: not app.is_playing(), what="the lab to stop")

@@ -63,6 +63,12 @@ def close_notifications(page: Any) -> None:
             pass
 
 
+def hide_notifications(page: Any) -> None:
+    """Hide the 'software WebGL' notice for good (it may come back after being closed): in a lab
+    with no 3D scene it sits at the window's bottom-left, over the panel's plots and drawings."""
+    page.add_style_tag(content=".mantine-Notification-root { display: none !important; }")
+
+
 def panel_image(page: Any) -> Any:
     """The camera picture in the panel (viser sends it as a blob: URL)."""
     return page.locator("img[src^='blob:']").first
