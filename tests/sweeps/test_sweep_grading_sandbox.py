@@ -121,16 +121,34 @@ def test_a_loop_past_the_wall_limit_is_stopped(tmp_path: Path) -> None:
     assert time.monotonic() - t0 < 200
 
 
-def _sandboxed_alive(marker: str) -> list[int]:
+def _sandboxed_alive(marker: str, ancestor: int | None = None, among: list[int] | None = None) -> list[int]:
+    """Processes whose command line holds ``marker``: descendants of ``ancestor`` (this test's
+    grading, not another test's running beside it on the other worker), or those of ``among``."""
     pids = []
     for pid in os.listdir("/proc"):
-        if pid.isdigit():
-            try:
-                if marker in (Path("/proc") / pid / "cmdline").read_bytes().decode(errors="replace"):
-                    pids.append(int(pid))
-            except OSError:
+        if not pid.isdigit() or (among is not None and int(pid) not in among):
+            continue
+        try:
+            if marker not in (Path("/proc") / pid / "cmdline").read_bytes().decode(errors="replace"):
                 continue
+            if ancestor is not None and not _descends(int(pid), ancestor):
+                continue
+            pids.append(int(pid))
+        except OSError:
+            continue
     return pids
+
+
+def _descends(pid: int, ancestor: int) -> bool:
+    while pid > 1:
+        if pid == ancestor:
+            return True
+        try:
+            stat = (Path("/proc") / str(pid) / "stat").read_text()
+        except OSError:
+            return False
+        pid = int(stat.rsplit(")", 1)[1].split()[1])
+    return False
 
 
 def test_sigterm_stops_grading_while_a_handin_loops_and_leaves_nothing_running(tmp_path: Path) -> None:
@@ -142,9 +160,11 @@ def test_sigterm_stops_grading_while_a_handin_loops_and_leaves_nothing_running(t
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     marker = "run0.csv"  # the looping hand-in's run is the only command with it
     deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and not _sandboxed_alive(marker):
+    while time.monotonic() < deadline and not _sandboxed_alive(marker, ancestor=proc.pid):
         time.sleep(0.1)
     time.sleep(1.0)
+    running = _sandboxed_alive(marker, ancestor=proc.pid)
+    assert running, "the looping hand-in never ran"
     t0 = time.monotonic()
     proc.send_signal(signal.SIGTERM)
     out, err = proc.communicate(timeout=60)
@@ -152,8 +172,10 @@ def test_sigterm_stops_grading_while_a_handin_loops_and_leaves_nothing_running(t
     assert proc.returncode == 143, err
     assert "stopped by SIGTERM after 0 of 2 hand-ins; the others are not graded" in err
     assert "Traceback" not in err and "PASS" not in out
-    time.sleep(1.0)
-    assert _sandboxed_alive(marker) == []
+    left = time.monotonic() + 15  # the sandbox dies with its parent; give a loaded machine time
+    while time.monotonic() < left and _sandboxed_alive(marker, among=running):
+        time.sleep(0.1)
+    assert _sandboxed_alive(marker, among=running) == []
 
 
 def test_sigterm_while_the_reference_runs_grades_nobody(tmp_path: Path) -> None:
