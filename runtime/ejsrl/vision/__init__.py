@@ -36,102 +36,61 @@ are here too.
 
 from __future__ import annotations
 
-from ejsrl.vision._susan import SUSAN_MASK, susan, susan_corners, susan_edges, usan_area
-from ejsrl.vision.camera import CameraModel, intrinsics_from_fov, look_at, pose_from_rvec
-from ejsrl.vision.colorspace import delta_e, lab_to_rgb, lab_to_xyz, rgb_to_lab, rgb_to_xyz, xyz_to_lab, xyz_to_rgb
-from ejsrl.vision.flow import flow_magnitude, optical_flow, warp_by_flow
-from ejsrl.vision.scale import collapse_laplacian_pyramid, dog_filter, gaussian_pyramid, laplacian_pyramid, log_blobs, log_filter
-from ejsrl.vision.segmentation import distance_transform, skeleton, split_touching, watershed
-from ejsrl.vision.shape import ellipse_from_moments, hu_moments
-from ejsrl.vision.matching import (
-    Features,
-    detect_features,
-    epipolar_distances,
-    feature_methods,
-    find_essential,
-    find_fundamental,
-    find_homography,
-    match_features,
-    recover_pose,
-)
-from ejsrl.vision.stereo import StereoRectification, depth_from_disparity, disparity, stereo_rectify, triangulate
-from ejsrl.vision.calibration import Calibration, calibrate_camera, calibrate_chessboard, chessboard_points, draw_chessboard, find_chessboard
-from ejsrl.vision.color import (
-    adjust_brightness_contrast,
-    adjust_gamma,
-    clahe,
-    equalize_histogram,
-    histogram,
-    hsv_to_rgb,
-    invert,
-    normalize,
-    rgb_to_hsv,
-    threshold,
-    threshold_adaptive,
-    threshold_otsu,
-    to_gray,
-    to_rgb,
-)
-from ejsrl.vision.draw import draw_boxes, draw_circles, draw_contours, draw_lines, draw_points, draw_text
-from ejsrl.vision.edges import canny, gradient_magnitude, laplacian, prewitt, roberts, scharr, sobel
-from ejsrl.vision.features import (
-    Region,
-    blobs,
-    centroid,
-    color_mask,
-    color_segment,
-    connected_components,
-    fast_corners,
-    find_contours,
-    harris_corners,
-    harris_response,
-    hough_circles,
-    hough_lines,
-    hough_segments,
-    lk_track,
-    match_template,
-    moments,
-    orb_features,
-    shi_tomasi_corners,
-)
-from ejsrl.vision.filters import (
-    add_gaussian_noise,
-    add_salt_pepper_noise,
-    bilateral_filter,
-    black_hat,
-    box_filter,
-    convolve,
-    dilate,
-    erode,
-    gaussian_blur,
-    median_blur,
-    morph_close,
-    morph_gradient,
-    morph_open,
-    sharpen,
-    structuring_element,
-    top_hat,
-)
-from ejsrl.vision.geometry import affine_matrix, crop, flip, perspective_matrix, resize, rotate, warp_affine, warp_perspective
-from ejsrl.vision.pipeline import STEPS, Pipeline, PipelineResult
-from ejsrl.vision.markers import MARKER_DICTIONARIES, Marker, detect_markers, marker_bits, marker_image, marker_pose
-from ejsrl.vision.pointcloud import IcpResult, best_rigid_transform, depth_to_points, estimate_normals, icp, transform_points, voxel_downsample
-from ejsrl.vision.sources import ImageSource
-from ejsrl.vision import servo as _servo
-from ejsrl.vision.servo import (
-    ServoMonitor,
-    camera_twist_to_world,
-    eih_joint_velocities,
-    feature_error,
-    ibvs_velocity,
-    integrate_twist,
-    interaction_matrix,
-    match_points,
-    pbvs_velocity,
-    skew,
-    theta_u,
-    twist_transform,
-)
+from ejsrl._lazy import lazy_exports
+from ejsrl.vision import servo as _servo  # NumPy only, as the camera model it uses
+
+# Each name is imported from its module when first read (ejsrl._lazy): the package imports without
+# OpenCV (a browser's Python has none), and an app that uses none of these does not load it.
+__getattr__, __dir__ = lazy_exports(__name__, {
+    "._susan": ("SUSAN_MASK", "susan", "susan_corners", "susan_edges", "usan_area"),
+    ".camera": ("CameraModel", "intrinsics_from_fov", "look_at", "pose_from_rvec"),
+    ".colorspace": ("delta_e", "lab_to_rgb", "lab_to_xyz", "rgb_to_lab", "rgb_to_xyz", "xyz_to_lab", "xyz_to_rgb"),
+    ".flow": ("flow_magnitude", "optical_flow", "warp_by_flow"),
+    ".scale": (
+        "collapse_laplacian_pyramid", "dog_filter", "gaussian_pyramid", "laplacian_pyramid", "log_blobs", "log_filter"
+    ),
+    ".segmentation": ("distance_transform", "skeleton", "split_touching", "watershed"),
+    ".shape": ("ellipse_from_moments", "hu_moments"),
+    ".matching": (
+        "Features", "detect_features", "epipolar_distances", "feature_methods", "find_essential", "find_fundamental",
+        "find_homography", "match_features", "recover_pose"
+    ),
+    ".stereo": ("StereoRectification", "depth_from_disparity", "disparity", "stereo_rectify", "triangulate"),
+    ".calibration": (
+        "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "draw_chessboard",
+        "find_chessboard"
+    ),
+    ".color": (
+        "adjust_brightness_contrast", "adjust_gamma", "clahe", "equalize_histogram", "histogram", "hsv_to_rgb",
+        "invert", "normalize", "rgb_to_hsv", "threshold", "threshold_adaptive", "threshold_otsu", "to_gray", "to_rgb"
+    ),
+    ".draw": ("draw_boxes", "draw_circles", "draw_contours", "draw_lines", "draw_points", "draw_text"),
+    ".edges": ("canny", "gradient_magnitude", "laplacian", "prewitt", "roberts", "scharr", "sobel"),
+    ".features": (
+        "Region", "blobs", "centroid", "color_mask", "color_segment", "connected_components", "fast_corners",
+        "find_contours", "harris_corners", "harris_response", "hough_circles", "hough_lines", "hough_segments",
+        "lk_track", "match_template", "moments", "orb_features", "shi_tomasi_corners"
+    ),
+    ".filters": (
+        "add_gaussian_noise", "add_salt_pepper_noise", "bilateral_filter", "black_hat", "box_filter", "convolve",
+        "dilate", "erode", "gaussian_blur", "median_blur", "morph_close", "morph_gradient", "morph_open", "sharpen",
+        "structuring_element", "top_hat"
+    ),
+    ".geometry": (
+        "affine_matrix", "crop", "flip", "perspective_matrix", "resize", "rotate", "warp_affine", "warp_perspective"
+    ),
+    ".pipeline": ("STEPS", "Pipeline", "PipelineResult"),
+    ".markers": ("MARKER_DICTIONARIES", "Marker", "detect_markers", "marker_bits", "marker_image", "marker_pose"),
+    ".pointcloud": (
+        "IcpResult", "best_rigid_transform", "depth_to_points", "estimate_normals", "icp", "transform_points",
+        "voxel_downsample"
+    ),
+    ".sources": ("ImageSource",),
+    ".servo": (
+        "ServoMonitor", "camera_twist_to_world", "eih_joint_velocities", "feature_error", "ibvs_velocity",
+        "integrate_twist", "interaction_matrix", "match_points", "pbvs_velocity", "skew", "theta_u", "twist_transform"
+    ),
+})
 
 #: the image functions (each takes and/or returns images), for documentation and counting
 IMAGE_FUNCTIONS: tuple[str, ...] = (
@@ -182,7 +141,8 @@ __all__ = [
     "recover_pose", "epipolar_distances",
     "StereoRectification", "stereo_rectify", "disparity", "depth_from_disparity", "triangulate",
     "Calibration", "calibrate_camera", "calibrate_chessboard", "chessboard_points", "draw_chessboard", "find_chessboard",
-    *_servo.__all__,
+    "interaction_matrix", "ibvs_velocity", "feature_error", "skew", "twist_transform",
+    "camera_twist_to_world", "eih_joint_velocities", "integrate_twist", "match_points", "theta_u", "pbvs_velocity", "ServoMonitor",
     "MARKER_DICTIONARIES", "Marker", "detect_markers", "marker_bits", "marker_image", "marker_pose",
     "IcpResult", "best_rigid_transform", "depth_to_points", "estimate_normals", "icp", "transform_points", "voxel_downsample",
     "ImageSource",
