@@ -518,6 +518,7 @@ _ELEMENT_COMPILERS["table"] = compile_table
 _ELEMENT_COMPILERS["console"] = compile_console
 
 from ejsgen._view_compile2d import compile_drawing, compile_keyboard  # noqa: E402 - it uses ViewCompiler's helpers
+from ejsgen._view_compile_source import compile_source  # noqa: E402 - a camera's real source
 
 _ELEMENT_COMPILERS["drawing"] = compile_drawing
 _ELEMENT_COMPILERS["keyboard"] = compile_keyboard
@@ -545,6 +546,7 @@ _PROP_COMPILERS: dict[str, Callable[[ViewCompiler, Any, Path_, str, str], Any]] 
     "int": lambda vc, v, path, base, what: v,
     "name": lambda vc, v, path, base, what: v,
     "bool": lambda vc, v, path, base, what: v,
+    "source": lambda vc, v, path, base, what: compile_source(vc, v, path, base, what),
 }
 
 

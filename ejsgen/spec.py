@@ -427,6 +427,7 @@ _ANNOTATIONS: dict[str, str] = {
     "ints2": "list[int]",
     "code": "Code",
     "children": "list[Any]",
+    "source": "Union[int, str]",
 }
 
 

@@ -99,6 +99,7 @@ class App(Controller):
         self._t0: float = 0.0
         self._stopped = threading.Event()
         self._world_functions: Any = None
+        self._camera_sources: Any = None  # this session's real camera sources (ejsrl.vision.sources.CameraSources)
         self._loop_thread: threading.Thread | None = None
         #: the sessions of a lab served with a simulation per browser tab (``serve(per_client=True)``)
         self.classroom: Any = None
@@ -270,9 +271,15 @@ class App(Controller):
         return self._world_functions
 
     def capture(self, name: str) -> np.ndarray:
-        """Render what camera ``name`` sees now (the scene is brought up to date first)."""
+        """Render what camera ``name`` sees now (the scene is brought up to date first); a camera
+        with a ``source`` gives that source's frame instead (at the model's time: a video in step)."""
         from ejsrl.world import render
 
+        source = self._real_source(name)
+        if source is not None:
+            node = self.scene.world[name]
+            t = self.model._ejs_time() if self.model.INDEPENDENT is not None else None
+            return self._camera_sources.frame(name, source, node.props.get("resolution", (320, 240)), t)
         self.scene.update(self.model, None)
         rgb, _depth = render(self.scene.world, name)
         return rgb
@@ -281,8 +288,21 @@ class App(Controller):
         """The depth image camera ``name`` sees now (Z in metres along its axis, inf where empty)."""
         from ejsrl.world.rendering import render_depth
 
+        source = self._real_source(name)
+        if source is not None:
+            raise ValueError(f"camera '{name}' reads a real source ({source!r}): it has no depth image (only a rendered camera has)")
         self.scene.update(self.model, None)
         return render_depth(self.scene.world, name)
+
+    def _real_source(self, name: str) -> Any:
+        """The ``source`` of camera ``name`` (None: it renders the scene); this session's sources made on first use."""
+        node = self.scene.world.nodes.get(name)
+        source = None if node is None or getattr(node, "kind", None) != "camera" else node.props.get("source")
+        if source is not None and self._camera_sources is None:
+            from ejsrl.vision.sources import CameraSources
+
+            self._camera_sources = CameraSources(self.base_dir)
+        return source
 
     # -- stepping ---------------------------------------------------------------------------------
     def _run_steps(self, n: int) -> int:

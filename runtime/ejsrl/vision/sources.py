@@ -37,7 +37,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ImageSource", "IMAGE_SUFFIXES"]
+__all__ = ["ImageSource", "IMAGE_SUFFIXES", "CameraSources"]
 
 #: image files a folder source reads
 IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm")
@@ -217,3 +217,62 @@ class ImageSource:
 
     def __repr__(self) -> str:
         return f"ImageSource({self.name!r}, {self.kind}, {self.fps:g} fps)"
+
+
+class CameraSources:
+    """The real sources of one session's ``camera`` elements (their ``source`` property), opened
+    on the first ``capture`` and kept: each session (browser tab) has its own, so every tab reads
+    its own video from its own start, and the sources close with the session.
+
+    ``base_dir``: the app's folder, where a source's files are (its assets).
+    """
+
+    def __init__(self, base_dir: str | os.PathLike[str] = ".") -> None:
+        self.base_dir = Path(base_dir)
+        self._open: dict[str, tuple[Any, ImageSource]] = {}
+        self._lock = threading.Lock()
+
+    def source_of(self, name: str, source: Any) -> ImageSource:
+        """The open source of camera ``name`` (opened now if it is not yet, or if the spec's value
+        changed). A camera, stream or file that cannot be opened is a ``ValueError`` naming the
+        camera element and what to do; it is tried again on the next capture (a camera plugged in
+        meanwhile is then found)."""
+        with self._lock:
+            kept = self._open.get(name)
+            if kept is not None and kept[0] == source:
+                return kept[1]
+            what = source if isinstance(source, int) or "://" in str(source) else str(self.base_dir / str(source))
+            try:
+                src = ImageSource(what)
+            except ValueError as e:
+                raise ValueError(f"camera '{name}' (source {source!r}): {e}") from None
+            if kept is not None:
+                kept[1].close()
+            self._open[name] = (source, src)
+            return src
+
+    def frame(self, name: str, source: Any, size: tuple[int, int], t: float | None) -> NDArray[np.uint8]:
+        """Camera ``name``'s frame now, RGB (h, w, 3) uint8 with ``size = (w, h)``: a file's or image
+        sequence's frame at time ``t`` seconds (its own frame rate, looped; the next frame when the
+        model has no time), a camera's or stream's newest."""
+        src = self.source_of(name, source)
+        try:
+            rgb = src.read() if t is None or src.kind in ("camera", "stream") else src.frame_at(max(float(t), 0.0))
+        except RuntimeError as e:  # unplugged, or the stream ended
+            with self._lock:
+                if self._open.get(name, (None, None))[1] is src:
+                    del self._open[name]
+            src.close()
+            raise RuntimeError(f"camera '{name}' (source {source!r}): {e}") from None
+        w, h = int(size[0]), int(size[1])
+        if rgb.shape[1] != w or rgb.shape[0] != h:
+            shrink = rgb.shape[1] > w and rgb.shape[0] > h
+            rgb = cv2.resize(rgb, (w, h), interpolation=cv2.INTER_AREA if shrink else cv2.INTER_LINEAR)
+        return rgb
+
+    def close(self) -> None:
+        """Let go of every source."""
+        with self._lock:
+            for _, src in self._open.values():
+                src.close()
+            self._open.clear()

@@ -19,7 +19,7 @@ Property types (``Prop.type``): ``num`` a number or expression; ``vec3`` three o
 (or an expression); ``vec`` any number of them; ``mat`` an N x 3 matrix of points;
 ``mat4`` / ``mat3`` a 4x4 / 3x3 matrix; ``text`` text with ``{expr}`` interpolated;
 ``file`` a file relative to the spec, ``files`` a list of them; ``expr`` an expression;
-``int`` an integer; ``bool`` true or false; ``flag`` true, false or an expression;
+``int`` an integer; ``source`` a camera's real image source (an index, a URL or a file: ``ejsgen._view_compile_source``); ``bool`` true or false; ``flag`` true, false or an expression;
 ``color`` a colour; ``ints2`` two positive integers; ``name`` an object name; ``bind`` a
 bound variable; ``code`` Python code; ``children`` nested 3D elements.
 """
@@ -45,7 +45,7 @@ REQUIRED: Any = _Required()
 
 #: every property type (see the module's docstring)
 PROP_TYPES = frozenset(
-    {"num", "vec3", "vec", "mat", "mat4", "mat3", "text", "file", "files", "expr", "int", "bool", "flag", "color", "ints2", "name", "bind", "code", "children"}
+    {"num", "vec3", "vec", "mat", "mat4", "mat3", "text", "file", "files", "expr", "int", "bool", "flag", "color", "ints2", "name", "bind", "code", "children", "source"}
 )
 #: the property types that are not values of the element's props (handled by the element itself)
 _NOT_VALUE_TYPES = frozenset({"bind", "code", "children"})
@@ -227,6 +227,12 @@ _KINDS: tuple[Kind, ...] = (
         Prop("distortion", "vec", None, "Lens distortion [k1, k2, p1, p2, k3], OpenCV's order, applied by the camera's own model."),
         Prop("blur", "num", None, "Defocus blur: a Gaussian of this standard deviation in pixels (0 or left out: off)."),
         Prop("noise", "num", None, "Gaussian sensor noise: standard deviation in grey levels, 0-255 (0 or left out: off)."),
+        Prop("source", "source", None, "A real image source instead of the rendered scene: a camera index (`0`: the camera of "
+             "the machine that runs the app), a stream URL (`rtsp://...`, `http://...`), a video file, an image, a folder of "
+             "images or a glob pattern (`\"frames/*.png\"`), relative to the spec (copied into the app). `capture(name)` then "
+             "gives its frames, resized to `resolution`, through the same pipeline: a file's frame at the simulation's time "
+             "(looped), a camera's newest. Each session (browser tab) reads its own. A camera that is missing pauses the "
+             "lab with a message saying so."),
     ), draw="camera", node_extra={"near": 0.01, "far": 100.0}),
     Kind("gizmo", "A draggable transform handle bound to a 4x4 pose variable.", (
         Prop("bind", "bind", REQUIRED, "The 4x4 pose variable."),
