@@ -16,15 +16,20 @@ than on the usual 1 - near / Z: with far = 100 m it separates surfaces 1e-5 m ap
 50 m (measured), where 1 - near / Z with near = 1 cm could not separate 1 mm at 10 m. Ties
 go to the first face drawn, the lower index, as in the NumPy back end.
 
-One context per process, made on first use and kept (a forked child makes its own); each
-render makes it current on the calling thread under a lock, so any thread may render.
+Contexts are pooled per process (a forked child makes its own): a render takes a free
+context, making one when none is free (up to ``EJSRL_GL_CONTEXTS``, default one per core,
+2 to 8), makes it current on the calling thread for the render only, and gives it back.
+So the stepper threads of a served class render at the same time, each in its own context
+(with one context behind a lock, a session's render waited for another's: bench/classroom.py,
+servoing lab), and any thread may render.
 """
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -118,7 +123,14 @@ class _Renderer:
         import moderngl
 
         self.mgl = moderngl
-        self.ctx = moderngl.create_context(standalone=True, backend="egl", require=330)
+        self.ctx = moderngl.create_context(standalone=True, backend="egl", require=330)  # current on this thread
+        try:
+            self._setup()
+        finally:
+            _release_current()  # free for whichever thread the pool lends it to
+
+    def _setup(self) -> None:
+        """Buffers, programs and vertex arrays, made with the new context current."""
         self.vbo = self.ctx.buffer(reserve=36 * 64, dynamic=True)
         self.cbo = self.ctx.buffer(reserve=9 * 64, dynamic=True)
         self.tbo = self.ctx.buffer(reserve=36 * 64, dynamic=True)
@@ -138,8 +150,6 @@ class _Renderer:
                 self.vaos[mode] = self.ctx.vertex_array(prog, attrs)
         self.targets: dict[tuple[int, int], tuple[Any, Any, Any]] = {}
         self.finish = _gil_free_finish()
-        self.lock = threading.Lock()
-        self.pid = os.getpid()
         info = self.ctx.info
         self.renderer = f"{info.get('GL_RENDERER', '?')} ({info.get('GL_VERSION', '?')})"
 
@@ -179,7 +189,7 @@ class _Renderer:
         proj = projection_matrix(camera.K, W, H, camera.near, camera.far)
         rgba = np.empty((H, W, 4), dtype=np.uint8)  # RGBA reads are a copy; RGB ones convert each pixel (7x slower)
         inv_z = np.empty((H, W), dtype=np.float32)
-        with self.lock, self.ctx:
+        with self.ctx:  # one thread at a time: the pool lends it to one
             draw, colour_only, inv_z_depth = self._target(W, H)
             if F:
                 for buf, data in bufs:
@@ -230,27 +240,107 @@ def _gil_free_finish() -> Callable[[], None]:
     return lambda: None
 
 
+def _release_current() -> None:
+    """Make no context current on this thread (moderngl leaves a new context current on the
+    thread that made it, where no other thread could make it current; ``with ctx:`` later
+    restores what was current before, so each render leaves the thread with none)."""
+    import ctypes
+
+    try:
+        egl = ctypes.CDLL("libEGL.so.1")
+    except OSError:
+        return
+    egl.eglGetCurrentDisplay.restype = ctypes.c_void_p
+    egl.eglMakeCurrent.argtypes = [ctypes.c_void_p] * 4
+    egl.eglMakeCurrent.restype = ctypes.c_uint
+    display = egl.eglGetCurrentDisplay()
+    if display:
+        egl.eglMakeCurrent(display, None, None, None)
+
+
+def context_limit() -> int:
+    """How many contexts a process makes at most: ``EJSRL_GL_CONTEXTS``, else one per core
+    (Mesa's llvmpipe rasterises on every core already; more contexts than that only wait)."""
+    forced = os.environ.get("EJSRL_GL_CONTEXTS", "").strip()
+    if forced.isdigit() and int(forced) > 0:
+        return int(forced)
+    return max(2, min(8, os.cpu_count() or 1))
+
+
+class _Pool:
+    """The process's renderers: each lent to one thread at a time, made when all are lent."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.pid = os.getpid()
+        self.free: list[_Renderer] = []
+        self.made = 0
+        self.failure: str | None = None
+        self.cv = threading.Condition()
+
+    def _take(self) -> _Renderer:
+        with self.cv:
+            while True:
+                if self.free:
+                    return self.free.pop()
+                if self.made == 0 and self.failure is not None:
+                    raise GLUnavailableError(
+                        f"the 'gl' render backend is not available: {self.failure}. To use it: {INSTALL_HINT}"
+                    )
+                if self.made < self.limit:
+                    self.made += 1
+                    break
+                self.cv.wait()
+        try:  # outside the lock: compiling the shaders takes a while, others may render meanwhile
+            return _Renderer()
+        except Exception as exc:
+            with self.cv:
+                self.made -= 1
+                if self.made == 0:  # none could be made: the back end is unavailable here
+                    self.failure = (
+                        f"moderngl is not installed ({exc})" if isinstance(exc, ImportError)
+                        else f"no OpenGL context through EGL: {type(exc).__name__}: {exc}".strip()
+                    )
+                else:  # out of contexts (memory, driver): share the ones there are
+                    self.limit = self.made
+                self.cv.notify_all()
+            return self._take()
+
+    @contextlib.contextmanager
+    def renderer(self) -> Iterator[_Renderer]:
+        """A renderer for this thread alone until the block ends; raises GLUnavailableError
+        (every time) when no context can be made in this process."""
+        r = self._take()
+        try:
+            yield r
+        finally:
+            with self.cv:
+                self.free.append(r)
+                self.cv.notify()
+
+    def size(self) -> int:
+        """How many contexts exist."""
+        with self.cv:
+            return self.made
+
+
 _lock = threading.Lock()
-_renderer: _Renderer | None = None
-_failure: str | None = None
+_the_pool: _Pool | None = None
+
+
+def _pool() -> _Pool:
+    """This process's pool (a forked child gets a new one: the parent's contexts are not its to use)."""
+    global _the_pool
+    with _lock:
+        if _the_pool is None or _the_pool.pid != os.getpid():
+            _the_pool = _Pool(context_limit())
+        return _the_pool
 
 
 def _get() -> _Renderer:
-    """The process's renderer, made on first call; raises GLUnavailableError (every time) if it cannot be."""
-    global _renderer, _failure
-    with _lock:
-        if _renderer is not None and _renderer.pid != os.getpid():
-            _renderer = None  # a forked child: the parent's context is not ours to use
-        if _renderer is None and _failure is None:
-            try:
-                _renderer = _Renderer()
-            except ImportError as exc:
-                _failure = f"moderngl is not installed ({exc})"
-            except Exception as exc:  # no EGL library, no driver, no GL 3.3, ...
-                _failure = f"no OpenGL context through EGL: {type(exc).__name__}: {exc}".strip()
-        if _renderer is None:
-            raise GLUnavailableError(f"the 'gl' render backend is not available: {_failure}. To use it: {INSTALL_HINT}")
-        return _renderer
+    """A renderer, given back at once (for what every context shares: availability, its name)."""
+    with _pool().renderer() as r:
+        return r
 
 
 def available() -> bool:
@@ -282,4 +372,5 @@ def render_faces(
     ``camera``: a ``CameraModel`` (K, width, height, near, far). ``bg`` (3,) uint8. Returns
     ``rgb`` (H, W, 3) uint8 and ``depth`` (H, W) float32, Z in metres, inf where empty.
     """
-    return _get().render(P, shaded, camera, bg, tex, dark)
+    with _pool().renderer() as r:
+        return r.render(P, shaded, camera, bg, tex, dark)
