@@ -198,3 +198,47 @@ def test_a_gl_render_lets_other_threads_run_while_it_rasterises():
         thread.join()
         shares.append(longest / (time.perf_counter() - start))
     assert min(shares) < 0.35, f"the spinning thread was held off for {min(shares):.0%} of the render at best"
+
+
+@pytest.mark.parametrize("realism", [None, "antialias", "smooth"])
+@pytest.mark.parametrize("dictionary,marker_id", [("aruco_4x4_50", 7), ("apriltag_36h11", 5)])
+def test_gl_draws_a_marker_texture_as_numpy_does_and_opencv_finds_it(dictionary: str, marker_id: int, realism: str | None):
+    """A marker on a tilted plate: the GL image is NumPy's but for pixels on the cells' edges, and
+    OpenCV's ArUco detector finds the marker in it at the scene's true corners."""
+    import cv2
+
+    from ejsrl.robotics.transforms import trotx
+    from ejsrl.vision import look_at as look
+    from ejsrl.vision.markers import detect_markers, marker_corners_3d
+    from ejsrl.world.rendering import Realism
+
+    require_gl()
+    side = 0.1
+    T_plate = transl(0.01, -0.02, 0.0) @ r2t(rotz(0.6)) @ trotx(0.4)
+    w = World()
+    w.add(Box("plate", size=(0.3, 0.3, 0.01), color="white", texture=f"{dictionary}:{marker_id}", texture_size=side, T_parent_local=T_plate))
+    w.add(Box("floor", size=(1, 1, 0.01), color="gray", T_parent_local=transl(0, 0, -0.1)))
+    cam = CameraModel(640, 480, fov_deg=50)
+    T_cam = look([0.1, -0.3, 0.45], [0.0, 0.0, 0.0], [0, 0, 1])
+    real = {None: None, "antialias": Realism(antialias=3), "smooth": Realism(shading="smooth")}[realism]
+    rgb_np, depth_np = render(w, cam, T_cam, backend="numpy", realism=real)
+    rgb_gl, depth_gl = render(w, cam, T_cam, backend="gl", realism=real)
+    diff = np.abs(rgb_np.astype(int) - rgb_gl.astype(int)).max(axis=2)
+    black = (rgb_np.max(axis=2) < 100).mean()
+    assert black > 0.01  # the marker is there, and large
+    assert (diff > 2).mean() < 0.004, f"{(diff > 2).mean():.4f} of the pixels differ"
+    seen = np.isfinite(depth_np)
+    assert np.array_equal(seen, np.isfinite(depth_gl))
+    assert (np.abs(depth_np[seen] - depth_gl[seen]) > 2e-4).mean() < 0.004  # the decals' lift is 0.05 mm; edges aside
+    # OpenCV's own detector (not ours) finds the marker in GL's pixels, where the scene has it
+    aruco = cv2.aruco
+    name = {"aruco_4x4_50": "DICT_4X4_50", "apriltag_36h11": "DICT_APRILTAG_36h11"}[dictionary]
+    det = aruco.ArucoDetector(aruco.getPredefinedDictionary(getattr(aruco, name)))
+    corners, ids, _ = det.detectMarkers(cv2.cvtColor(rgb_gl, cv2.COLOR_RGB2GRAY))
+    assert ids is not None and ids.ravel().tolist() == [marker_id]
+    T_world_marker = T_plate @ transl(0, 0, 0.005)
+    truth = cam.project((T_world_marker @ np.column_stack([marker_corners_3d(side), np.ones(4)]).T).T[:, :3], T_cam)
+    assert np.linalg.norm(corners[0].reshape(4, 2) - truth, axis=1).max() < 1.0
+    ours = detect_markers(rgb_gl, dictionary)
+    assert [m.id for m in ours] == [marker_id]
+    assert np.linalg.norm(ours[0].corners - truth, axis=1).max() < (0.5 if realism == "antialias" else 0.8)

@@ -30,8 +30,9 @@ on both back ends (see ``ejsrl.world._realism``). A solid node whose ``texture``
 ``texture_coords``). A solid node whose ``texture`` is ``"<dictionary>:<id>"`` (say
 ``"aruco_4x4_50:7"``, ``"apriltag_36h11:0"``; see ``ejsrl.vision.markers``) shows that fiducial
 marker, ``texture_size`` metres a side, centred on its origin, on its faces that look along
-its +z axis (see ``marker_coords``); a render with a marker in view is drawn by the NumPy
-back end (the GL shaders have no marker bitmaps), so it is the same on every machine.
+its +z axis (see ``marker_coords``): the NumPy back end paints it per pixel, the GL back end
+draws its black cells as decal faces (``ejsrl.world._marker_decals``): the same pixels but on
+the cells' edges.
 ``render_depth`` is the depth image alone.
 """
 
@@ -163,7 +164,8 @@ def render_triangles(
     ``rng``: the generator of the noise (default: a fresh one). ``texture`` (F, 3 corners,
     3): checker coordinates (s, t), in squares, and 1 on textured faces, 0 elsewhere (see
     ``texture_coords``); the dark squares are ``CHECKER_DARK`` times as bright. ``markers``:
-    what ``marker_coords`` gives (drawn by the NumPy back end whatever ``backend`` says). Returns ``rgb`` (H, W, 3)
+    what ``marker_coords`` gives (the GL back end draws their black cells as decal faces:
+    ``ejsrl.world._marker_decals``). Returns ``rgb`` (H, W, 3)
     uint8 and ``depth`` (H, W) float32 (metres along the optical axis, inf where nothing is seen).
     """
     be = _pick_backend(backend)
@@ -182,8 +184,6 @@ def render_triangles(
         realism = realism or Realism()
         cn = _world_corner_normals(tris, T[:3, :3]) if realism.shading == "smooth" else None
         tex = None if texture is None else np.asarray(texture, dtype=np.float64).reshape(-1, 3, 3)
-        if markers is not None:
-            be = "numpy"
         return _render_realistic(P, n, cols, front, camera, bg, be, realism, rng, cn, tex, markers)
     if be == "gl":
         from ejsrl.world import _gl
@@ -447,12 +447,24 @@ def _render_pinhole(
     markers: tuple[NDArray[np.float64], list[NDArray[np.bool_]]] | None = None,
 ) -> tuple[NDArray[np.uint8], NDArray[np.float32]]:
     """The pinhole render of camera-frame faces on back end ``be``: flat, or smooth with corner
-    normals ``cn``; a checker texture where ``tex`` says; markers (NumPy back end only)."""
+    normals ``cn``; a checker texture where ``tex`` says; markers where ``markers`` says (on
+    GL as decal faces: ``ejsrl.world._marker_decals``)."""
     smooth = cn is not None
-    if be == "gl" and markers is None:
+    if be == "gl":
         from ejsrl.world import _gl
 
         keep = np.flatnonzero(front) if front is not None else np.arange(P.shape[2])
+        if markers is not None:
+            from ejsrl.world._marker_decals import marker_decals
+
+            Pd, nd, cd, src, bary = marker_decals(P, n, cols, markers[0], markers[1], keep, MARKER_DARK)
+            keep = np.concatenate([keep, P.shape[2] + np.arange(Pd.shape[2])])
+            P, n, cols = np.concatenate([P, Pd], axis=2), np.concatenate([n, nd], axis=1), np.concatenate([cols, cd])
+            if smooth:  # the decal's corner normals: the face's, interpolated at its corners
+                cdn = np.einsum("dvw,wcd->vcd", bary, cn[:, :, src])
+                cn = np.concatenate([cn, cdn / np.linalg.norm(cdn, axis=1, keepdims=True)], axis=2)
+            if tex is not None:
+                tex = np.concatenate([tex, np.zeros((Pd.shape[2], 3, 3))])
         if smooth:
             shaded = _shade_corners(cn, cols, AMBIENT)[keep]
         else:
