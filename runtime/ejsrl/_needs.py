@@ -16,7 +16,6 @@ reads that list from the app's own file and, when a package is missing, prints w
 
 from __future__ import annotations
 
-import importlib.metadata
 import importlib.util
 import re
 import shlex
@@ -71,13 +70,17 @@ def missing(requirements: list[str]) -> list[str]:
         if not m:
             continue
         name = m.group(1)
-        try:
-            importlib.metadata.distribution(name)
-            continue
-        except importlib.metadata.PackageNotFoundError:
-            pass
         module = _MODULES.get(name.lower(), name.replace("-", "_"))
-        if importlib.util.find_spec(module) is None:
+        try:
+            if importlib.util.find_spec(module) is not None:
+                continue
+        except (ImportError, ValueError):  # a finder that refuses it, or a module without a spec
+            pass
+        from importlib import metadata  # only then: importing it costs every app's start more than the check
+
+        try:
+            metadata.distribution(name)
+        except metadata.PackageNotFoundError:
             out.append(req)
     return out
 

@@ -27,7 +27,6 @@ times as many connections in all; more are answered 429 (logged once per address
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import dataclasses
 import itertools
@@ -43,7 +42,10 @@ import threading
 import time
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import asyncio  # imported where the front runs: a headless or in-browser lab never loads it
 
 __all__ = ["WORKER_ENV", "MAX_PROCESSES", "WorkerRole", "Front", "default_processes", "worker_command", "split_places"]
 
@@ -284,6 +286,8 @@ class Front:
         failure: list[BaseException] = []
 
         def run() -> None:
+            import asyncio
+
             loop = asyncio.new_event_loop()
             asyncio.set_event_loop(loop)
             try:
@@ -314,6 +318,8 @@ class Front:
         return int(self._server.sockets[0].getsockname()[1])
 
     async def _bind(self) -> asyncio.base_events.Server:
+        import asyncio
+
         host = None if self.host in ("", "0.0.0.0") else self.host
         tries = 1 if self.port == 0 else 100
         for port in range(self.port, self.port + tries):
@@ -363,6 +369,8 @@ class Front:
             log.warning("ejsrl: refused %s from %s: it has %d open (the most from one address)", what, address, limit)
 
     async def _relay_one(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, address: str) -> None:
+        import asyncio
+
         try:
             head = await asyncio.wait_for(reader.readuntil(b"\r\n\r\n"), HEAD_SECONDS)
         except (asyncio.IncompleteReadError, asyncio.LimitOverrunError, asyncio.TimeoutError, ConnectionError, ValueError):
