@@ -1,0 +1,152 @@
+// The in-page channel of a lab built with `ejsgen build --web` (a classic script, run before
+// viser's client). viser's client opens its websocket from an inline Worker; this script
+// gives it, in that Worker's place, an object speaking the same protocol (WsWorkerIncoming /
+// WsWorkerOutgoing of viser's WebsocketClientWorker.ts) whose other end is the lab's Python,
+// running in worker.js. Every other Worker the client makes is a real one.
+//
+// window.ejsWeb: {ready (a Promise), call(what, args) -> Promise, timing, bytes}: what the
+// tests and bench/web.py use (a headless run's CSV, the model's time, the step cost).
+(() => {
+  "use strict";
+  const RealWorker = window.Worker;
+  const base = new URL("ejsweb/", document.baseURI);
+  let python = null;
+  let socket = null; // the viser client's side, once it made its websocket worker
+  let ready = false;
+  let wanted = false; // the client asked to connect (set_server / retry)
+  let connected = false;
+  let calls = 0;
+  const pending = new Map();
+  let resolveReady, rejectReady;
+  const api = {
+    ready: new Promise((res, rej) => { resolveReady = res; rejectReady = rej; }),
+    timing: {},
+    failed: null,
+    call(what, args) {
+      return api.ready.then(() => new Promise((res, rej) => {
+        const id = ++calls;
+        pending.set(id, { res, rej });
+        python.postMessage({ type: "call", id, what, args });
+      }));
+    },
+  };
+  window.ejsWeb = api;
+
+  // -- what the page shows while the lab loads -------------------------------------------------
+  let overlay = null;
+  const progress = {};
+  function show(text, failed) {
+    if (overlay === null) {
+      overlay = document.createElement("div");
+      overlay.id = "ejsweb-loading";
+      overlay.setAttribute("role", "status");
+      overlay.style.cssText = "position:fixed;left:50%;top:40%;transform:translate(-50%,-50%);z-index:10000;" +
+        "font:15px system-ui,sans-serif;padding:14px 20px;border-radius:8px;background:rgba(255,255,255,.95);" +
+        "box-shadow:0 2px 12px rgba(0,0,0,.2);color:#222;max-width:80vw;white-space:pre-wrap";
+      (document.body || document.documentElement).appendChild(overlay);
+    }
+    overlay.textContent = text; // text only: nothing here is read as HTML
+    if (failed) overlay.style.color = "#a00";
+  }
+  function hide() {
+    if (overlay !== null) overlay.remove();
+    overlay = null;
+  }
+  const mb = (n) => (n / 1e6).toFixed(1);
+
+  function connect() {
+    if (!ready || !wanted || connected || socket === null) return;
+    connected = true;
+    socket.emit({ type: "connected" });
+    python.postMessage({ type: "connect" });
+  }
+
+  function startPython() {
+    python = new RealWorker(new URL("worker.js", base), { type: "module" });
+    const t0 = performance.now();
+    python.onmessage = (e) => {
+      const msg = e.data;
+      if (msg.type === "batch") {
+        if (!api.timing.firstBatch) api.timing.firstBatch = performance.now() - t0;
+        if (socket !== null) socket.emit({ type: "message_batch", messages: msg.messages });
+        hide();
+      } else if (msg.type === "progress") {
+        progress[msg.what] = msg;
+        let got = 0, size = 0;
+        for (const p of Object.values(progress)) { got += p.got; size += p.size; }
+        api.bytes = got;
+        show(`Loading the lab… ${mb(got)} of ${mb(Math.max(size, got))} MB`);
+      } else if (msg.type === "ready") {
+        ready = true;
+        api.fps = msg.fps;
+        Object.assign(api.timing, msg.timing, { ready: performance.now() - t0 });
+        show("Starting the lab…");
+        resolveReady();
+        connect();
+      } else if (msg.type === "reply") {
+        const p = pending.get(msg.id);
+        pending.delete(msg.id);
+        if (p) (msg.ok ? p.res : p.rej)(msg.ok ? msg.value : new Error(msg.value));
+      } else if (msg.type === "log") {
+        (msg.level === "warn" ? console.warn : console.log)("[lab]", msg.text);
+      } else if (msg.type === "failed") {
+        api.failed = msg.text;
+        console.error("[lab]", msg.text);
+        show("The lab stopped: " + msg.text.split("\n").filter(Boolean).slice(-1)[0], true);
+        rejectReady(new Error(msg.text));
+      }
+    };
+    python.onerror = (e) => {
+      api.failed = String(e.message || e);
+      show("The lab could not start: " + api.failed + "\n(this page needs a recent Chrome, Edge or Firefox)", true);
+      rejectReady(new Error(api.failed));
+    };
+  }
+
+  /** Stands in for viser's websocket worker. */
+  class PageSocket {
+    constructor() {
+      this.onmessage = null;
+      this.onerror = null;
+      socket = this;
+    }
+    emit(data) {
+      if (typeof this.onmessage === "function") this.onmessage({ data });
+    }
+    postMessage(data) {
+      if (data.type === "send") {
+        if (connected) python.postMessage({ type: "send", message: data.message });
+      } else if (data.type === "set_server" || data.type === "retry") {
+        wanted = true;
+        connect();
+      }
+      // "zstd_wasm": nothing is compressed on this channel; "close": the page is going away
+    }
+    addEventListener(type, fn) {
+      if (type === "message") this.onmessage = fn;
+    }
+    removeEventListener() {}
+    terminate() {}
+  }
+
+  function isSocketWorker(url) {
+    // viser's inline websocket worker: a blob: URL whose code opens the websocket
+    try {
+      const request = new XMLHttpRequest();
+      request.open("GET", String(url), false);
+      request.send();
+      const code = request.responseText || "";
+      return code.includes("set_server") && code.includes("WebSocket");
+    } catch (e) {
+      return false;
+    }
+  }
+
+  window.Worker = function Worker(url, options) {
+    if (socket === null && String(url).startsWith("blob:") && isSocketWorker(url)) return new PageSocket();
+    return new RealWorker(url, options);
+  };
+  window.Worker.prototype = RealWorker.prototype;
+
+  startPython();
+})();

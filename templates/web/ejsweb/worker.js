@@ -1,0 +1,231 @@
+// The lab's Python, in a module worker (ejsgen build --web). It loads CPython for WebAssembly
+// (python.wasm) with the WASI shim, mounts the standard library zip at /usr/local/lib and the
+// lab's files at /lab, makes the lab (ejsrl.web.lab.open_lab) and then runs one display frame
+// per tick: the page's messages go in through /io/inbox, viser's batch comes out of /io/outbox
+// (see runtime/ejsrl/web/lab.py). One interpreter lives as long as the page: each call is a
+// "turn" of the reactor's `turn` export.
+//
+// Messages from the page (bridge.js): {type: "connect"}, {type: "send", message},
+// {type: "call", id, what, args} (headless CSV, state). To the page: {type: "progress", ...},
+// {type: "ready", fps}, {type: "batch", messages}, {type: "reply", id, ok, value},
+// {type: "failed", text}, {type: "log", level, text}.
+
+import { WASI, File, OpenFile, ConsoleStdout, PreopenDirectory, Directory } from "./vendor/browser_wasi_shim/index.js";
+import { decode, encode } from "./msgpack.js";
+
+const log = (level, text) => postMessage({ type: "log", level, text });
+let exports = null;
+let stdout = [];
+let fps = 30;
+let connected = false;
+let inbox = [];
+const io = { inbox: new File([]), outbox: new File([]), "run.csv": new File([]) };
+
+/** Fetch `url` (gzip-compressed: `url` ends in .gz) into a Uint8Array, reporting progress. */
+async function fetchBytes(url, what, size) {
+  const response = await fetch(url);
+  if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
+  let got = 0;
+  const counted = response.body.pipeThrough(new TransformStream({
+    transform(chunk, controller) {
+      got += chunk.byteLength;
+      postMessage({ type: "progress", what, got, size });
+      controller.enqueue(chunk);
+    },
+  }));
+  const body = url.endsWith(".gz") ? counted.pipeThrough(new DecompressionStream("gzip")) : counted;
+  return new Uint8Array(await new Response(body).arrayBuffer());
+}
+
+/** The lab's files (bundle.bin: a 4-byte little-endian JSON index length, the index
+ * [[path, size], ...], then the files' bytes) as a tree of the shim's Directory/File. */
+function unpack(bundle) {
+  const n = new DataView(bundle.buffer, bundle.byteOffset).getUint32(0, true);
+  const index = JSON.parse(new TextDecoder().decode(bundle.subarray(4, 4 + n)));
+  const root = new Map();
+  let pos = 4 + n;
+  for (const [path, size] of index) {
+    const parts = path.split("/");
+    let dir = root;
+    for (const part of parts.slice(0, -1)) {
+      if (!dir.has(part)) dir.set(part, new Directory(new Map()));
+      dir = dir.get(part).contents;
+    }
+    dir.set(parts[parts.length - 1], new File(bundle.subarray(pos, pos + size), { readonly: true }));
+    pos += size;
+  }
+  return root;
+}
+
+/** Run `code` in the interpreter; its standard output as text. */
+function turn(code) {
+  const bytes = new TextEncoder().encode(code);
+  const p = exports.host_alloc(bytes.length) >>> 0;
+  if (p === 0) throw new Error("the lab's Python is out of memory");
+  new Uint8Array(exports.memory.buffer, p, bytes.length).set(bytes);
+  stdout = [];
+  exports.turn(p, bytes.length);
+  return stdout.join("\n");
+}
+
+/** A turn whose last line prints a JSON value: that value (errors are raised as Error). */
+function ask(code) {
+  const out = turn(
+    "import json as _j, traceback as _tb\ntry:\n" +
+    code.split("\n").map((l) => "    " + l).join("\n") +
+    "\n    print('\\x1e' + _j.dumps({'ok': True, 'value': _v}))\n" +
+    "except BaseException as _e:\n    print('\\x1e' + _j.dumps({'ok': False, 'value': _tb.format_exc()}))\n");
+  const line = out.split("\n").reverse().find((l) => l.startsWith("\x1e"));
+  if (line === undefined) throw new Error("the lab's Python gave no answer: " + out.slice(-500));
+  const answer = JSON.parse(line.slice(1));
+  if (!answer.ok) throw new Error(answer.value);
+  return answer.value;
+}
+
+async function boot() {
+  const t0 = performance.now();
+  const manifest = await (await fetch("python/manifest.json")).json();
+  const [module, stdlib, lab] = await Promise.all([
+    fetchBytes(manifest.wasm.url, "python", manifest.wasm.size).then((b) => WebAssembly.compile(b)),
+    fetchBytes(manifest.stdlib.url, "stdlib", manifest.stdlib.size),
+    fetchBytes(manifest.lab.url, "lab", manifest.lab.size),
+  ]);
+  const fetched = performance.now() - t0;
+  const fds = [
+    new OpenFile(new File([])),
+    ConsoleStdout.lineBuffered((line) => stdout.push(line)),
+    ConsoleStdout.lineBuffered((line) => log("warn", line)),
+    new PreopenDirectory("/usr/local/lib", [[manifest.stdlib.name, new File(stdlib, { readonly: true })]]),
+    new PreopenDirectory("/lab", unpack(lab)),
+    new PreopenDirectory("/io", Object.entries(io)),
+    new PreopenDirectory("/tmp", []),
+  ];
+  const wasi = new WASI(["python.wasm"], ["TMPDIR=/tmp", "HOME=/tmp", "PYTHONTZPATH=", "PYTHONDONTWRITEBYTECODE=1"],
+    fds, { debug: false });
+  const instance = await WebAssembly.instantiate(module, {
+    wasi_snapshot_preview1: wasi.wasiImport,
+    host: { call: () => -1 }, // no host functions: the lab asks the page nothing synchronously
+  });
+  exports = instance.exports;
+  wasi.initialize(instance);
+  const started = performance.now() - t0;
+  const info = ask("import sys\nsys.path.insert(0, '/lab')\nfrom ejsrl.web.lab import open_lab\n" +
+    "lab = open_lab('app')\n_v = {'fps': lab.fps, 'title': lab.app.meta.title}");
+  fps = info.fps;
+  postMessage({ type: "ready", fps, title: info.title, timing: { fetched, started, lab: performance.now() - t0 } });
+}
+
+/** Replace viser's binary placeholders ({__binary_index, dtype}) with typed arrays over `buffer`. */
+const DTYPES = {
+  "<f2": [Uint16Array, 2], "<f4": [Float32Array, 4], "<f8": [Float64Array, 8], "|u1": [Uint8Array, 1],
+  "<u2": [Uint16Array, 2], "<u4": [Uint32Array, 4], "|i1": [Int8Array, 1], "<i2": [Int16Array, 2], "<i4": [Int32Array, 4],
+};
+function placeBinaries(obj, buffer, offsets, lengths) {
+  if (obj === null || typeof obj !== "object" || ArrayBuffer.isView(obj)) return obj;
+  if (Array.isArray(obj)) {
+    for (let i = 0; i < obj.length; i++) obj[i] = placeBinaries(obj[i], buffer, offsets, lengths);
+    return obj;
+  }
+  if ("__binary_index" in obj && "dtype" in obj) {
+    const i = obj.__binary_index;
+    const [ctor, bytes] = DTYPES[obj.dtype] || [Uint8Array, 1];
+    return new ctor(buffer, offsets[i], lengths[i] / bytes);
+  }
+  for (const k of Object.keys(obj)) obj[k] = placeBinaries(obj[k], buffer, offsets, lengths);
+  return obj;
+}
+
+function decodeBatch(data) {
+  const buffer = data.slice().buffer; // starts at 0: the 8-byte alignment of the arrays holds
+  const bytes = new Uint8Array(buffer);
+  const n = Number(new DataView(buffer).getBigUint64(0, true));
+  const batch = decode(bytes.subarray(8, 8 + n));
+  const lengths = batch.binaryBufferLengths || [];
+  const offsets = [];
+  let pos = 8 + n;
+  for (const len of lengths) {
+    pos += (8 - (pos % 8)) % 8;
+    offsets.push(pos);
+    pos += len;
+  }
+  if (lengths.length) placeBinaries(batch.messages, buffer, offsets, lengths);
+  return { messages: batch.messages, buffer };
+}
+
+function frame(step) {
+  if (inbox.length) {
+    let size = 0;
+    for (const m of inbox) size += 4 + m.length;
+    const data = new Uint8Array(size);
+    const view = new DataView(data.buffer);
+    let pos = 0;
+    for (const m of inbox) { view.setUint32(pos, m.length, true); data.set(m, pos + 4); pos += 4 + m.length; }
+    io.inbox.data = data;
+    inbox = [];
+  }
+  const out = turn(step ? "lab.frame()" : "lab.frame(step=False)");
+  if (out) log("info", out);
+  const data = io.outbox.data;
+  if (data.length) {
+    const { messages, buffer } = decodeBatch(data);
+    postMessage({ type: "batch", messages }, [buffer]);
+  }
+}
+
+let next = 0;
+let frameMs = 0;
+function loop() {
+  const t = performance.now();
+  try {
+    frame(true);
+  } catch (e) {
+    postMessage({ type: "failed", text: String(e && e.stack || e) });
+    return;
+  }
+  frameMs = performance.now() - t;
+  const period = 1000 / fps;
+  next += period;
+  let delay = next - performance.now();
+  if (delay < 0) { next = performance.now(); delay = 0; }
+  setTimeout(loop, delay);
+}
+
+function call(what, args) {
+  if (what === "state") return { ...ask("_v = lab.state()"), frameMs };
+  if (what === "headless") {
+    const duration = Number(args.duration);
+    if (!Number.isFinite(duration) || duration <= 0) throw new Error("headless: duration must be a positive number");
+    const names = (args.vars || []).map(String);
+    if (!names.every((v) => /^[A-Za-z_][A-Za-z0-9_]*(\[[0-9]+\])?$/.test(v))) throw new Error("headless: bad variable name");
+    const every = Math.max(1, Math.floor(Number(args.every) || 1));
+    const t = performance.now();
+    const status = ask("from ejsrl.web.lab import headless_csv\n" +
+      `_v = headless_csv(lab.module, ${duration}, variables=${names.length ? JSON.stringify(names) : "None"}, every=${every})`);
+    return { status, csv: new TextDecoder().decode(io["run.csv"].data), ms: performance.now() - t };
+  }
+  if (what === "steps") { // the cost of n model steps in this browser (bench/web.py)
+    const n = Math.max(1, Math.floor(Number(args.n) || 1));
+    return ask(`import time\n_m = lab.app\n_t = time.perf_counter()\n_m._run_steps(${n}) if False else [_m.model._ejs_step() for _ in range(${n})]\n` +
+      "_v = (time.perf_counter() - _t)");
+  }
+  throw new Error("unknown call " + what);
+}
+
+onmessage = (e) => {
+  const msg = e.data;
+  if (msg.type === "send") {
+    try { inbox.push(encode(msg.message)); } catch (err) { log("warn", "dropped a client message: " + err); }
+  } else if (msg.type === "connect") {
+    if (!connected) {
+      connected = true;
+      next = performance.now();
+      loop();
+    }
+  } else if (msg.type === "call") {
+    let reply;
+    try { reply = { ok: true, value: call(msg.what, msg.args || {}) }; } catch (err) { reply = { ok: false, value: String(err && err.message || err) }; }
+    postMessage({ type: "reply", id: msg.id, ...reply });
+  }
+};
+
+boot().catch((e) => postMessage({ type: "failed", text: String(e && e.stack || e) }));
