@@ -55,23 +55,7 @@ def drawn(mirror: SceneMirror, name: str) -> np.ndarray:
 
 def covers_exactly(mirror: SceneMirror, name: str, p0: np.ndarray, p1: np.ndarray) -> bool:
     """Whether the drawn pieces of a two-point line lie on the segment p0-p1 and cover all of it, no more."""
-    length = float(np.linalg.norm(p1 - p0))
-    d = (p1 - p0) / length
-    spans = []
-    for seg in segments(mirror, name):
-        rel = seg - p0
-        if np.abs(rel - np.outer(rel @ d, d)).max() > 1e-6:  # off the line
-            return False
-        spans.append(sorted(rel @ d))
-    spans.sort()
-    if spans[0][0] < -1e-6 or max(s[1] for s in spans) > length + 1e-6 or abs(spans[0][0]) > 1e-6:
-        return False
-    reach = spans[0][1]
-    for lo, hi in spans[1:]:
-        if lo > reach + 1e-6:
-            return False  # a gap
-        reach = max(reach, hi)
-    return abs(reach - length) < 1e-6
+    return covers_segment(segments(mirror, name), p0, p1)
 
 
 def kinds(sent: list, name: str) -> set[str]:
@@ -155,28 +139,140 @@ def test_a_spring_oscillating_within_twice_its_shortest_length_is_sent_as_poses_
     assert 1 <= len(frames_with_points) <= 3 and frames_with_points[-1] < 30, frames_with_points  # within its first swing
 
 
-def test_a_line_whose_shape_changes_is_sent_as_points(mirrored):
+def covers_segment(segs: list[np.ndarray], p0: np.ndarray, p1: np.ndarray) -> bool:
+    """Whether the drawn segments ``segs`` (each (2, 3)) lie on the segment p0-p1 and cover all of it, no more."""
+    length = float(np.linalg.norm(p1 - p0))
+    d = (p1 - p0) / length
+    spans = []
+    for seg in segs:
+        rel = seg - p0
+        if np.abs(rel - np.outer(rel @ d, d)).max() > 1e-6:  # off the line
+            return False
+        spans.append(sorted(rel @ d))
+    spans.sort()
+    if spans[0][0] < -1e-6 or max(s[1] for s in spans) > length + 1e-6 or abs(spans[0][0]) > 1e-6:
+        return False
+    reach = spans[0][1]
+    for lo, hi in spans[1:]:
+        if lo > reach + 1e-6:
+            return False  # a gap
+        reach = max(reach, hi)
+    return abs(reach - length) < 1e-6
+
+
+def pieces_cover(mirror: SceneMirror, name: str, pts: np.ndarray, first_geom: int = 0) -> bool:
+    """Whether a line drawn as pieces (two geometry handles a segment, from ``first_geom`` on)
+    covers each segment of ``pts`` (N, 3) exactly, as the browser places them."""
+    geoms = mirror._nodes[name].geoms[first_geom:]
+    for i in range(len(pts) - 1):
+        segs = []
+        for g in geoms[2 * i : 2 * i + 2]:
+            assert g.visible
+            R = q2r(np.asarray(g.wxyz, dtype=float))
+            segs += [seg @ R.T + np.asarray(g.position, dtype=float) for seg in np.asarray(g.points, dtype=float)]
+        if not covers_segment(segs, pts[i], pts[i + 1]):
+            return False
+    return True
+
+
+def zigzag(a: float, b: float, coils: int = 6, amp: float = 0.05) -> np.ndarray:
+    """A zigzag spring (2 coils + 3 points) from (a, 0, 0) to (b, 0, 0), across z."""
+    x = np.linspace(a, b, 2 * coils + 1)
+    z = np.zeros_like(x)
+    z[1:-1:2], z[2:-1:2] = amp, -amp
+    return np.column_stack([x, np.zeros_like(x), z])
+
+
+def test_a_line_that_turns_is_a_pose_and_one_whose_shape_changes_is_drawn_anew_as_pieces(mirrored):
     world, mirror, sent = mirrored
-    zigzag = world.add(Line("zigzag", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]])))
+    zig = world.add(Line("zigzag", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]])))
     mirror.sync(world)
     R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    zigzag.set(points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]) @ R.T + [0.5, 0.0, 0.0])  # turned: a pose
+    zig.set(points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]) @ R.T + [0.5, 0.0, 0.0])  # turned: a pose
     sent.clear()
     mirror.sync(world)
     assert kinds(sent, f"{ROOT}/zigzag/g0") == {"SetPositionMessage", "SetOrientationMessage"}
+    assert len(mirror._nodes["zigzag"].geoms) == 1
     new = np.array([[0.0, 0.0, 0.0], [0.0, 1.5, 0.0], [0.3, 1.5, 0.0], [0.3, 2.0, 1.0]])
-    zigzag.set(points=new)  # grown: points
+    zig.set(points=new)  # grown: drawn anew, as pieces (two a segment)
+    mirror.sync(world)
+    assert len(mirror._nodes["zigzag"].geoms) == 6
+    assert pieces_cover(mirror, "zigzag", new)
+
+
+def test_a_zigzag_spring_that_stretches_is_sent_as_poses(mirrored):
+    """A spring of 12 segments between a wall and a moving plate: after it first changes shape
+    (drawn anew as pieces), every frame is poses only and the pieces cover every segment exactly."""
+    world, mirror, sent = mirrored
+    spring = world.add(Line("spring", points=zigzag(0.0, 1.0)))
+    mirror.sync(world)
+    frames_with_points = 0
+    for k, t in enumerate(np.arange(1 / 30, 4.0, 1 / 30)):
+        pts = zigzag(0.0, 1.0 + 0.3 * np.sin(9 * t))
+        spring.set(points=pts)
+        sent.clear()
+        mirror.sync(world)
+        assert pieces_cover(mirror, "spring", pts), k
+        if k == 0:
+            continue  # drawn anew
+        got = set().union(*(kinds(sent, f"{ROOT}/spring/g{i}") for i in range(24)))
+        assert "LineSegmentsMessage" not in got and "RemoveSceneNodeMessage" not in got, k
+        frames_with_points += "SceneNodeUpdateMessage" in got
+    assert frames_with_points == 0, frames_with_points  # the zigzag's segments change length by 1.1x at most
+
+
+def test_a_line_of_more_segments_than_pieces_are_made_for_sends_its_points(mirrored):
+    from ejsrl.view._lines import MAX_PIECE_SEGMENTS
+
+    world, mirror, sent = mirrored
+    long = world.add(Line("long", points=zigzag(0.0, 1.0, coils=MAX_PIECE_SEGMENTS)))  # 2 coils a segment... 128 segments
+    mirror.sync(world)
+    new = zigzag(0.0, 1.2, coils=MAX_PIECE_SEGMENTS)
+    long.set(points=new)
     sent.clear()
     mirror.sync(world)
-    assert kinds(sent, f"{ROOT}/zigzag/g0") == {"SceneNodeUpdateMessage"}
-    assert np.allclose(drawn(mirror, "zigzag"), new, atol=1e-6)
+    assert kinds(sent, f"{ROOT}/long/g0") == {"SceneNodeUpdateMessage"}
+    assert len(mirror._nodes["long"].geoms) == 1
+    assert np.allclose(drawn(mirror, "long"), new, atol=1e-6)
+
+
+def test_a_trail_s_newest_segments_are_pieces_moved_by_poses(mirrored):
+    """A trail on an ellipse (its shape changes as it goes): its segment set gets the points, and
+    pieces over its newest two segments, moved by poses once their lengths are known, reach the
+    newest point in the same update."""
+    from ejsrl.view._lines import TRAIL_HEAD
+    from ejsrl.world.scene import Trail
+
+    world, mirror, sent = mirrored
+    trail = world.add(Trail("path", max_points=20))
+    mirror.sync(world)
+    pose_only = 0
+    for k, t in enumerate(np.arange(0.0, 3.0, 1 / 30)):
+        p = np.array([0.45 * np.cos(7 * t), 0.0, 0.25 * np.sin(7 * t)])
+        trail.push(p)
+        sent.clear()
+        mirror.sync(world)
+        pts = trail.props["points"]
+        geoms = mirror._nodes["path"].geoms
+        assert len(geoms) == 1 + 2 * TRAIL_HEAD
+        if len(pts) >= TRAIL_HEAD + 1:
+            assert pieces_cover(mirror, "path", pts[-TRAIL_HEAD - 1 :], first_geom=1), k
+            g = geoms[0]  # the segment set: every point, the newest among them
+            assert np.allclose(np.asarray(g.points, dtype=float)[-1, 1] @ q2r(np.asarray(g.wxyz, dtype=float)).T + g.position, p, atol=1e-6)
+            heads = set().union(*(kinds(sent, f"{ROOT}/path/g{i}") for i in range(1, 1 + 2 * TRAIL_HEAD)))
+            pose_only += heads <= {"SetPositionMessage", "SetOrientationMessage", "SetSceneNodeVisibilityMessage"}
+        else:  # fewer segments than pieces: the ones without a segment are hidden
+            assert sum(g.visible for g in geoms[1:]) == 2 * max(0, len(pts) - 1), k
+    print("head frames sent as poses alone:", pose_only)
+    assert pose_only >= 80, pose_only  # of 88 frames with a full head: the speed on the ellipse varies 1.8-fold
 
 
 def test_a_two_point_line_that_gets_a_third_point_is_drawn_anew(mirrored):
     world, mirror, sent = mirrored
     line = world.add(Line("l", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])))
     mirror.sync(world)
-    line.set(points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]))
+    pts = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]])
+    line.set(points=pts)
     mirror.sync(world)
-    assert len(mirror._nodes["l"].geoms) == 1
-    assert np.allclose(drawn(mirror, "l"), [[0, 0, 0], [1, 0, 0], [1, 1, 0]], atol=1e-6)
+    assert len(mirror._nodes["l"].geoms) == 4  # its shape changed: pieces, two a segment
+    assert pieces_cover(mirror, "l", pts)

@@ -1,28 +1,40 @@
 """Lines of the 3D view drawn in the same browser frame as the solids beside them.
 
-viser's client applies a node's pose (``SetPositionMessage``, ``SetOrientationMessage``) to its
-three.js object in the animation frame that receives it, but a line's new ``points`` go
-through a React re-render that commits after that frame is drawn: they show one browser frame
-later. A pendulum's rod sent as points therefore trailed its bob (a pose) while playing: median
-3-8 px, up to 19-37 px at 30 frames/s in the browser tests' set-ups (1280x800, square-on). So a line is moved by poses wherever
-its shape allows, and its points are sent only when its shape changes:
+viser's client applies a node's pose (``SetPositionMessage``, ``SetOrientationMessage``) and its
+visibility to its three.js object in the animation frame that receives them, but a line's new
+``points`` go through a React re-render that commits after that frame is drawn: they show one
+browser frame later. A pendulum's rod sent as points therefore trailed its bob (a pose) while
+playing: median 3-8 px, up to 19-37 px at 30 frames/s in the browser tests' set-ups (1280x800,
+square-on); a zigzag spring's end left its plate by up to 15-17 px and a trail's head its ball
+by up to 25 px. So a line is moved by poses wherever it can be, and its points are sent only
+when a piece must be made anew:
 
-- a line of two distinct points (a rod, a spring drawn straight, a beam) is two *pieces*, each a
-  segment of a fixed length ``h`` posed at one end and pointing at the other: together they
-  cover the segment exactly while its length ``l`` stays within ``[h, 2h]``, so it stretches,
-  shrinks, turns and moves by poses alone (``h = l / 1.5`` when made: a third shorter or
-  longer); a length leaving that band sends new pieces, in the pieces' current frames, that
-  cover every length seen so far when the longest is at most twice the shortest (a spring
-  oscillating within that is then sent by poses alone), else with room the way it went; a
-  one-piece line of two points that stretches becomes two pieces (drawn anew once);
-- any other line is one segment set whose rigid motion (every distance kept: a turning
-  polygon, a link drawn as a polyline) is fitted to the points last sent by Kabsch's method
-  and sent as the pose of its geometry; a new shape (a growing trail, a chain of springs)
-  sends its points, in the frame the geometry is posed in, and shows a frame later.
+- a segment whose length changes is two *pieces*, each a segment of a fixed length ``h`` posed
+  at one end and pointing at the other: together they cover the segment exactly while its
+  length ``l`` stays within ``[h, 2h]``, so it stretches, shrinks, turns and moves by poses
+  alone (``h = l / 1.5`` when made: a third shorter or longer); a length leaving that band
+  sends new pieces, in the pieces' current frames, that cover every length seen so far when
+  the longest is at most twice the shortest (a spring oscillating within that is then sent by
+  poses alone), else with room the way it went;
+- a ``line`` of two distinct points (a rod, a spring drawn straight) is one such segment;
+- a ``line`` of more points is first one segment set whose rigid motion (every distance kept:
+  a turning polygon, a link drawn as a polyline) is fitted to the points last sent by Kabsch's
+  method and sent as the pose of its geometry; the first time its shape changes (a zigzag
+  spring that stretches, a chain of springs) it is drawn anew as pieces, two a segment, if it
+  has at most ``MAX_PIECE_SEGMENTS`` segments (4 messages a segment that moves, a frame);
+  a longer line keeps sending its points and shows a frame late;
+- a ``trail`` is one segment set of all its points (sent as points, or as a pose while it
+  moves rigidly: a point going round a circle at a steady speed) under pieces on its newest
+  ``TRAIL_HEAD`` segments: the set shows its new points a frame late, but the pieces that
+  cover what it does not show yet are there at once, so the trail reaches its moving point.
+
+A line drawn anew (new nodes) shows a frame late once. Pieces of one colour overlap where a
+segment is shorter than ``2h``; a line has no opacity, so the overlap does not show.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from typing import Any
 
@@ -31,7 +43,7 @@ import numpy as np
 from ejsrl.robotics.transforms import r2q
 from ejsrl.view._wire import set_position, set_prop, set_wxyz
 
-__all__ = ["RIGID_LINES", "LineDraw", "rigid_fit", "polyline_segments"]
+__all__ = ["RIGID_LINES", "MAX_PIECE_SEGMENTS", "TRAIL_HEAD", "LineDraw", "rigid_fit", "polyline_segments"]
 
 #: lines moved by poses (see above); False sends a line's points every time, as viser's own
 #: path does (the browser tests measure both)
@@ -41,6 +53,14 @@ RIGID_LINES = True
 #: to 2/3 or stretch to 4/3 of that length (a spring about its rest length) before its points
 #: are sent again
 PIECE_RATIO = 1.5
+
+#: a ``line`` of at most this many segments whose shape changes is drawn as pieces (two a
+#: segment, moved by poses); a longer one sends its points (shown a browser frame late)
+MAX_PIECE_SEGMENTS = 64
+
+#: a trail's newest segments drawn as pieces over its segment set (two: the set may be two
+#: updates behind when a loaded browser takes two of them in one frame)
+TRAIL_HEAD = 2
 
 
 def polyline_segments(points: Any) -> np.ndarray:
@@ -90,10 +110,14 @@ def _turn(u: np.ndarray, d: np.ndarray) -> np.ndarray:
     return np.eye(3) + vx + vx @ vx / (1.0 + c)
 
 
+def _eligible(node: Any, pts: np.ndarray) -> bool:
+    """Whether a ``line`` whose shape changes is drawn as pieces: 2 to ``MAX_PIECE_SEGMENTS + 1`` finite points."""
+    return bool(RIGID_LINES and node.kind == "line" and 2 <= len(pts) <= MAX_PIECE_SEGMENTS + 1 and np.all(np.isfinite(pts)))
+
+
 def _two_points(node: Any, pts: np.ndarray) -> bool:
-    """Whether a line is drawn as two pieces: a ``line`` of two distinct finite points."""
-    return bool(RIGID_LINES and node.kind == "line" and len(pts) == 2 and np.all(np.isfinite(pts))
-                and np.linalg.norm(pts[1] - pts[0]) > 1e-12)
+    """Whether a line is drawn as pieces from the start: a ``line`` of two distinct finite points."""
+    return _eligible(node, pts) and len(pts) == 2 and float(np.linalg.norm(pts[1] - pts[0])) > 1e-12
 
 
 class _Handle:
@@ -120,80 +144,44 @@ class _Handle:
         set_prop(self.h, "points", polyline_segments(self.local))
 
 
-class LineDraw:
-    """How one line (or trail) node is drawn: one segment set, or two pieces for two points."""
+class _Pieces:
+    """One segment drawn as two pieces (see the module's docstring): ``a`` from its start, ``b``
+    from its end; ``seen``: the shortest and longest lengths it has had (metres); ``shown``:
+    False while the segment has no length (or no points)."""
 
-    def __init__(self, handles: list[_Handle], pieces: bool, length: float = 0.0) -> None:
-        self.handles = handles
-        self.pieces = pieces
-        #: for pieces: the shortest and longest lengths seen (metres)
+    __slots__ = ("a", "b", "seen", "shown")
+
+    def __init__(self, a: _Handle, b: _Handle, length: float) -> None:
+        self.a, self.b = a, b
         self.seen = (length, length)
-        #: the style last set (colour, width, shown): set again only when it changes
-        self.sent: tuple | None = None
-
-    @property
-    def geoms(self) -> list[Any]:
-        return [x.h for x in self.handles]
+        self.shown = True
 
     @classmethod
-    def build(cls, scene: Any, node: Any, base: str, color: tuple[int, int, int]) -> LineDraw:
-        """The handles of ``node`` below its frame (``base``: its scene path)."""
-        pts = np.asarray(node.props["points"], dtype=float).reshape(-1, 3)
-        width = float(node.props["width"])
-        pieces = _two_points(node, pts)
-        if not pieces:
-            h = scene.add_line_segments(f"{base}/g0", polyline_segments(pts), colors=color, thickness=width, thickness_units="screen")
-            h.visible = len(pts) >= 2
-            draw = cls([_Handle(h, pts.copy())], False)
-        else:
-            length = float(np.linalg.norm(pts[1] - pts[0]))
-            d = (pts[1] - pts[0]) / length
-            piece = length / PIECE_RATIO
-            ends = [np.array([pts[0], pts[0] + piece * d]), np.array([pts[1], pts[1] - piece * d])]
-            handles = []
-            for i, local in enumerate(ends):
-                h = scene.add_line_segments(f"{base}/g{i}", polyline_segments(local), colors=color, thickness=width,
-                                            thickness_units="screen")
-                handles.append(_Handle(h, local))
-            draw = cls(handles, True, length)
-        draw.sent = (tuple(color), width, len(pts) >= 2)
-        return draw
+    def make(cls, add: Any, p0: np.ndarray, p1: np.ndarray) -> _Pieces:
+        """Pieces on the segment ``p0``-``p1`` (3,); ``add(local (2, 3))`` makes a segment set's handle."""
+        length = float(np.linalg.norm(p1 - p0)) if np.all(np.isfinite([p0, p1])) else 0.0
+        d = (p1 - p0) / length if length > 1e-12 else np.array([1.0, 0.0, 0.0])
+        placeholder = length <= 1e-12  # hidden until the segment has a length
+        if placeholder:
+            p0, length = np.zeros(3), 1.0
+        piece = length / PIECE_RATIO
+        a, b = np.array([p0, p0 + piece * d]), np.array([p0 + length * d, p0 + (length - piece) * d])
+        made = cls(_Handle(add(a), a), _Handle(add(b), b), length)
+        if placeholder:
+            made.seen = (math.inf, 0.0)
+        return made
 
-    def update(self, node: Any, color: tuple[int, int, int]) -> bool:
-        """Send what changed of ``node``; False if it needs new handles (its kind of drawing changed)."""
-        pts = np.asarray(node.props["points"], dtype=float).reshape(-1, 3)
-        shown = len(pts) >= 2
-        if self.pieces:
-            if len(pts) != 2 or not np.all(np.isfinite(pts)):
-                return False
-            shown = self._pieces(pts)
-        else:
-            g = self.handles[0]
-            T = rigid_fit(g.local, pts) if RIGID_LINES else None
-            if T is not None:  # moved as a whole: the pose of its geometry
-                g.pose(T)
-            elif _two_points(node, pts):  # a segment that stretches: as pieces from now on
-                return False
-            else:  # a new shape: its points
-                g.points(pts)
-        style = (tuple(color), float(node.props["width"]), shown)
-        if style != self.sent:  # a moving line changes its points or poses only: each set costs
-            for x in self.handles:
-                # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
-                # means; per-vertex colours would be read as linear and shown washed out
-                x.h.colors = np.array(color, dtype=np.uint8)
-                x.h.thickness = style[1]
-                x.h.visible = style[2]
-            self.sent = style
-        return True
+    @property
+    def handles(self) -> tuple[_Handle, _Handle]:
+        return self.a, self.b
 
-    def _pieces(self, pts: np.ndarray) -> bool:
-        """Place the two pieces on the segment ``pts`` (2, 3); whether it is shown (not of length 0)."""
-        a, b = self.handles
-        length = float(np.linalg.norm(pts[1] - pts[0]))
-        if length < 1e-12:
+    def place(self, p0: np.ndarray, p1: np.ndarray) -> bool:
+        """Cover the segment ``p0``-``p1`` (3,); whether it is shown (finite, of a length)."""
+        a, b = self.a, self.b
+        length = float(np.linalg.norm(p1 - p0))
+        if not (math.isfinite(length) and length > 1e-12):
             return False
-        d = (pts[1] - pts[0]) / length
+        d = (p1 - p0) / length
         piece = float(np.linalg.norm(a.local[1] - a.local[0]))
         lo, hi = min(self.seen[0], length), max(self.seen[1], length)
         self.seen = (lo, hi)
@@ -205,13 +193,113 @@ class LineDraw:
                 piece = math.sqrt(hi / 2.0 * lo)
             else:
                 piece = 0.75 * length if length > piece else 0.55 * length
-            a.points(np.array([pts[0], pts[0] + piece * d]))
-            b.points(np.array([pts[1], pts[1] - piece * d]))
+            a.points(np.array([p0, p0 + piece * d]))
+            b.points(np.array([p1, p1 - piece * d]))
             return True
-        for x, start, direction in ((a, pts[0], d), (b, pts[1], -d)):
+        for x, start, direction in ((a, p0, d), (b, p1, -d)):
             u = (x.local[1] - x.local[0]) / piece
             T = np.eye(4)
             T[:3, :3] = _turn(u, direction)
             T[:3, 3] = start - T[:3, :3] @ x.local[0]
             x.pose(T)
         return True
+
+    def show(self, shown: bool, style_shown: bool) -> None:
+        """Show or hide the pieces (a visibility change reaches the screen with the poses)."""
+        if shown != self.shown:
+            self.shown = shown
+            for x in self.handles:
+                x.h.visible = shown and style_shown
+
+
+class LineDraw:
+    """How one line (or trail) node is drawn: a segment set (``handles``: none or one) and pieces."""
+
+    def __init__(self, handles: list[_Handle], pieces: list[_Pieces], kind: str) -> None:
+        self.handles = handles
+        self.pieces = pieces
+        self.kind = kind
+        #: the style last set (colour, width, shown): set again only when it changes
+        self.sent: tuple | None = None
+        #: set by :meth:`update` when it returns False: draw the line anew as pieces
+        self.changing = False
+
+    @property
+    def geoms(self) -> list[Any]:
+        return [x.h for x in self.handles] + [x.h for p in self.pieces for x in p.handles]
+
+    @classmethod
+    def build(cls, scene: Any, node: Any, base: str, color: tuple[int, int, int], *, changing: bool = False) -> LineDraw:
+        """The handles of ``node`` below its frame (``base``: its scene path); ``changing``: its
+        shape has changed before (a line drawn anew): pieces if it has few enough segments."""
+        pts = np.asarray(node.props["points"], dtype=float).reshape(-1, 3)
+        width = float(node.props["width"])
+        count = itertools.count()
+
+        def add(local: np.ndarray) -> Any:
+            return scene.add_line_segments(f"{base}/g{next(count)}", polyline_segments(local), colors=color, thickness=width,
+                                           thickness_units="screen")
+
+        handles: list[_Handle] = []
+        pieces: list[_Pieces] = []
+        if _two_points(node, pts) or (changing and _eligible(node, pts)):
+            pieces = [_Pieces.make(add, pts[i], pts[i + 1]) for i in range(len(pts) - 1)]
+        else:
+            handles = [_Handle(add(pts), pts.copy())]
+            if node.kind == "trail" and RIGID_LINES:
+                pieces = [_Pieces.make(add, np.zeros(3), np.zeros(3)) for _ in range(TRAIL_HEAD)]
+        draw = cls(handles, pieces, node.kind)
+        draw.sent = (tuple(color), width, len(pts) >= 2)
+        for x in handles:
+            x.h.visible = len(pts) >= 2
+        draw._place_pieces(pts, True)
+        return draw
+
+    def update(self, node: Any, color: tuple[int, int, int]) -> bool:
+        """Send what changed of ``node``; False if it needs new handles (its kind of drawing changed:
+        then ``changing`` says whether to draw it anew as pieces)."""
+        pts = np.asarray(node.props["points"], dtype=float).reshape(-1, 3)
+        shown = len(pts) >= 2
+        style = (tuple(color), float(node.props["width"]), shown)
+        if self.pieces and not self.handles:  # a line drawn as pieces
+            if len(pts) != len(self.pieces) + 1 or not np.all(np.isfinite(pts)):
+                self.changing = True
+                return False
+        elif self.handles:
+            g = self.handles[0]
+            T = rigid_fit(g.local, pts) if RIGID_LINES else None
+            if T is not None:  # moved as a whole: the pose of its geometry
+                g.pose(T)
+            elif self.kind == "line" and _eligible(node, pts):  # its shape changed: as pieces from now on
+                self.changing = True
+                return False
+            else:  # a new shape: its points
+                g.points(pts)
+        if style != self.sent:  # a moving line changes its points or poses only: each set costs
+            for x in self.handles:
+                self._style(x, style, style[2])
+            for p in self.pieces:
+                for x in p.handles:
+                    self._style(x, style, style[2] and p.shown)
+            self.sent = style
+        self._place_pieces(pts, style[2])
+        return True
+
+    @staticmethod
+    def _style(x: _Handle, style: tuple, visible: bool) -> None:
+        # one colour for the whole line: viser's client reads it as sRGB, as the CSS colour
+        # means; per-vertex colours would be read as linear and shown washed out
+        x.h.colors = np.array(style[0], dtype=np.uint8)
+        x.h.thickness = style[1]
+        x.h.visible = visible
+
+    def _place_pieces(self, pts: np.ndarray, style_shown: bool) -> None:
+        """Put the pieces on their segments: every segment of a line drawn as pieces, or a
+        trail's newest ``TRAIL_HEAD`` (the oldest piece on the oldest of them)."""
+        if not self.pieces:
+            return
+        first = 0 if not self.handles else len(pts) - 1 - len(self.pieces)
+        for i, p in enumerate(self.pieces):
+            k = first + i
+            ok = 0 <= k and k + 1 < len(pts) and p.place(pts[k], pts[k + 1])
+            p.show(ok, style_shown)

@@ -475,8 +475,14 @@ def _props_solid(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opaci
 
 
 def _props_polyline(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
-    if m.line is None or not m.line.update(node, color):  # drawn another way now (two points became three)
-        _props_rebuild(mirror, node, m, color, opacity)
+    if m.line is not None and m.line.update(node, color):
+        return
+    # drawn another way now (a shape that changed: as pieces; two points became three hundred: a set)
+    changing = m.line is not None and m.line.changing
+    for h in m.geoms:
+        _safe_remove(h)
+    m.line = LineDraw.build(mirror.scene, node, mirror._path(node.name), color, changing=changing)
+    m.geoms = list(m.line.geoms)
 
 
 def _props_points(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
