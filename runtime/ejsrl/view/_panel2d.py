@@ -27,7 +27,6 @@ events are per session.
 
 from __future__ import annotations
 
-import asyncio
 import base64
 import collections
 import html
@@ -353,6 +352,8 @@ class Panel2D:
         """viser's callback (on its event loop, in the order messages arrive): parse, queue, deliver."""
         if getattr(event, "client", None) is None:
             return
+        import asyncio  # here, on viser's loop: a lab's start (headless, in a browser) does not load it
+
         self.receive(self.events._impl.value, deliver=False)
         await asyncio.get_running_loop().run_in_executor(None, self.deliver)
 
