@@ -276,3 +276,34 @@ def test_a_two_point_line_that_gets_a_third_point_is_drawn_anew(mirrored):
     mirror.sync(world)
     assert len(mirror._nodes["l"].geoms) == 4  # its shape changed: pieces, two a segment
     assert pieces_cover(mirror, "l", pts)
+
+
+def test_the_masses_of_a_chain_are_posed_points_once_they_move_apart(mirrored):
+    """A point cloud beside a line drawn as pieces keeps step with it: once its points move apart
+    (not as a whole) each is its own posed point, and every frame after sends positions alone."""
+    from ejsrl.world.scene import Points
+
+    world, mirror, sent = mirrored
+    x = np.arange(1, 31) * 0.1
+    masses = world.add(Points("masses", points=np.column_stack([x, 0 * x, 0 * x]), size=0.04))
+    mirror.sync(world)
+    for k, t in enumerate(np.arange(0.0, 1.0, 1 / 30)):
+        pts = np.column_stack([x, 0 * x, 0.05 * np.sin(np.pi * x / 3.1) * np.cos(5 * t + 0.1)])
+        masses.set(points=pts)
+        sent.clear()
+        mirror.sync(world)
+        geoms = mirror._nodes["masses"].geoms
+        assert len(geoms) == 30
+        assert np.allclose([np.asarray(g.position) + np.asarray(g.points)[0] for g in geoms], pts, atol=1e-6)
+        if k:
+            got = set().union(*(kinds(sent, f"{ROOT}/masses/g{i}") for i in range(30)))
+            assert got == {"SetPositionMessage"}, got
+    # a cloud moved as a whole stays one cloud, sent as a pose
+    cloud = world.add(Points("cloud", points=np.random.default_rng(1).normal(size=(200, 3)), size=0.01))
+    mirror.sync(world)
+    cloud.set(T_parent_local=np.eye(4))
+    R = np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    cloud.set(points=cloud.props["points"] @ R.T + 1.0)
+    sent.clear()
+    mirror.sync(world)
+    assert kinds(sent, f"{ROOT}/cloud/g0") == {"SetPositionMessage", "SetOrientationMessage"}

@@ -43,7 +43,7 @@ import numpy as np
 from ejsrl.robotics.transforms import r2q
 from ejsrl.view._wire import set_position, set_prop, set_wxyz
 
-__all__ = ["RIGID_LINES", "MAX_PIECE_SEGMENTS", "TRAIL_HEAD", "LineDraw", "rigid_fit", "polyline_segments"]
+__all__ = ["RIGID_LINES", "MAX_PIECE_SEGMENTS", "MAX_POSED_POINTS", "TRAIL_HEAD", "LineDraw", "PointsDraw", "rigid_fit", "polyline_segments"]
 
 #: lines moved by poses (see above); False sends a line's points every time, as viser's own
 #: path does (the browser tests measure both)
@@ -303,3 +303,90 @@ class LineDraw:
             k = first + i
             ok = 0 <= k and k + 1 < len(pts) and p.place(pts[k], pts[k + 1])
             p.show(ok, style_shown)
+
+
+#: a point cloud of at most this many points whose points move apart (the masses of a chain of
+#: springs) is drawn anew as one posed point each, so that it keeps step with the lines drawn as
+#: pieces beside it; a larger one sends its points (shown a browser frame late)
+MAX_POSED_POINTS = 64
+
+
+class PointsDraw:
+    """How one point cloud node is drawn: one cloud (moved by a pose while it moves as a whole,
+    else sent its points), or one posed single-point cloud per point once its points have moved
+    apart, if it has at most ``MAX_POSED_POINTS``."""
+
+    def __init__(self, handles: list[_Handle], posed: bool) -> None:
+        self.handles = handles
+        self.posed = posed
+        #: the style last set (colour, size, count): set again only when it changes
+        self.sent: tuple | None = None
+        #: set by :meth:`update` when it returns False: draw the cloud anew as posed points
+        self.changing = False
+
+    @property
+    def geoms(self) -> list[Any]:
+        return [x.h for x in self.handles]
+
+    @classmethod
+    def build(cls, scene: Any, node: Any, base: str, color: tuple[int, int, int], *, changing: bool = False) -> PointsDraw:
+        """The handles of ``node`` below its frame (``base``: its scene path); ``changing``: its
+        points have moved apart before: one posed point each if there are few enough."""
+        pts = np.asarray(node.props["points"], dtype=float).reshape(-1, 3)
+        size = float(node.props["size"])
+        if changing and RIGID_LINES and 1 <= len(pts) <= MAX_POSED_POINTS:
+            handles = []
+            for i, p in enumerate(pts):
+                h = scene.add_point_cloud(f"{base}/g{i}", points=np.zeros((1, 3), dtype=np.float32), colors=color,
+                                          point_size=size, precision="float32")
+                x = _Handle(h, np.zeros((1, 3)))
+                handles.append(x)
+                x.h.visible = _place_point(x, p)
+            draw = cls(handles, True)
+        else:
+            h = scene.add_point_cloud(f"{base}/g0", points=pts.astype(np.float32), colors=color, point_size=size, precision="float32")
+            draw = cls([_Handle(h, pts.copy())], False)
+        draw.sent = (tuple(color), size, len(pts))
+        return draw
+
+    def update(self, node: Any, color: tuple[int, int, int]) -> bool:
+        """Send what changed of ``node``; False if it needs new handles (then ``changing`` says
+        whether to draw it anew as posed points)."""
+        pts = np.asarray(node.props["points"], dtype=float).reshape(-1, 3)
+        style = (tuple(color), float(node.props["size"]), len(pts))
+        if self.posed:
+            if len(pts) != len(self.handles):
+                self.changing = True
+                return False
+            for x, p in zip(self.handles, pts):
+                shown = _place_point(x, p)
+                if shown != x.h.visible:
+                    x.h.visible = shown
+        else:
+            g = self.handles[0]
+            T = rigid_fit(g.local, pts) if RIGID_LINES else None
+            if T is not None:
+                g.pose(T)
+            elif RIGID_LINES and 1 <= len(pts) <= MAX_POSED_POINTS and len(pts) == len(g.local) and np.all(np.isfinite(pts)):
+                self.changing = True  # its points moved apart: one posed point each from now on
+                return False
+            else:
+                g.local = (pts - g.T[:3, 3]) @ g.T[:3, :3]
+                set_prop(g.h, "points", g.local.astype(np.float32))
+        if style != self.sent:
+            for x in self.handles:
+                n = len(x.h.points)
+                x.h.colors = np.broadcast_to(np.array(style[0], dtype=np.uint8), (n, 3)).copy()
+                x.h.point_size = style[1]
+            self.sent = style
+        return True
+
+
+def _place_point(x: _Handle, p: np.ndarray) -> bool:
+    """Pose the single-point cloud ``x`` at ``p`` (3,); whether it is shown (``p`` finite)."""
+    if not np.all(np.isfinite(p)):
+        return False
+    T = x.T.copy()
+    T[:3, 3] = p
+    x.pose(T)
+    return True

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from ejsrl.robotics.transforms import q2r, r2q
-from ejsrl.view._lines import LineDraw
+from ejsrl.view._lines import LineDraw, PointsDraw
 from ejsrl.view._wire import set_position, set_wxyz
 from ejsrl.world.kinds import KINDS
 
@@ -102,8 +102,8 @@ class _Mirror:
         self.part_keys: list[tuple] | None = None
         self.part_handles: list[list[Any]] = []
         self.parts_ref: list[Any] = []  # keeps the keyed arrays alive, so their ids stay unique
-        #: for lines and trails: how they are drawn (ejsrl.view._lines)
-        self.line: LineDraw | None = None
+        #: for lines, trails and point clouds: how they are drawn (ejsrl.view._lines)
+        self.line: LineDraw | PointsDraw | None = None
 
 
 class SceneMirror:
@@ -395,10 +395,8 @@ def _build_polyline(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color
 
 
 def _build_points(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
-    pts = np.asarray(node.props["points"], dtype=np.float32).reshape(-1, 3)
-    m.geoms.append(
-        mirror.scene.add_point_cloud(f"{base}/g0", points=pts, colors=color, point_size=float(node.props["size"]), precision="float32")
-    )
+    m.line = PointsDraw.build(mirror.scene, node, base, color)
+    m.geoms.extend(m.line.geoms)
 
 
 def _build_frame(mirror: SceneMirror, node: Any, m: _Mirror, base: str, color: Color, opacity: float | None) -> None:
@@ -475,22 +473,16 @@ def _props_solid(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opaci
 
 
 def _props_polyline(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
+    """A line, a trail or a point cloud: what changed, or drawn anew another way (a line whose
+    shape changed: as pieces; two points became three hundred: one segment set)."""
     if m.line is not None and m.line.update(node, color):
         return
-    # drawn another way now (a shape that changed: as pieces; two points became three hundred: a set)
+    draw = PointsDraw if _style(node.kind) == "points" else LineDraw
     changing = m.line is not None and m.line.changing
     for h in m.geoms:
         _safe_remove(h)
-    m.line = LineDraw.build(mirror.scene, node, mirror._path(node.name), color, changing=changing)
+    m.line = draw.build(mirror.scene, node, mirror._path(node.name), color, changing=changing)
     m.geoms = list(m.line.geoms)
-
-
-def _props_points(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
-    g = m.geoms[0]
-    g.points = np.asarray(node.props["points"], dtype=np.float32).reshape(-1, 3)
-    n = len(g.points)
-    g.colors = np.broadcast_to(np.array(color, dtype=np.uint8), (n, 3)).copy()
-    g.point_size = float(node.props["size"])
 
 
 def _props_frame(mirror: SceneMirror, node: Any, m: _Mirror, color: Color, opacity: float | None) -> None:
@@ -534,7 +526,7 @@ _PROP_UPDATERS: dict[str, Callable[[SceneMirror, Any, _Mirror, Color, float | No
     "box": _props_solid,
     "sphere": _props_solid,
     "polyline": _props_polyline,
-    "points": _props_points,
+    "points": _props_polyline,
     "frame": _props_frame,
     "label": _props_label,
     "camera": _props_camera,
