@@ -77,6 +77,7 @@ _MODEL_LINKS = {
     "Ode": ("ODE", "ode-pages"),
     "Fmu": ("FMU", "fmus"),
     "Plant": ("plant", "remote-laboratories-plant"),
+    "PlantVideo": ("plant video", "the-plants-camera"),
 }
 
 
@@ -428,6 +429,7 @@ def _sections() -> dict[str, Callable[[], str]]:
         "plant": lambda: field_table(spec.Plant),
         "plant-command": lambda: field_table(_spec_plant.PlantCommand),
         "plant-measurement": lambda: field_table(_spec_plant.PlantMeasurement),
+        "plant-video": lambda: field_table(_spec_plant.PlantVideo),
         "view-elements": lambda: _kinds_table(spec.GUI_ELEMENT_MODELS, {"scene": "The 3D world: a list of 3D elements (see [3D elements](#3d-elements))."}),
         "view-properties": lambda: _per_kind(spec.GUI_ELEMENT_MODELS),
         "plot-series": lambda: field_table(spec.SeriesEl),
@@ -448,6 +450,7 @@ SECTIONS: tuple[str, ...] = (
     "top-level", "variable", "model", "code-page", "ode", "ode-methods", "events", "evolution-pages",
     "program", "simulation", "fmu", "view-elements", "view-properties", "plot-series", "drawing-elements", "drawing-properties", "drag", "scene-elements",
     "scene-common", "scene-properties", "prelude", "reserved", "vision", "plant", "plant-command", "plant-measurement",
+    "plant-video",
 )
 
 

@@ -19,7 +19,7 @@ from ejsgen.plan import Line
 if TYPE_CHECKING:
     from ejsgen.compiler import Compiler
 
-__all__ = ["Plant", "PlantCommand", "PlantMeasurement", "compile_plant"]
+__all__ = ["Plant", "PlantCommand", "PlantMeasurement", "PlantVideo", "compile_plant"]
 
 from ejsgen.spec import Strict  # noqa: E402  (spec.py imports this module after defining Strict)
 
@@ -28,7 +28,8 @@ _SECRET_HINT = ("credentials never go in a spec (it is copied into app.py): set 
                 "EJSRL_PLANT_PASSWORD where the app runs, or name a file with EJSRL_PLANT_CREDENTIALS=FILE")
 
 #: what a measurement may read: the plant's state, or the link's own view of it
-MEASURED = Literal["joints", "speeds", "gripper", "status", "event", "latency", "queue_position", "holds_lease", "connected"]
+MEASURED = Literal["joints", "speeds", "gripper", "status", "event", "latency", "video_age", "queue_position", "holds_lease", "connected"]
+_TIMES = ("latency", "video_age")
 #: units a joint or latency value is converted to and from (SI inside the plant)
 UNITS = Literal["rad", "deg", "s", "ms"]
 _SCALE = {"rad": 1.0, "deg": 3.141592653589793 / 180.0, "s": 1.0, "ms": 1e-3}
@@ -53,9 +54,18 @@ class PlantMeasurement(Strict):
     """A model variable that receives a value measured by the plant (in Real plant mode, and while watching)."""
 
     source: MEASURED = Field(alias="from")
-    """What it reads: ``joints`` (5 angles), ``speeds``, ``gripper``, ``status`` (text), ``event`` (text: what the plant last did), ``latency`` (command round trip), ``queue_position`` (0: not waiting), ``holds_lease`` (1 or 0), ``connected`` (1 or 0)."""
+    """What it reads: ``joints`` (5 angles), ``speeds``, ``gripper``, ``status`` (text), ``event`` (text: what the plant last did), ``latency`` (command round trip), ``video_age`` (the newest camera frame's age), ``queue_position`` (0: not waiting), ``holds_lease`` (1 or 0), ``connected`` (1 or 0)."""
     unit: UNITS = "rad"
-    """The variable's unit: rad or deg for joints and speeds (per s), s or ms for latency."""
+    """The variable's unit: rad or deg for joints and speeds (per s), s or ms for latency and video_age."""
+
+
+class PlantVideo(Strict):
+    """The plant's camera, shown in Real plant mode with the age of the frame on screen."""
+
+    stale: float = Field(default=0.5, gt=0, le=60)
+    """Seconds: a frame older than this is flagged STALE (the camera or the plant stopped, the network is slow)."""
+    rate: float = Field(default=15.0, gt=0, le=60)
+    """At most this many frames a second go to each page (the newest one; the others are dropped)."""
 
 
 class Plant(Strict):
@@ -77,6 +87,8 @@ class Plant(Strict):
     """Model variable: what it drives on the plant."""
     measurements: dict[str, PlantMeasurement] = Field(default_factory=dict)
     """Model variable: what it receives from the plant."""
+    video: PlantVideo | None = None
+    """The plant's camera stream, shown in Real plant mode with its age (``video: {}`` for the defaults)."""
 
     @model_validator(mode="before")
     @classmethod
@@ -133,9 +145,9 @@ def compile_plant(c: Compiler) -> None:
                 cmds.append(f"PlantCommand({var!r}, {link.to!r}, scale={scale!r}, q_min={[x * scale for x in lim[0]]!r}, "
                             f"q_max={[x * scale for x in lim[1]]!r}, max_speed={speed!r}),")
             else:
-                if link.unit in ("s", "ms") and link.source != "latency" or link.source == "latency" and link.unit not in ("s", "ms"):
+                if (link.unit in ("s", "ms")) != (link.source in _TIMES):
                     c.errors.append(SpecError(c.loc(path + ("unit",)), f"'{link.unit}' is not a unit of {link.source}",
-                                              "latency is in s or ms; joints and speeds in rad or deg"))
+                                              "latency and video_age are in s or ms (give unit: ms); joints and speeds in rad or deg"))
                     continue
                 meas.append(f"PlantMeasurement({var!r}, {link.source!r}, scale={_SCALE[link.unit]!r}),")
     if sum(1 for l in plant.commands.values() if l.to == "joints") > 1:
@@ -143,6 +155,7 @@ def compile_plant(c: Compiler) -> None:
     lines = [Line("from ejsrl.app._plant_link import PlantCommand, PlantDef, PlantMeasurement"), Line(""),
              Line(f"return PlantDef({plant.host!r}, {plant.port!r}, topic={plant.topic!r}, heartbeat={plant.heartbeat!r}, rate={plant.rate!r},"),
              *([Line(f"    transport={plant.transport!r},")] if plant.transport != "mqtt" else []),
+             *([Line(f"    video_stale={plant.video.stale!r}, video_rate={plant.video.rate!r},")] if plant.video else []),
              Line("    commands=["), *[Line("        " + s) for s in cmds], Line("    ],"),
              Line("    measurements=["), *[Line("        " + s) for s in meas], Line("    ],"), Line(")")]
     c.add_method("_plant", "self", "The real plant this lab drives (plant:); the plant panel connects to it, never the browser.", lines)

@@ -4,6 +4,8 @@ Real plant switch, the queue position, the plant following the program, the e-st
 from __future__ import annotations
 
 import math
+import re
+import signal
 import time
 from pathlib import Path
 
@@ -18,6 +20,27 @@ pytestmark = pytest.mark.browser
 
 def _panel_text(page) -> str:
     return page.evaluate("document.body.innerText")
+
+
+#: the natural size of the largest picture shown in the page (the plant's camera), or null
+_CAMERA_JS = """() => { const im = [...document.querySelectorAll('img')].filter(i => i.complete && i.naturalWidth > 0
+    && i.offsetParent !== null).sort((a, b) => b.naturalWidth - a.naturalWidth)[0];
+    return im ? [im.naturalWidth, im.naturalHeight] : null; }"""
+
+#: the mean row of the orange (robot-coloured) pixels of the 320 x 240 picture in the page
+_ARM_V_JS = """() => { const im = [...document.querySelectorAll('img')].find(i => i.naturalWidth === 320 && i.offsetParent !== null);
+    const c = document.createElement('canvas'); c.width = 320; c.height = 240;
+    const g = c.getContext('2d'); g.drawImage(im, 0, 0); const d = g.getImageData(0, 0, 320, 240).data;
+    let n = 0, sv = 0;
+    for (let k = 0; k < d.length; k += 4) { const r = d[k], gr = d[k + 1], b = d[k + 2];
+        if (r > 120 && r - b > 90 && gr > 0.35 * r && gr < 0.8 * r && b < 100) { n++; sv += Math.floor(k / 4 / 320); } }
+    return n > 100 ? sv / n : null; }"""
+
+
+def _arm_v(page) -> float:
+    v = page.evaluate(_ARM_V_JS)
+    assert v is not None, "no arm in the plant camera's picture"
+    return v
 
 
 def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page, tmp_path: Path,
@@ -44,6 +67,13 @@ def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page
         wait_until(lambda: "number 1 in the queue" in _panel_text(page), timeout=30, what="the queue position")
         other.release_lease()
         wait_until(lambda: "You control the robot" in _panel_text(page), timeout=30, what="the lease")
+        # the plant's camera: its 320 x 240 JPEG in the page, and the frame's age on screen
+        wait_until(lambda: page.evaluate(_CAMERA_JS) == [320, 240], timeout=30, what="the plant's camera in the page")
+        wait_until(lambda: re.search(r"Video: (\d+) ms old", _panel_text(page)), timeout=30, what="the video's age")
+        age_ms = int(re.search(r"Video: (\d+) ms old", _panel_text(page)).group(1))
+        assert 0 < age_ms < 500, age_ms
+        assert "Video: STALE" not in _panel_text(page)
+        v_home = _arm_v(page)
         # the same program as in simulation now drives the plant: planned and measured joints agree
         page.get_by_role("button", name="Run program").click()
         wait_until(lambda: other.state["status"] == "moving", timeout=30, what="the plant to move")
@@ -57,6 +87,9 @@ def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page
 
         wait_until(arrived, timeout=30, what="the measured joints to reach the planned ones within 1 deg")
         save_shot(page, "robualab")          # the gallery's picture with EJSGEN_GALLERY=1
+        # the picture in the page follows the robot: the arm is up now (joint 2 at ~90 deg), its
+        # orange pixels higher in the picture than at the start (v grows downwards)
+        wait_until(lambda: _arm_v(page) < v_home - 20, timeout=20, what="the camera's picture to show the arm raised")
         # the e-stop button stops the robot
         page.get_by_role("button", name="EMERGENCY STOP").click()
         pressed = time.monotonic()
@@ -68,6 +101,10 @@ def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page
         time.sleep(1.0)                      # the program goes on in the simulation; the robot does not
         assert np.max(np.abs(other.measured() - q_stop)) < math.radians(0.2)
         assert stop_s < 3.0
+        # the plant dies mid-stream: the page says so, and the picture is flagged stale
+        plant.proc.send_signal(signal.SIGKILL)
+        wait_until(lambda: "Video: STALE" in _panel_text(page), timeout=30, what="the stale video flagged")
+        assert "offline" in _panel_text(page)
     request_finalizer()
 
 

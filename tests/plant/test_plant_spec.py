@@ -95,3 +95,19 @@ def test_credentials_from_the_environment_never_reach_the_app(tmp_path: Path, mo
     for f in out.rglob("*"):
         if f.is_file():
             assert secret.encode() not in f.read_bytes(), f
+
+
+def test_a_video_section_builds_and_its_errors_are_located(tmp_path: Path) -> None:
+    from ejsgen.cli import build
+
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(SPEC.replace("  measurements:\n", "  video: {stale: 0.8, rate: 12}\n  measurements:\n    age: {from: video_age, unit: ms}\n")
+                    .replace("    lag: 0.0\n", "    lag: 0.0\n    age: 0.0\n"))
+    app = (build(spec, tmp_path / "out") / "app.py").read_text()
+    assert "video_stale=0.8, video_rate=12.0" in app and "PlantMeasurement('age', 'video_age', scale=0.001)" in app
+    spec, errs = _errors(tmp_path, SPEC.replace("  measurements:\n", "  video: {stale: 0}\n  measurements:\n"))
+    assert len(errs) == 1 and errs[0].startswith(f"{_at(spec, '0}')}: error:") and "greater than 0" in errs[0], errs
+    spec, errs = _errors(tmp_path, SPEC.replace("  measurements:\n", "  video: {stale: 1, fps: 3}\n  measurements:\n"))
+    assert len(errs) == 1 and errs[0].startswith(f"{_at(spec, 'fps: 3')}:") and "fps" in errs[0], errs
+    spec, errs = _errors(tmp_path, SPEC.replace("{from: latency, unit: ms}", "{from: video_age}"))
+    assert len(errs) == 1 and "'rad' is not a unit of video_age" in errs[0] and "unit: ms" in errs[0], errs

@@ -26,8 +26,9 @@ import numpy as np
 
 from ejsrl.plant._creds import Credentials
 from ejsrl.plant._mqtt import make_client
+from ejsrl.plant._video import PlantClock, VideoFrame, parse_frame
 
-__all__ = ["PlantLink", "Limits"]
+__all__ = ["PlantLink", "LinkBase", "Limits"]
 
 
 @dataclass(frozen=True)
@@ -72,19 +73,15 @@ def refusal(link: Any, qa: np.ndarray, now: float, st: dict[str, Any] | None, on
     return None
 
 
-class PlantLink:
-    """One session's MQTT link to the plant at ``host:port`` under topic ``prefix``."""
+class LinkBase:
+    """What a link shows whatever its transport (MQTT: :class:`PlantLink`, OPC UA:
+    :class:`ejsrl.app._plant_opcua.OpcUaLink`): the plant's last state, the lease and queue, the
+    round trip, and the camera's newest frame with its age on this app's clock."""
 
-    def __init__(self, host: str, port: int, *, prefix: str = "ejsrl/plant", limits: Limits | None = None,
-                 creds: Credentials | None = None, heartbeat: float = 0.1, session: str | None = None,
-                 alive: Any = None) -> None:
-        self.prefix = prefix.rstrip("/")
+    def _init_link(self, session: str | None, limits: Limits | None, heartbeat: float) -> None:
         self.session = session or uuid.uuid4().hex[:12]   # the plant's name for this session (not the tab's token)
         self.limits = limits
         self.heartbeat_period = heartbeat
-        #: ``alive()`` -> seconds since the session was last seen alive (None: always); the
-        #: heartbeat stops after 1 s of it, and the link closes itself after 10 s
-        self.alive = alive
         #: ``on_state()`` is called (from the network thread) after every state message or connection change
         self.on_state: Any = None
         self.state: dict[str, Any] | None = None          # the plant's last state message
@@ -95,24 +92,17 @@ class PlantLink:
         self.latency: float | None = None                 # last round trip, s
         self.latencies: list[float] = []
         self.wants_lease = False
-        self._refused = False
-        self._asked = 0.0
         self._seq = 0
-        self._sent: dict[int, float] = {}
         self._last_q: np.ndarray | None = None
         self._last_t: float | None = None
         self._lock = threading.Lock()
         self._changed = threading.Condition(self._lock)
-        self._stop = threading.Event()
-        self.client = make_client(f"ejsrl-app-{self.session}", creds or Credentials())
-        self.client.reconnect_delay_set(min_delay=0.1, max_delay=2)
-        self.client.on_connect = self._on_connect
-        self.client.on_disconnect = self._on_disconnect
-        self.client.on_message = self._on_message
-        self.client.connect_async(host, port, keepalive=5)
-        self.client.loop_start()
-        self._beat = threading.Thread(target=self._beat_loop, name="ejsrl-plant-heartbeat", daemon=True)
-        self._beat.start()
+        #: the plant's clock on this app's: a frame's age is ``now - (frame.t + offset)``
+        self.clock = PlantClock()
+        self.video_wanted = False
+        self.frame: VideoFrame | None = None              # the camera's newest frame (older ones are dropped)
+        self.frames = 0                                   # frames taken
+        self.bad_frames = 0                               # frames refused (see parse_frame)
 
     # ---- what the lab shows -----------------------------------------------------------------
     @property
@@ -132,6 +122,18 @@ class PlantLink:
         st = self.state
         return None if st is None else np.asarray(st["q"], dtype=float)
 
+    def video_age(self, now: float | None = None) -> float | None:
+        """Seconds since the newest frame was captured, on this app's clock (None: no frame yet).
+        It grows while no frame comes (the plant paused, killed or cut off); a frame of the plant's
+        former life (before a restart, another clock) counts from its arrival."""
+        f = self.frame
+        if f is None:
+            return None
+        now = time.monotonic() if now is None else now
+        st = self.state
+        age = self.clock.age(f.t, now) if st is not None and st.get("boot") == f.boot else None
+        return max(0.0, now - f.arrived if age is None else age)
+
     def wait_for(self, pred: Any, timeout: float = 10.0) -> bool:
         """Wait until ``pred(self)`` holds (checked on every state message); True when it did."""
         end = time.monotonic() + timeout
@@ -142,6 +144,55 @@ class PlantLink:
                     return False
                 self._changed.wait(min(left, 0.05))
         return True
+
+    # ---- what the transports call -------------------------------------------------------------
+    def _take_state(self, st: dict[str, Any], arrived: float) -> bool:
+        """Keep a state message that arrived at ``arrived`` (monotonic s); the caller holds the
+        lock. True when the plant restarted since the last one (its queue and clock are new)."""
+        rebooted = self.state is not None and st.get("boot") != self.state.get("boot")
+        if rebooted:
+            self.clock.reset()
+        self.clock.add(st.get("t"), arrived)
+        self.state, self.state_at, self.plant_online = st, arrived, True
+        self._changed.notify_all()
+        return rebooted
+
+    def _take_frame(self, payload: bytes) -> None:
+        """Keep a frame message if it is a whole JPEG (never decoded here), else count it."""
+        frame = parse_frame(payload, time.monotonic())
+        if isinstance(frame, str):
+            self.bad_frames += 1
+            return
+        with self._changed:
+            self.frame = frame
+            self.frames += 1
+            self._changed.notify_all()
+
+
+class PlantLink(LinkBase):
+    """One session's MQTT link to the plant at ``host:port`` under topic ``prefix``."""
+
+    def __init__(self, host: str, port: int, *, prefix: str = "ejsrl/plant", limits: Limits | None = None,
+                 creds: Credentials | None = None, heartbeat: float = 0.1, session: str | None = None,
+                 alive: Any = None) -> None:
+        self._init_link(session, limits, heartbeat)
+        self.prefix = prefix.rstrip("/")
+        #: ``alive()`` -> seconds since the session was last seen alive (None: always); the
+        #: heartbeat stops after 1 s of it, and the link closes itself after 10 s
+        self.alive = alive
+        self._refused = False
+        self._asked = 0.0
+        self._sent: dict[int, float] = {}
+        self._stop = threading.Event()
+        self.client = make_client(f"ejsrl-app-{self.session}", creds or Credentials())
+        self.client.reconnect_delay_set(min_delay=0.1, max_delay=2)
+        self.client.on_connect = self._on_connect
+        self.client.on_disconnect = self._on_disconnect
+        self.client.on_message = self._on_message
+        self.client.connect_async(host, port, keepalive=5)
+        self.client.loop_start()
+        self._beat = threading.Thread(target=self._beat_loop, name="ejsrl-plant-heartbeat", daemon=True)
+        self._beat.start()
 
     # ---- what the session does --------------------------------------------------------------
     def request_lease(self) -> None:
@@ -156,6 +207,15 @@ class PlantLink:
     def estop(self, on: bool = True) -> None:
         """Emergency stop: any session may press it, holder or spectator."""
         self._publish("estop", {"on": bool(on)})
+
+    def want_video(self, on: bool) -> None:
+        """Receive the plant's camera frames (subscribe to ``video``) or stop receiving them."""
+        if on == self.video_wanted:
+            return
+        self.video_wanted = on
+        if self.connected:
+            topic = f"{self.prefix}/video"
+            self.client.subscribe(topic, 0) if on else self.client.unsubscribe(topic)
 
     def send(self, q: Sequence[float], gripper: float | None = None) -> str | None:
         """Send joint set points ``q`` (rad); returns why it was not sent, or None when it was."""
@@ -199,7 +259,8 @@ class PlantLink:
                 self._changed.notify_all()
             return
         self._refused = False
-        client.subscribe([(f"{self.prefix}/state", 0), (f"{self.prefix}/online", 1)])
+        topics = [(f"{self.prefix}/state", 0), (f"{self.prefix}/online", 1)]
+        client.subscribe(topics + ([(f"{self.prefix}/video", 0)] if self.video_wanted else []))
         with self._lock:
             self.connected = True
             self._sent.clear()                # nothing in flight survives a reconnect
@@ -218,6 +279,10 @@ class PlantLink:
             self.on_state()
 
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
+        if msg.topic.endswith("/video"):
+            if self.video_wanted:
+                self._take_frame(msg.payload)
+            return
         if msg.topic.endswith("/online"):
             with self._lock:
                 self.plant_online = msg.payload == b"1"
@@ -225,7 +290,7 @@ class PlantLink:
                     self.note = "the plant is offline"
                 self._changed.notify_all()
             return
-        now = time.perf_counter()
+        now, arrived = time.perf_counter(), time.monotonic()
         try:
             st = json.loads(msg.payload)
         except (ValueError, UnicodeDecodeError):
@@ -239,11 +304,9 @@ class PlantLink:
                 self.latency = rtt
                 self.latencies.append(rtt)
                 del self.latencies[:-1000]
-            rebooted = self.state is not None and st.get("boot") != self.state.get("boot")
-            self.state, self.state_at, self.plant_online = st, time.monotonic(), True
             if self.connected:
                 self.note = "connected"
-            self._changed.notify_all()
+            rebooted = self._take_state(st, arrived)
         if rebooted and self.wants_lease:   # a restarted plant forgot the queue: ask again
             self.request_lease()
         if self.on_state is not None:
@@ -300,6 +363,10 @@ class PlantDef:
     commands: list[PlantCommand] | None = None
     measurements: list[PlantMeasurement] | None = None
     transport: str = "mqtt"
+    #: the plant's camera in Real plant mode: a frame older than ``video_stale`` s is flagged
+    #: stale (None: no video); at most ``video_rate`` frames a second go to the page
+    video_stale: float | None = None
+    video_rate: float = 15.0
 
     def joints(self) -> PlantCommand | None:
         return next((c for c in self.commands or [] if c.to == "joints"), None)

@@ -17,12 +17,12 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ejsrl.app._plant_link import Limits, refusal
+from ejsrl.app._plant_link import LinkBase, Limits, refusal
 
 __all__ = ["OpcUaLink"]
 
 
-class OpcUaLink:
+class OpcUaLink(LinkBase):
     """One session's OPC UA link to the plant at ``opc.tcp://host:port/ejsrl/plant/``."""
 
     def __init__(self, host: str, port: int, *, limits: Limits | None = None, heartbeat: float = 0.1,
@@ -31,54 +31,15 @@ class OpcUaLink:
             from asyncua.sync import Client  # noqa: F401
         except ImportError as e:  # pragma: no cover
             raise ImportError("the OPC UA transport needs asyncua: python3 -m pip install 'ejsgen[plant]'") from e
+        self._init_link(session, limits, heartbeat)
         self.url = f"opc.tcp://{host}:{port}/ejsrl/plant/"
-        self.session = session or uuid.uuid4().hex[:12]
-        self.limits, self.heartbeat_period, self.rate = limits, heartbeat, rate
+        self.rate = rate
         self._user, self._password = username, password
-        self.state: dict[str, Any] | None = None
-        self.state_at = 0.0
-        self.plant_online = False
-        self.connected = False
-        self.note = "connecting to the plant"
-        self.latency: float | None = None
-        self.latencies: list[float] = []
-        self.wants_lease = False
-        self.on_state: Any = None
-        self._seq = 0
-        self._last_q: np.ndarray | None = None
-        self._last_t: float | None = None
         self._client: Any = None
         self._obj: Any = None
         self._idx = 0
-        self._changed = threading.Condition()
         self._stop = threading.Event()
         threading.Thread(target=self._run, name="ejsrl-plant-opcua", daemon=True).start()
-
-    # ---- the same read-outs as PlantLink ------------------------------------------------------
-    @property
-    def holds_lease(self) -> bool:
-        st = self.state
-        return bool(self.connected and st and st.get("holder") == self.session)
-
-    @property
-    def queue_position(self) -> int | None:
-        st = self.state
-        if not st or self.session not in st.get("queue", []):
-            return None
-        return st["queue"].index(self.session) + 1
-
-    def measured(self) -> np.ndarray | None:
-        return None if self.state is None else np.asarray(self.state["q"], dtype=float)
-
-    def wait_for(self, pred: Any, timeout: float = 10.0) -> bool:
-        end = time.monotonic() + timeout
-        with self._changed:
-            while not pred(self):
-                left = end - time.monotonic()
-                if left <= 0:
-                    return False
-                self._changed.wait(min(left, 0.05))
-        return True
 
     # ---- what the session does ----------------------------------------------------------------
     def _call(self, name: str, *args: Any) -> Any:
@@ -101,6 +62,10 @@ class OpcUaLink:
 
     def estop(self, on: bool = True) -> None:
         self._call("EStop", self.session, bool(on))
+
+    def want_video(self, on: bool) -> None:
+        """Read the plant's camera frames (its ``Video`` variable, when ``VideoSeq`` changed) or not."""
+        self.video_wanted = on
 
     def send(self, q: Sequence[float], gripper: float | None = None) -> str | None:
         qa = np.asarray(q, dtype=float).reshape(-1)
@@ -157,6 +122,8 @@ class OpcUaLink:
                 self._idx = client.get_namespace_index("urn:ejsrl:plant")
                 self._obj = client.nodes.objects.get_child(f"{self._idx}:Plant")
                 state = self._obj.get_child(f"{self._idx}:State")
+                video, video_seq = (self._obj.get_child(f"{self._idx}:{n}") for n in ("Video", "VideoSeq"))
+                seen = None
                 self._set(connected=True, note="connected")
                 if self.wants_lease:
                     self._call("Lease", self.session, "request")
@@ -167,10 +134,18 @@ class OpcUaLink:
                         self._obj.call_method(f"{self._idx}:Heartbeat", self.session)
                         next_beat = now + self.heartbeat_period
                     st = json.loads(state.read_value())
+                    arrived = time.monotonic()
+                    if self.video_wanted and video_seq.read_value() != seen:
+                        seen, payload = client.read_values([video_seq, video])
+                        if payload:
+                            self._take_frame(payload)
                     if (self.wants_lease and st.get("holder") != self.session
                             and self.session not in (st.get("queue") or [])):
                         self._obj.call_method(f"{self._idx}:Lease", self.session, "request")
-                    self._set(state=st, state_at=time.monotonic(), plant_online=True)
+                    with self._changed:
+                        self._take_state(st, arrived)
+                    if self.on_state is not None:
+                        self.on_state()
                     self._stop.wait(1.0 / self.rate)
             except Exception as e:  # noqa: BLE001 - lost: say so at once, then reconnect
                 self._set(connected=False, plant_online=False,

@@ -41,6 +41,7 @@ class PlantConfig:
     latency: float = 0.0           #: injected one-way latency of commands into the plant
     noise: float = 2e-4            #: encoder noise, rad (standard deviation)
     dt: float = 0.001              #: integration step of the arm
+    clock_offset: float = 0.0      #: added to the plant's clock (its state's and frames' ``t``): another machine's clock
 
 
 class Plant:
@@ -74,6 +75,17 @@ class Plant:
         self.on_tick: Callable[[], None] | None = None
         self.stopped_at: float | None = None       # monotonic time the arm came to rest after a stop
         self._rearm_after_watchdog = False
+
+    # ---- the plant's clock ------------------------------------------------------------------
+    def clock(self) -> float:
+        """The plant's clock, s: the times in its state and its camera's frames (another
+        machine's clock for the app: monotonic here, shifted by ``clock_offset``)."""
+        return time.monotonic() + self.cfg.clock_offset
+
+    def pose(self) -> tuple[float, np.ndarray]:
+        """``(t, q)``: the plant's clock and the arm's true joint angles (5,) rad, for its camera."""
+        with self._lock:
+            return self.clock(), self.arm.q.copy()
 
     # ---- the lease --------------------------------------------------------------------------
     def lease(self, session: str, op: str) -> dict[str, Any]:
@@ -244,6 +256,6 @@ class Plant:
             moving = self.arm.moving()
             status = ("fault" if self.fault else "estop" if self.estopped
                       else "stopping" if self.arm.braking and moving else "moving" if moving else "idle")
-            return {"t": now, "boot": self.boot, "q": q.tolist(), "qd": qd.tolist(), "gripper": self.arm.gripper,
+            return {"t": now + self.cfg.clock_offset, "boot": self.boot, "q": q.tolist(), "qd": qd.tolist(), "gripper": self.arm.gripper,
                     "status": status, "estop": self.estopped, "estop_by": self.estop_by, "fault": self.fault, "event": self.event,
                     "ack": self.ack, "refused": self.refused, **self._lease_state(now)}

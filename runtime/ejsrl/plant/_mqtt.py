@@ -2,8 +2,10 @@
 
 Topics under ``prefix`` (default ``ejsrl/plant``): ``cmd``, ``lease``, ``heartbeat``, ``estop``
 in (JSON, QoS 0: a broker never keeps a command for later), ``state`` out (JSON, QoS 0, after
-every executed command and ``rate`` times a second), and ``online`` (retained ``1``/``0``,
-``0`` being the plant's last will, so clients learn at once that the plant is gone).
+every executed command and ``rate`` times a second), ``video`` out (the camera's frames, see
+:mod:`._video`: QoS 0, a frame dropped while the one before it is still being written), and
+``online`` (retained ``1``/``0``, ``0`` being the plant's last will, so clients learn at once
+that the plant is gone).
 """
 
 from __future__ import annotations
@@ -11,10 +13,13 @@ from __future__ import annotations
 import json
 import threading
 import time
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ._core import Plant
 from ._creds import Credentials
+
+if TYPE_CHECKING:
+    from ._camera import PlantCamera
 
 __all__ = ["MqttPlant", "import_paho"]
 
@@ -44,8 +49,11 @@ class MqttPlant:
     """Serve ``plant`` on an MQTT broker at ``host:port``."""
 
     def __init__(self, plant: Plant, host: str, port: int, *, prefix: str = "ejsrl/plant",
-                 creds: Credentials | None = None, rate: float = 50.0) -> None:
+                 creds: Credentials | None = None, rate: float = 50.0, camera: PlantCamera | None = None) -> None:
         self.plant, self.prefix, self.rate = plant, prefix.rstrip("/"), rate
+        self.camera = camera
+        self._frame_info: Any = None          # paho's handle of the last frame published
+        self.frames_dropped = 0
         self.client = make_client(f"ejsrl-plant-{plant.boot}", creds or Credentials())
         self.client.will_set(f"{self.prefix}/online", "0", qos=1, retain=True)
         self.client.reconnect_delay_set(min_delay=0.1, max_delay=2)
@@ -59,9 +67,24 @@ class MqttPlant:
         self.client.connect_async(self.host, self.port, keepalive=5)
         self.client.loop_start()
         threading.Thread(target=self._publish_loop, name="ejsrl-plant-mqtt", daemon=True).start()
+        if self.camera is not None:
+            self.camera.sinks.append(self._publish_frame)
+
+    def _publish_frame(self, frame: bytes) -> None:
+        """Publish a camera frame, or drop it while the last one is still being written (a slow
+        broker connection gets fewer frames, never a queue of old ones)."""
+        if not self.connected.is_set() or not self.client.is_connected():
+            return
+        last = self._frame_info
+        if last is not None and not last[0].is_published() and time.monotonic() - last[1] < 1.0:
+            self.frames_dropped += 1
+            return
+        self._frame_info = (self.client.publish(f"{self.prefix}/video", frame, qos=0), time.monotonic())
 
     def stop(self) -> None:
         self._stop.set()
+        if self.camera is not None and self._publish_frame in self.camera.sinks:
+            self.camera.sinks.remove(self._publish_frame)
         if self.client.is_connected():
             try:
                 self.client.publish(f"{self.prefix}/online", "0", qos=1, retain=True).wait_for_publish(1.0)
@@ -76,6 +99,7 @@ class MqttPlant:
         p = self.prefix
         client.subscribe([(f"{p}/cmd", 0), (f"{p}/lease", 0), (f"{p}/heartbeat", 0), (f"{p}/estop", 0)])
         client.publish(f"{p}/online", "1", qos=1, retain=True)
+        self._frame_info = None               # a frame lost with the old connection holds nothing back
         self.connected.set()
 
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:

@@ -2,7 +2,9 @@
 
 Address space under the object ``Plant`` in namespace ``urn:ejsrl:plant``: variables
 ``Measured`` (Double[5], rad), ``Gripper`` (Double), ``Status`` (String), ``State`` (String: the
-JSON of :meth:`Plant.state`, for clients that want every field) updated ``rate`` times a second;
+JSON of :meth:`Plant.state`, for clients that want every field) updated ``rate`` times a second,
+``Video`` (ByteString: the camera's newest frame message, see :mod:`._video`) and ``VideoSeq``
+(Int64: its number, so a client reads the frame only when it changed);
 methods ``Lease(session, op) -> String``, ``Heartbeat(session)``,
 ``Command(session, epoch, seq, t, q[5], gripper) -> String`` (empty when executed, else why it
 was refused) and ``EStop(session, on)``.
@@ -13,9 +15,12 @@ from __future__ import annotations
 import asyncio
 import json
 import threading
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ._core import Plant
+
+if TYPE_CHECKING:
+    from ._camera import PlantCamera
 
 __all__ = ["OpcUaPlant", "NAMESPACE"]
 
@@ -33,8 +38,12 @@ def import_asyncua() -> Any:
 class OpcUaPlant:
     """Serve ``plant`` at ``opc.tcp://host:port/ejsrl/plant/`` from a thread of its own."""
 
-    def __init__(self, plant: Plant, host: str, port: int, *, rate: float = 50.0) -> None:
+    def __init__(self, plant: Plant, host: str, port: int, *, rate: float = 50.0, camera: PlantCamera | None = None) -> None:
         self.plant, self.host, self.port, self.rate = plant, host, port, rate
+        self.camera = camera
+        self._frame: bytes | None = None       # the camera's newest frame, not yet written
+        if camera is not None:
+            camera.sinks.append(self._take_frame)
         self.endpoint = f"opc.tcp://{host}:{port}/ejsrl/plant/"
         self.ready = threading.Event()
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -43,6 +52,9 @@ class OpcUaPlant:
 
     def start(self) -> None:
         threading.Thread(target=self._thread, name="ejsrl-plant-opcua", daemon=True).start()
+
+    def _take_frame(self, frame: bytes) -> None:
+        self._frame = frame                    # the server's loop writes the newest one; others are dropped
 
     def stop(self) -> None:
         if self._loop and self._stop:
@@ -72,6 +84,9 @@ class OpcUaPlant:
         gripper = await obj.add_variable(idx, "Gripper", 0.0)
         status = await obj.add_variable(idx, "Status", "idle")
         state = await obj.add_variable(idx, "State", "{}")
+        video = await obj.add_variable(idx, "Video", b"", varianttype=ua.VariantType.ByteString)
+        video_seq = await obj.add_variable(idx, "VideoSeq", 0, varianttype=ua.VariantType.Int64)
+        seq = 0
 
         @uamethod
         def lease(parent: Any, session: str, op: str) -> str:
@@ -103,6 +118,11 @@ class OpcUaPlant:
                 await gripper.write_value(float(st["gripper"]))
                 await status.write_value(st["status"])
                 await state.write_value(json.dumps(st))
+                frame, self._frame = self._frame, None
+                if frame is not None:
+                    seq += 1
+                    await video.write_value(frame, ua.VariantType.ByteString)
+                    await video_seq.write_value(seq, ua.VariantType.Int64)
                 try:
                     await asyncio.wait_for(self._stop.wait(), 1.0 / self.rate)
                 except asyncio.TimeoutError:

@@ -46,6 +46,16 @@ class PlantPanel:
         self.estop_button = gui.add_button("EMERGENCY STOP", color="red", hint="Stops the real robot for everyone")
         self.rearm_button = gui.add_button("Re-arm the plant", color="gray", visible=False)
         self.status = gui.add_markdown("")
+        # the plant's camera (Real plant mode): the plant's JPEG goes to the page as it came,
+        # the newest frame only, at most video_rate a second (viser keeps only the newest unsent one)
+        self.video: Any = None
+        self._video_shown: tuple[str, int] | None = None
+        self._video_at = 0.0
+        self._video_label = ""
+        if self.defn.video_stale is not None:
+            self.video = gui.add_image(np.full((2, 2, 3), 40, dtype=np.uint8), label="Plant camera",
+                                       format="jpeg", visible=False)
+            self._video_label = "Plant camera"
 
         @self.mode.on_update
         def _(_e: Any) -> None:
@@ -86,6 +96,11 @@ class PlantPanel:
         self.real = real
         self._sent = None
         self._wake()
+        if self.video is not None:
+            self.link.want_video(real)
+            if not real and self.video.visible:
+                self.video.visible = False
+                self._video_shown = None
         if real:
             self.link.request_lease()
         else:
@@ -111,7 +126,31 @@ class PlantPanel:
             setattr(model, m.var, value)
         if self.real and link.holds_lease and not (st or {}).get("estop"):
             self._send(model)
+        if self.video is not None and self.real:
+            self._show_frame()
         self._show(st)
+
+    def _show_frame(self) -> None:
+        """Send the link's newest frame to the page if it is new and the rate allows."""
+        f, now = self.link.frame, time.monotonic()
+        if f is None or (f.boot, f.seq) == self._video_shown or now - self._video_at < 1.0 / self.defn.video_rate:
+            return
+        self.video._data = f.jpeg          # the plant's JPEG as it came: checked by the link, never decoded here
+        self._video_shown, self._video_at = (f.boot, f.seq), now
+        if not self.video.visible:
+            self.video.visible = True
+
+    def video_line(self) -> str:
+        """What the panel says of the video: its age in ms, or STALE past ``video_stale`` s."""
+        age, stale = self.link.video_age(), self.defn.video_stale or 0.0
+        label = "Plant camera" if age is None or age <= stale else "Plant camera: STALE"
+        if label != self._video_label:
+            self.video.label = self._video_label = label
+        if age is None:
+            return "**Video:** waiting for the plant's camera"
+        if age > stale:
+            return f"**Video: STALE** (the newest frame is {age:.1f} s old)"
+        return f"**Video:** {age * 1000:.0f} ms old"
 
     def _measured(self, source: str, st: dict[str, Any] | None) -> Any:
         link = self.link
@@ -123,6 +162,8 @@ class PlantPanel:
             return float(link.queue_position or 0)
         if source == "latency":
             return None if link.latency is None else float(link.latency)
+        if source == "video_age":
+            return link.video_age()
         if st is None:
             return None
         if source in ("joints", "speeds"):
@@ -185,6 +226,8 @@ class PlantPanel:
             refused = st.get("refused") or {}
             if refused.get("session") == link.session and refused.get("reason"):
                 lines.append(f"Refused by the plant: {escape_markdown(str(refused['reason']))}")
+        if self.video is not None and self.real:
+            lines.append(self.video_line())
         text = "  \n".join(lines)
         if text != self._shown:
             self.status.content = text
