@@ -381,6 +381,7 @@ def flood(name: str, n: int, seconds: float, out_root: Path) -> None:
     """``n`` students on one process, quiet and then beside a hostile one (see the docstring)."""
     import msgspec
 
+    from testkit.classroom import token_of
     from testkit.guard_client import CAMERA, Client, gui_update
 
     app_dir = build(name, out_root)
@@ -406,8 +407,7 @@ def flood(name: str, n: int, seconds: float, out_root: Path) -> None:
         await measure("quiet")
         evil = await Student.join(server.port)
         slider = next(m["uuid"] for m in evil.client.received if m.get("type") == "GuiSliderMessage")
-        token = next(re.search(r"s/([A-Za-z0-9_-]{8,64})/'", t).group(1) for t in evil.client.texts()
-                     if re.search(r"s/([A-Za-z0-9_-]{8,64})/'", t))
+        token = token_of(evil.client)
         stop, sent, start = asyncio.Event(), [0], time.perf_counter()
 
         async def values() -> None:

@@ -8,6 +8,7 @@ import pytest
 
 from testkit.browser import wait_until
 from testkit.browser_lab import make_app
+from testkit.classroom import served_classroom
 from testkit.served import Served
 
 
@@ -19,12 +20,8 @@ SLOW = 120_000
 def classroom(request):
     """The browser lab served with a simulation per tab (at most 2 tabs, or ``request.param``);
     yields ``(app, url)``."""
-    app = make_app()
-    limit = getattr(request, "param", 2)
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=limit, grace=30.0)
-    yield app, f"http://127.0.0.1:{server.get_port()}"
-    app.stop()
-    server.stop()
+    with served_classroom(max_sessions=getattr(request, "param", 2), grace=30.0) as (app, server):
+        yield app, f"http://127.0.0.1:{server.get_port()}"
 
 
 def open_tab(context, url: str):

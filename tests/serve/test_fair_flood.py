@@ -16,42 +16,21 @@ from __future__ import annotations
 
 import asyncio
 import math
-import re
 import statistics
 import time
 
 import msgspec
 import pytest
 
+from testkit.classroom import FULL, join, readouts, token_of
 from testkit.guard_client import CAMERA, Client, gui_update, run_async
 from testkit.served import Served
 
-_READOUT = re.compile(r"^\*\*\w+\*\* = ([-+0-9.eE]+)")
 LAB = "paper/six_axis_kinematics"
 STUDENTS = 3
 FLOOD_RATE = 2000.0  # values a second
 LIVE_COPIES = 40
 MEASURE_SECONDS = 5.0
-
-
-def token_of(client: Client) -> str | None:
-    for text in client.texts():
-        match = re.search(r"s/([A-Za-z0-9_-]{8,64})/'", text)
-        if match:
-            return match.group(1)
-    return None
-
-
-def readouts(client: Client) -> list[float]:
-    """Every simulated time the client's time readout was sent (one per display frame)."""
-    out = []
-    for m in client.received:
-        if m.get("type") in ("GuiUpdateMessage", "GuiMarkdownMessage"):
-            data = m.get("updates", m.get("props", {}))
-            match = _READOUT.match(str(data.get("_markdown", data.get("content", ""))))
-            if match:
-                out.append(float(match.group(1)))
-    return out
 
 
 def button(client: Client) -> str:
@@ -64,10 +43,7 @@ def labels_of(client: Client, uuid: str) -> list[str]:
 
 
 async def student(port: int, cookie: str | None, path: str = "") -> Client:
-    client = await Client.open(port, path=path, cookie=cookie)
-    await client.until(lambda: token_of(client) is not None or "This lab is full" in " ".join(client.texts()),
-                       "the panel", timeout=90)
-    return client
+    return await join(port, path, cookie, timeout=90)
 
 
 async def frames_per_second(clients: list[Client], seconds: float) -> list[float]:
@@ -137,7 +113,7 @@ def test_a_flood_and_copies_of_a_live_address_do_not_slow_the_other_students(ser
         # measured once they are settled: each waits up to 2 s for the address's tab to close,
         # holding no thread, then gets a lab of its own while places are left (max-sessions
         # 12), else the "lab is full" page; making those labs is a one-off cost of new tabs
-        await Client.until(lambda: all(token_of(c) is not None or "This lab is full" in " ".join(c.texts())
+        await Client.until(lambda: all(token_of(c) is not None or FULL in " ".join(c.texts())
                                        for c in copies), "the copies to be settled", timeout=90)
         await asyncio.sleep(1.0)
         loud_fps = await frames_per_second(students, MEASURE_SECONDS)

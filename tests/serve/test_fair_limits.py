@@ -13,7 +13,7 @@ import pytest
 from websockets.exceptions import InvalidStatus
 
 from ejsrl.view import _fair
-from testkit.browser_lab import make_app
+from testkit.classroom import join, served_classroom, token_of
 from testkit.guard_client import CAMERA, Client, gui_update, run_async
 
 
@@ -21,35 +21,19 @@ from testkit.guard_client import CAMERA, Client, gui_update, run_async
 def classroom(request):
     options = dict(max_sessions=6, grace=30.0)
     options.update(getattr(request, "param", {}))
-    app = make_app()
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, **options)
-    yield app, server
-    app.stop()
-    server.stop()
-
-
-def token_of(client: Client) -> str | None:
-    for text in client.texts():
-        match = re.search(r"s/([A-Za-z0-9_-]{8,64})/'", text)
-        if match:
-            return match.group(1)
-    return None
+    with served_classroom(**options) as served:
+        yield served
 
 
 async def tab(server, path: str = "", cookie: str | None = None) -> Client:
-    client = await Client.open(server.get_port(), path=path, cookie=cookie)
-    await client.until(lambda: token_of(client) is not None or "This lab is full" in " ".join(client.texts()),
-                       "the panel", timeout=30)
-    return client
+    return await join(server.get_port(), path, cookie)
 
 
 def test_connections_from_one_address_are_capped_and_the_refusal_logged_once(monkeypatch, caplog):
     monkeypatch.setattr(_fair, "MAX_PER_ADDRESS", 3)
-    app = make_app()
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=4)
-    port = server.get_port()
 
-    async def scenario() -> None:
+    async def scenario(server) -> None:
+        port = server.get_port()
         mine = [await Client.open(port, camera=False) for _ in range(3)]
         for _ in range(5):
             with pytest.raises(InvalidStatus) as refused:
@@ -72,22 +56,16 @@ def test_connections_from_one_address_are_capped_and_the_refusal_logged_once(mon
         for c in [*mine[1:], other, again]:
             await c.close()
 
-    try:
-        with caplog.at_level("WARNING", logger="ejsrl.serve"):
-            run_async(scenario())
-    finally:
-        app.stop()
-        server.stop()
+    with served_classroom(max_sessions=4) as (_app, server), caplog.at_level("WARNING", logger="ejsrl.serve"):
+        run_async(scenario(server))
     lines = [r.getMessage() for r in caplog.records if "refused websockets from" in r.getMessage()]
     assert lines == ["ejsrl: refused websockets from 127.0.0.1: it has 3 open (the most from one address)"]
 
 
 def test_a_websocket_that_never_registers_is_closed(monkeypatch):
     monkeypatch.setattr(_fair, "REGISTER_SECONDS", 1.0)
-    app = make_app()
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2)
 
-    async def scenario() -> float:
+    async def scenario(server) -> float:
         idle = await Client.open(server.get_port(), camera=False)
         page = await Client.open(server.get_port(), server=server)  # registers at once: stays
         t = time.monotonic()
@@ -98,11 +76,8 @@ def test_a_websocket_that_never_registers_is_closed(monkeypatch):
         await page.close()
         return waited
 
-    try:
-        waited = run_async(scenario())
-    finally:
-        app.stop()
-        server.stop()
+    with served_classroom(max_sessions=2) as (_app, server):
+        waited = run_async(scenario(server))
     assert 0.5 <= waited <= 3.0
 
 
@@ -267,13 +242,13 @@ def test_a_tab_always_behind_is_not_starved(classroom, monkeypatch):
     monkeypatch.setattr(type(app.classroom), "backlog",
                         lambda self, cid: 10 if cid in behind else original(self, cid))
 
-    def times(client: Client) -> list[float]:
+    def times(client: Client) -> list[str]:
+        """The texts of the time readout the client was sent (with the note on frames, if any)."""
         out = []
         for m in client.received:
             text = str(m.get("updates", m.get("props", {})).get("_markdown", "")) \
                 if m.get("type") in ("GuiUpdateMessage", "GuiMarkdownMessage") else ""
-            match = re.match(r"\*\*t\*\* = ([-+0-9.eE]+)", text)
-            if match:
+            if re.match(r"\*\*t\*\* = ([-+0-9.eE]+)", text):
                 out.append(text)
         return out
 

@@ -20,6 +20,7 @@ from pathlib import Path
 import pytest
 from websockets.exceptions import InvalidStatus
 
+from testkit.classroom import token_of
 from testkit.guard_client import Client, run_async
 from testkit.served import Served
 
@@ -108,14 +109,6 @@ def get(port: int, path: str = "/", cookie: str | None = None, host: str | None 
     out = r.status, r.headers, r.read()
     conn.close()
     return out
-
-
-def token_of(client: Client) -> str | None:
-    for text in client.texts():
-        match = re.search(r"s/([A-Za-z0-9_-]{8,64})/'", text)
-        if match:
-            return match.group(1)
-    return None
 
 
 async def tab(port: int, cookie: str, path: str = "") -> tuple[Client, str]:
