@@ -149,16 +149,8 @@ class _Compiled:
                 return True
         except OSError:  # the source is no file (a .pyz): numba cannot cache it, nothing for a child to do
             return False
-        import ejsrl
-
-        root = str(Path(ejsrl.__file__).resolve().parent.parent)  # the folder (or .pyz) this ejsrl is in
-        code = f"import sys; sys.path.insert(0, {root!r}); from ejsrl.vision._susan import _warm_cache; sys.exit(_warm_cache())"
-        null = os.devnull
-        actions = [(os.POSIX_SPAWN_OPEN, fd, null, os.O_RDWR, 0) for fd in (0, 1, 2)]
-        # its own session: a Ctrl+C in this terminal does not stop it half-way through the cache
-        try:
-            pid = os.posix_spawn(sys.executable, [sys.executable, "-P", "-c", code], os.environ, file_actions=actions, setsid=True)
-        except OSError:  # no interpreter to start (an embedded Python): compile here
+        pid = _spawn_warm_child()
+        if pid is None:  # no interpreter to start (an embedded Python): compile here
             return False
         self.child = pid
         try:
@@ -166,6 +158,21 @@ class _Compiled:
         finally:
             self.child = None
         return os.waitstatus_to_exitcode(status) == 0
+
+
+def _spawn_warm_child() -> int | None:
+    """Start the detached child that writes numba's cache (``_warm_cache``, in a session of its own:
+    a Ctrl+C in this terminal does not stop it half-way through the cache, and it outlives a short
+    script); its pid, or None where no interpreter can be started so."""
+    import ejsrl
+
+    root = str(Path(ejsrl.__file__).resolve().parent.parent)  # the folder (or .pyz) this ejsrl is in
+    code = f"import sys; sys.path.insert(0, {root!r}); from ejsrl.vision._susan import _warm_cache; sys.exit(_warm_cache())"
+    actions = [(os.POSIX_SPAWN_OPEN, fd, os.devnull, os.O_RDWR, 0) for fd in (0, 1, 2)]
+    try:
+        return os.posix_spawn(sys.executable, [sys.executable, "-P", "-c", code], os.environ, file_actions=actions, setsid=True)
+    except OSError:
+        return None
 
 
 def _cache_mark(kind: str) -> Path:

@@ -1,4 +1,5 @@
-"""Prepare SUSAN's compiled kernels ahead of use: ``python -m ejsrl.vision.warm``.
+"""Prepare SUSAN's compiled kernels ahead of use: ``python -m ejsrl.vision.warm``, or on its own
+when ``ejsgen build`` (or ``run``) builds a lab that uses SUSAN (``start_in_background``).
 
 The first process on a machine that runs SUSAN with numba compiles its kernels into numba's
 cache (17-27 s on a loaded 2-core machine; the NumPy path gives the same corners meanwhile);
@@ -15,7 +16,44 @@ import importlib.util
 import sys
 import time
 
-__all__ = ["main"]
+__all__ = ["main", "start_in_background", "uses_susan"]
+
+
+def uses_susan(app_text: str) -> bool:
+    """Whether a generated app's code calls SUSAN (``susan_corners``, ``susan``, a ``Pipeline`` step "susan")."""
+    return "susan" in app_text.lower()
+
+
+def start_in_background() -> str:
+    """Have a detached process compile SUSAN's kernels into numba's cache, unless they are cached
+    already, numba is not installed, or ``EJSRL_SUSAN_CHILD=0``; returns what it did, in words.
+
+    ``ejsgen build`` calls this for a lab that uses SUSAN: the compile (17-27 s on a loaded 2-core
+    machine) then runs while the user starts the app, whose first SUSAN call loads the kernels
+    (1-2 s: numba's import and its first load) instead of compiling them. Processes take turns
+    on the cache (``_susan._warm_cache``'s lock), so an app started meanwhile waits for this
+    compile instead of doing its own.
+    """
+    import os
+    import threading
+
+    if os.environ.get("EJSRL_SUSAN_CHILD") == "0" or not hasattr(os, "posix_spawn"):
+        return "not started (EJSRL_SUSAN_CHILD=0, or no way to start a child here)"
+    if importlib.util.find_spec("numba") is None:
+        return "numba is not installed: SUSAN runs its NumPy path"
+    from ejsrl.vision import _susan
+
+    try:
+        if _susan._cache_mark("done").exists():
+            return "SUSAN's kernels are in numba's cache already"
+    except OSError:  # a .pyz: nothing numba could cache
+        return "numba cannot cache kernels run from here"
+    pid = _susan._spawn_warm_child()
+    if pid is None:
+        return "could not start the compile"
+    # reap it when it ends, so a long-lived caller (``ejsgen run``) leaves no zombie
+    threading.Thread(target=os.waitpid, args=(pid, 0), name="ejsrl-susan-warm-reaper", daemon=True).start()
+    return f"compiling SUSAN's kernels into numba's cache in the background (process {pid})"
 
 
 def main() -> int:
