@@ -111,8 +111,11 @@ def ikine(
       (``pip install 'ejsgen[fast]'``) these searches run compiled (:mod:`._ik_numba`,
       1-2 us an iteration; loaded in the background from the first search, see
       :mod:`._ik_fast`); there every other restart searches without clamping and moves its
-      answer into the limits by whole turns, and a search within 1e-4 of its goal may take
-      up to ``3 ilimit`` iterations.
+      answer into the limits by whole turns, a clamped search's joints stop on their limits
+      while the others go on (an active set), the extra damping follows each step's gain
+      ratio, ill-conditioned steps are solved by QR, and a search within 1e-4 of its goal
+      may take up to ``3 ilimit`` iterations (``10 ilimit`` while its error halves every
+      ``ilimit``).
 
     Args:
         T: goal pose ``T_world_tool`` (4, 4).
@@ -217,6 +220,18 @@ def _ikine_closed(prob: "_Problem", cf: _ik_closed.ClosedForm, Tg: Array, q_ref:
     # LM searches from the nearest solutions clamped into the limits
     best = None
     outside.sort(key=lambda s: sum((a - b) ** 2 for a, b in zip(prob.clamp(s), q_ref)))
+    compiled = _ik_fast.compiled_for(prob.setup) if cf.kind == "srs" and outside else None
+    if compiled is not None:
+        # a 7R arm's self-motion may reach the limits between the swept values of joint 3
+        # (seen at a singular wrist with joint 3 near its limit): compiled searches, whose
+        # steps stop on the limits, from the nearest solution clamped into them
+        ok, it, searches, E, q, e = compiled.run(Tg, prob.clamp(outside[0]), np.asarray(prob.w, dtype=float),
+                                                 prob.tol, prob.lam, ilimit, 10, 0, True)
+        total += it
+        tried += searches
+        if ok:
+            return prob.success(q, e, E, total, tried)
+        best = (q, e, E)
     for s in outside[:2]:
         tried += 1
         q, e, E, it, ok = prob.lm(prob.clamp(s), min(ilimit, 10))
