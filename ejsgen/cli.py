@@ -137,13 +137,6 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_build(args: argparse.Namespace) -> int:
-    if args.web:  # a static web page that runs the lab in the browser (ejsgen._web_build, specs/web.md)
-        from ejsgen._web_build import build_web
-
-        site = build_web(args.spec, args.output or f"{default_out_dir(Path(args.spec))}-web")
-        print(f"built {site.out} in {site.seconds:.1f} s: a web page, {site.download_bytes / 1e6:.1f} MB for a first "
-              f"visit; try it: python -m http.server -d {shlex.quote(str(site.out))} 8000")
-        return 0
     start = time.perf_counter()
     out = build(args.spec, args.output, bundle=args.bundle)
     took = time.perf_counter() - start
@@ -276,8 +269,6 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
     b.add_argument("spec", metavar="SPEC")
     b.add_argument("-o", "--output", metavar="DIR", help="output folder (default dist/NAME)")
     b.add_argument("--bundle", action="store_true", help="also write a single-file NAME.pyz that carries the runtime")
-    b.add_argument("--web", action="store_true",
-                   help="build a static web page that runs the lab in the browser, no server (needs ejsgen[web]; default DIR dist/NAME-web)")
     r = sub.add_parser(
         "run",
         help="build a spec and run the app; other options go to the app",
@@ -303,9 +294,6 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
     from ejsgen.sweep import add_parser as _add_sweep_parser
 
     _add_sweep_parser(sub, options=sweep)
-    from ejsgen._plant_cmd import add_parser as _add_plant_parser
-
-    _add_plant_parser(sub)
     return p
 
 
@@ -346,10 +334,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     app_args: list[str] = []
     if argv and argv[0] == "run":
         argv, app_args = _split_run_args(argv)
-    if argv[:2] == ["plant", "serve"]:  # the reference plant's own options, --help included
-        from ejsgen._plant_cmd import serve
-
-        return serve(argv[2:])
     args = _parser(sweep=argv[:1] == ["sweep"]).parse_args(argv)
     try:
         if args.command == "new":
@@ -366,10 +350,6 @@ def main(argv: Sequence[str] | None = None) -> int:
             from ejsgen._docs import cmd_docs
 
             return cmd_docs(args)
-        if args.command == "plant":
-            from ejsgen._plant_cmd import cmd_plant
-
-            return cmd_plant(args)
         if args.command == "sweep":
             from ejsgen.sweep import cmd_sweep
 
