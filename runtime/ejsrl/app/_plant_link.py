@@ -102,6 +102,7 @@ class LinkBase:
         self.video_wanted = False
         self.frame: VideoFrame | None = None              # the camera's newest frame (older ones are dropped)
         self.frames = 0                                   # frames taken
+        self.states = 0                                   # state messages taken
         self.bad_frames = 0                               # frames refused (see parse_frame)
 
     # ---- what the lab shows -----------------------------------------------------------------
@@ -154,6 +155,7 @@ class LinkBase:
             self.clock.reset()
         self.clock.add(st.get("t"), arrived)
         self.state, self.state_at, self.plant_online = st, arrived, True
+        self.states += 1
         self._changed.notify_all()
         return rebooted
 

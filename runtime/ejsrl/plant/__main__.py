@@ -32,8 +32,8 @@ def _camera_size(text: str) -> tuple[int, int] | tuple[()] | None:
         return ()
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="python -m ejsrl.plant", description=__doc__)
+def main(argv: list[str] | None = None, prog: str = "python -m ejsrl.plant") -> int:
+    ap = argparse.ArgumentParser(prog=prog, description=__doc__)
     ap.add_argument("--mqtt", metavar="HOST:PORT", help="serve on the MQTT broker at HOST:PORT")
     ap.add_argument("--prefix", default="ejsrl/plant", help="MQTT topic prefix (default ejsrl/plant)")
     ap.add_argument("--opcua", metavar="HOST:PORT", help="serve an OPC UA endpoint at HOST:PORT")
