@@ -294,6 +294,9 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
     from ejsgen.sweep import add_parser as _add_sweep_parser
 
     _add_sweep_parser(sub, options=sweep)
+    from ejsgen._plant_cmd import add_parser as _add_plant_parser
+
+    _add_plant_parser(sub)
     return p
 
 
@@ -334,6 +337,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     app_args: list[str] = []
     if argv and argv[0] == "run":
         argv, app_args = _split_run_args(argv)
+    if argv[:2] == ["plant", "serve"]:  # the reference plant's own options, --help included
+        from ejsgen._plant_cmd import serve
+
+        return serve(argv[2:])
     args = _parser(sweep=argv[:1] == ["sweep"]).parse_args(argv)
     try:
         if args.command == "new":
@@ -350,6 +357,10 @@ def main(argv: Sequence[str] | None = None) -> int:
             from ejsgen._docs import cmd_docs
 
             return cmd_docs(args)
+        if args.command == "plant":
+            from ejsgen._plant_cmd import cmd_plant
+
+            return cmd_plant(args)
         if args.command == "sweep":
             from ejsgen.sweep import cmd_sweep
 
