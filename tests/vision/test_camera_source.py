@@ -138,3 +138,22 @@ def test_a_missing_camera_pauses_the_lab_with_a_message_and_the_app_keeps_servin
     assert app.error is None
     app.step_once()
     assert "no such camera" in app.error.message
+
+
+@pytest.mark.browser
+def test_a_missing_camera_is_a_message_in_the_page_and_the_lab_keeps_serving(tmp_path: Path, page) -> None:
+    from testkit.browser import serving, wait_until
+
+    with serving(build(_lab(tmp_path, "97"), tmp_path / "app")) as (app, url):
+        page.goto(url)
+        page.wait_for_selector("canvas", state="attached", timeout=45_000)
+        page.get_by_role("button", name="Play").click()
+        wait_until(lambda: app.error is not None, what="the capture's error to be recorded")
+        box = page.locator("b", has_text="Error")
+        box.first.wait_for(timeout=30_000)
+        page.get_by_text("cannot open camera 97: there is no such camera", exact=False).first.wait_for(timeout=30_000)
+        assert not app.is_playing()
+        # the server keeps serving: a reload shows the lab and its message again
+        page.reload()
+        page.wait_for_selector("canvas", state="attached", timeout=45_000)
+        page.get_by_text("no such camera", exact=False).first.wait_for(timeout=30_000)
