@@ -77,15 +77,6 @@ def test_an_opencv_function_in_imports(tmp_path: Path) -> None:
     assert "look_at" not in err.message  # the camera-pose helper is NumPy's: it runs
 
 
-@pytest.mark.parametrize("line, word", [("import cv2", "OpenCV (`cv2`)"), ("from ejsrl.vision import filters", "ejsrl.vision.filters"),
-                                        ("from ejsrl.vision.features import blobs", "`blobs`"),
-                                        ("from ejsrl.vision import ImageSource", "OpenCV and the devices")])
-def test_opencv_modules_in_imports(tmp_path: Path, line: str, word: str) -> None:
-    text = HEAD.replace("title: Web check\n", f"title: Web check\nimports:\n  - {line}\n")
-    errors, text = refusals(tmp_path, text)
-    one(errors, text, line, word)
-
-
 def test_numpy_only_vision_imports_pass(tmp_path: Path) -> None:
     text = HEAD.replace("title: Web check\n", "title: Web check\nimports:\n  - from ejsrl.vision import CameraModel, "
                         "interaction_matrix, rgb_to_lab, icp\n  - import numpy.linalg as la\n  - from scipy.integrate import solve_ivp\n"
@@ -101,11 +92,14 @@ def test_an_opencv_function_reached_through_the_vision_module_in_code(tmp_path: 
     one(errors, text, "vision.canny", "`vision.canny`", "OpenCV")
 
 
-@pytest.mark.parametrize("line, word", [("import pandas", "the package `pandas`"), ("import socket", "network sockets"),
-                                        ("import threading", "threads"), ("from subprocess import run", "processes"),
-                                        ("from ejsrl.fmi import FmuInstance", "native"),
-                                        ("from ejsrl.robotics import load_urdf", "lxml")])
-def test_packages_and_modules_a_browser_lacks(tmp_path: Path, line: str, word: str) -> None:
+@pytest.mark.parametrize("line, word", [
+    ("import cv2", "OpenCV (`cv2`)"), ("from ejsrl.vision import filters", "ejsrl.vision.filters"),
+    ("from ejsrl.vision.features import blobs", "`blobs`"), ("from ejsrl.vision import ImageSource", "OpenCV and the devices"),
+    ("import pandas", "the package `pandas`"), ("import socket", "network sockets"), ("import threading", "threads"),
+    ("from subprocess import run", "processes"), ("from ejsrl.fmi import FmuInstance", "native"),
+    ("from ejsrl.robotics import load_urdf", "lxml"),
+])
+def test_modules_and_packages_a_browser_lacks_in_imports(tmp_path: Path, line: str, word: str) -> None:
     text = HEAD.replace("title: Web check\n", f"title: Web check\nimports:\n  - {line}\n")
     errors, text = refusals(tmp_path, text)
     one(errors, text, line, word)
