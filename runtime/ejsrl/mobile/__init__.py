@@ -7,7 +7,8 @@
   :func:`follow_line`, :func:`pure_pursuit`;
 - maps and planners: :class:`BinaryOccupancyGrid` (also from an image file),
   :class:`DistanceTransformPlanner`, :class:`AStarPlanner`, :class:`DstarPlanner` (replans
-  when cells change), :class:`PRMPlanner`, :class:`RRTPlanner` (car-like);
+  when cells change), :class:`PRMPlanner`, :class:`RRTPlanner` (car-like),
+  :class:`LatticePlanner` (straight and quarter-turn moves on a lattice of poses);
 - sensors: :class:`LandmarkMap`, :class:`RangeBearingSensor`, :class:`LaserScanner`;
 - estimation: :class:`EKF` (dead reckoning, localisation, EKF-SLAM), :class:`ParticleFilter`
   (Monte Carlo localisation), :class:`PoseGraph` (graph SLAM, g2o and TORO files);
@@ -24,6 +25,7 @@ from .control import follow_line, lookahead_point, move_to_point, move_to_pose, 
 from .drawing import chi2_2dof, ellipse_points, vehicle_outline
 from .ekf import EKF
 from .grid import BinaryOccupancyGrid, OccupancyGrid
+from .lattice import LatticePlanner, LatticeStatus
 from .particles import ParticleFilter
 from .planners import AStarPlanner, DistanceTransformPlanner, DstarPlanner, NoPathError, path_length
 from .posegraph import PoseGraph
@@ -34,7 +36,7 @@ from .vehicles import Bicycle, DiffSteer, Omni, Unicycle, VehicleBase
 
 __all__ = [
     "AStarPlanner", "Bicycle", "BinaryOccupancyGrid", "DiffSteer", "DistanceTransformPlanner", "DstarPlanner",
-    "EKF", "LandmarkMap", "PoseGraph", "PRMPlanner", "RRTPlanner", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "ParticleFilter", "RangeBearingSensor", "SE2",
+    "EKF", "LandmarkMap", "LatticePlanner", "LatticeStatus", "PoseGraph", "PRMPlanner", "RRTPlanner", "LaserScanner", "NoPathError", "OccupancyGrid", "Omni", "ParticleFilter", "RangeBearingSensor", "SE2",
     "Unicycle", "VehicleBase", "angdiff", "chi2_2dof", "ellipse_points", "follow_line", "lookahead_point",
     "move_to_point", "move_to_pose", "path_length", "pose_direction", "pure_pursuit", "vehicle_outline", "wrap",
 ]
