@@ -29,6 +29,7 @@ import numpy as np
 
 from ejsrl.robotics.transforms import q2r, r2q
 from ejsrl.view._lines import LineDraw, PointsDraw
+from ejsrl.view._marker_face import add_marker_face, marker_face_key
 from ejsrl.view._wire import set_position, set_wxyz
 from ejsrl.world.kinds import KINDS
 
@@ -84,7 +85,7 @@ def _snapshot(node: Any) -> tuple:
 class _Mirror:
     """What has been sent for one world node."""
 
-    __slots__ = ("kind", "style", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref", "line")
+    __slots__ = ("kind", "style", "frame", "geoms", "T", "rev", "geom_rev", "visible", "state", "mesh_parts_rgb", "part_keys", "part_handles", "parts_ref", "line", "marker")
 
     def __init__(self, kind: str) -> None:
         self.kind = kind
@@ -104,6 +105,8 @@ class _Mirror:
         self.parts_ref: list[Any] = []  # keeps the keyed arrays alive, so their ids stay unique
         #: for lines, trails and point clouds: how they are drawn (ejsrl.view._lines)
         self.line: LineDraw | PointsDraw | None = None
+        #: for solids with a marker texture: what its picture was made for, and its image handle
+        self.marker: tuple[tuple, Any] | None = None
 
 
 class SceneMirror:
@@ -185,6 +188,7 @@ class SceneMirror:
             elif state != m.state:
                 m.state = state
                 self._update_props(node, m)
+            self._sync_marker(node, m)
 
     def _path(self, name: str) -> str:
         return f"{ROOT}/{name}"
@@ -206,8 +210,21 @@ class SceneMirror:
         m.geom_rev = node.geom_rev
         m.state = _snapshot(node)
         self._build_geometry(node, m)
+        self._sync_marker(node, m)
         self.counters["create"] += 1
         return m
+
+    def _sync_marker(self, node: Any, m: _Mirror) -> None:
+        """The picture of a marker texture on the node's +z face (ejsrl.view._marker_face), made
+        again when what it shows changed (texture, size, height, colour), removed when it has none."""
+        if m.style not in ("box", "sphere", "mesh") and m.marker is None:
+            return
+        key = marker_face_key(node, _rgb255(node.color)) if node.props.get("texture") else None
+        if (m.marker[0] if m.marker is not None else None) == key:
+            return
+        if m.marker is not None:
+            _safe_remove(m.marker[1])
+        m.marker = None if key is None else (key, add_marker_face(self.scene, f"{self._path(node.name)}/marker", key))
 
     def _remove(self, name: str) -> None:
         m = self._nodes.pop(name, None)
@@ -215,6 +232,8 @@ class SceneMirror:
             return
         for h in m.geoms:
             _safe_remove(h)
+        if m.marker is not None:
+            _safe_remove(m.marker[1])
         _safe_remove(m.frame)
         self.counters["remove"] += 1
 

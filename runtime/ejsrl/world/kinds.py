@@ -154,7 +154,7 @@ COMMON: tuple[Prop, ...] = (
     Prop("transform", "mat4", None, "A 4x4 homogeneous pose (instead of position/rotation)."),
 )
 
-#: the virtual camera's texture of a solid element (the browser view draws it plain)
+#: the virtual camera's texture of a solid element (the browser's 3D view draws a marker too, ejsrl.view._marker_face; a checker plain)
 _TEXTURE: tuple[Prop, ...] = (
     Prop("texture", "text", None, "checker: a checkerboard on each face, as the virtual camera sees it (capture); "
          "or a fiducial marker '<dictionary>:<id>' (e.g. 'aruco_4x4_50:7', 'apriltag_36h11:0') on the faces along +z."),
