@@ -234,6 +234,10 @@ CHILD_MODELS: dict[str, type[Strict]] = {
     "grid": Grid2DEl,
 }
 
+from ejsgen._spec2d_mobile import MOBILE_MODELS  # noqa: E402 - they extend _Shape, defined above
+
+CHILD_MODELS.update(MOBILE_MODELS)  # vehicle, laser, occupancy, path, ellipse, particles (issue #27)
+
 
 def _inline(node: Any, defs: dict[str, Any]) -> Any:
     """``node`` with every ``{"$ref": "#/$defs/X"}`` replaced by X's schema (the 2D models have no cycles)."""
@@ -286,7 +290,7 @@ class DrawingEl(Strict):
     keys: dict[str, Code] = Field(default_factory=dict)
     """Key: code run when the key is pressed while the panel has the keyboard focus (click it), then the fixed relations. Keys: letters, digits, ArrowUp, ArrowDown, ArrowLeft, ArrowRight, Space, Enter, Escape, + and -."""
     children: list[Any] = Field(default_factory=list)
-    """The 2D elements, drawn in order: point, particle, circle, segment, arrow, spring, polygon, polyline, trace, text, image, axes, grid."""
+    """The 2D elements, drawn in order: point, particle, circle, segment, arrow, spring, polygon, polyline, trace, text, image, axes, grid; for mobile robots vehicle, laser, occupancy, path, ellipse, particles."""
 
 
 class KeyboardEl(Strict):

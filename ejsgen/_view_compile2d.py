@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 from ejsgen._shapes import infer_shape
 from ejsgen._spec2d import CHILD_MODELS, KEY_ALIASES, KEY_NAMES, key_schema_note
+from ejsgen._spec2d_mobile import compile_prop as compile_mobile_prop
 from ejsgen._suggest import did_you_mean
 from ejsgen.errors import SpecError
 from ejsgen.plan import Call, Src
@@ -33,7 +34,7 @@ _NUM_PROPS = ("size", "radius", "width", "head", "spacing")
 _COLOR_PROPS = ("fill", "stroke")
 _PLAIN_PROPS = ("shape", "align", "coils", "max_points")
 #: the kinds that can be dragged, and those whose drag may take the end (handle: end)
-_DRAGGABLE = ("point", "particle", "circle", "segment", "arrow", "spring", "text", "image")
+_DRAGGABLE = ("point", "particle", "circle", "segment", "arrow", "spring", "text", "image", "vehicle")
 _TWO_ENDS = ("segment", "arrow", "spring")
 #: the kinds that may be sets (position N x 2)
 _SETS = ("point", "particle", "circle", "segment", "arrow")
@@ -276,7 +277,10 @@ def _child(vc: ViewCompiler, raw: Any, path: Path_, names: set[str], counts: dic
             continue  # the runtime's default
         ppath = kpath + (prop,)
         what = f"the {prop} of {kind} '{name}'"
-        if prop == "size" and kind == "image":
+        handled, got = compile_mobile_prop(vc, kind, prop, value, ppath, what)  # issue #27's kinds
+        if handled:
+            pass
+        elif prop == "size" and kind == "image":
             got = vc.vector(value, ppath, "", what, 2)
         elif prop in _POINT_PROPS:
             got = _point(vc, value, ppath, what, sets=kind in _SETS)

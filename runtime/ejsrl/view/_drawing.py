@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ejsrl.view._drawing_mobile import MOBILE_SHAPE_KINDS, mobile_items
 from ejsrl.view._panel2d import Panel2D, encode_xy
 from ejsrl.view.elements import Dynamic
 from ejsrl.view.elements2d import Drawing, SceneKeys, Shape2D
@@ -231,7 +232,9 @@ class DrawingBinding:
                 if app.error is None:
                     app.fail(exc, shape.where)
                 continue
-            if item is not None:
+            if isinstance(item, list):  # a mobile kind: several items
+                items.extend(item)
+            elif item is not None:
                 items.append(item)
         frame: dict[str, Any] = {
             "bounds": [x0, x1, y0, y1],
@@ -342,6 +345,12 @@ class DrawingBinding:
             item = {"t": "arrows", "xy": encode_xy(xy), "stroke": color or "#495057", "width": float(p.get("width", 1.0)), "head": 9.0}
         elif kind == "grid":
             item = self._grid(bounds, float(p.get("spacing", 1.0)), color, float(p.get("width", 1.0)))
+        elif kind in MOBILE_SHAPE_KINDS:
+            items = mobile_items(kind, s.name, p, color, css_color, lambda img: self._picture(s, img))
+            if s.drag is not None and items:
+                items[0]["id"] = s.name
+                items[0]["drag"] = {"x": "x", "y": "y"}.get(s.drag.along, "xy")
+            return items  # type: ignore[return-value]
         else:  # pragma: no cover - Shape2D refuses other kinds
             return None
         if s.drag is not None:
@@ -363,6 +372,14 @@ class DrawingBinding:
             raise ValueError(f"a grid of spacing {spacing:g} draws {len(xs) + len(ys)} lines here; make the spacing larger")
         rows = [[x, y0 - sy, x, y1 + sy] for x in xs] + [[x0 - sx, y, x1 + sx, y] for y in ys]
         return {"t": "segments", "xy": encode_xy(np.array(rows, dtype=float).reshape(-1, 4)), "stroke": color or "#e9ecef", "width": width}
+
+    def _picture(self, s: Shape2D, img: np.ndarray) -> str:
+        """An image's data URL, encoded again only when it changed."""
+        st = self.states[s.name]
+        key = (img.shape, hash(img.tobytes()))
+        if st.image_key != key:
+            st.image_key, st.image_url = key, _png_data_url(img)
+        return st.image_url  # type: ignore[return-value]
 
     def _image(self, s: Shape2D, p: dict[str, Any]) -> str:
         st = self.states[s.name]

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from ejsrl.view._drawing_mobile import MOBILE_SHAPE_KINDS
 from ejsrl.view.elements import Element
 
 __all__ = ["Drawing", "Shape2D", "Drag2D", "SHAPE_KINDS", "SceneKeys"]
@@ -31,6 +32,7 @@ SHAPE_KINDS: dict[str, tuple[str, ...]] = {
     "axes": ("width",),
     "grid": ("spacing", "width"),
 }
+SHAPE_KINDS.update(MOBILE_SHAPE_KINDS)  # vehicle, laser, occupancy, path, ellipse, particles (issue #27)
 
 
 @dataclass
