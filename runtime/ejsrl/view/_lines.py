@@ -42,6 +42,7 @@ import numpy as np
 
 from ejsrl.robotics.transforms import r2q
 from ejsrl.view._wire import set_position, set_prop, set_wxyz
+from ejsrl.world._pieces import PIECE_RATIO, refit_piece
 
 __all__ = ["RIGID_LINES", "MAX_PIECE_SEGMENTS", "MAX_POSED_POINTS", "TRAIL_HEAD", "LineDraw", "PointsDraw", "rigid_fit", "polyline_segments"]
 
@@ -49,10 +50,6 @@ __all__ = ["RIGID_LINES", "MAX_PIECE_SEGMENTS", "MAX_POSED_POINTS", "TRAIL_HEAD"
 #: path does (the browser tests measure both)
 RIGID_LINES = True
 
-#: a two-point line's pieces are ``length / PIECE_RATIO`` long when made: it may then shrink
-#: to 2/3 or stretch to 4/3 of that length (a spring about its rest length) before its points
-#: are sent again
-PIECE_RATIO = 1.5
 
 #: a ``line`` of at most this many segments whose shape changes is drawn as pieces (two a
 #: segment, moved by poses); a longer one sends its points (shown a browser frame late)
@@ -183,16 +180,9 @@ class _Pieces:
             return False
         d = (p1 - p0) / length
         piece = float(np.linalg.norm(a.local[1] - a.local[0]))
-        lo, hi = min(self.seen[0], length), max(self.seen[1], length)
-        self.seen = (lo, hi)
-        if not (piece * (1.0 - 1e-9) <= length <= 2.0 * piece * (1.0 + 1e-9)):
-            # out of the pieces' band: new pieces, sent in their current frames (shown a frame
-            # later): for every length seen if one piece length covers them all (the middle of
-            # those that do, by ratio: room both ways), else with room the way it went
-            if hi <= 2.0 * lo:
-                piece = math.sqrt(hi / 2.0 * lo)
-            else:
-                piece = 0.75 * length if length > piece else 0.55 * length
+        new, self.seen = refit_piece(piece, length, self.seen)
+        if new is not None:  # out of the pieces' band: new pieces, sent in their current frames (shown a frame later)
+            piece = new
             a.points(np.array([p0, p0 + piece * d]))
             b.points(np.array([p1, p1 - piece * d]))
             return True

@@ -11,6 +11,7 @@ view can send only what changed since it last looked.
 from __future__ import annotations
 
 import copy
+import math
 from collections.abc import Iterator, Sequence
 from typing import Any, ClassVar
 
@@ -241,35 +242,72 @@ class Cylinder(Node):
 
 
 class Arrow(Node):
-    """Arrow from ``start`` along ``vector`` (both (3,), in the node frame)."""
+    """Arrow from ``start`` along ``vector`` (both (3,), in the node frame).
+
+    Its parts are a head (a cone ``min(0.3 * length, 6 * width)`` long) and a shaft of two
+    overlapping cylinders of one fixed length ``h``, from the tail and from the head's base
+    (``ejsrl.world._pieces``): while the shaft's length stays within ``[h, 2h]`` and the head's
+    does not change (arrows at least 20 widths long) a change of the arrow moves its parts but not
+    their vertices, so the browser's view moves it by poses, in the frame of the bodies beside it.
+    A translucent arrow's shaft is one cylinder (overlapping pieces would show darker).
+    """
 
     kind = "arrow"
     GEOMETRY_PROPS = ("start", "vector", "width")
 
+    def __init__(self, name: str, **kwargs: Any) -> None:
+        super().__init__(name, **kwargs)
+        #: the shaft pieces' length (metres; 0: none yet), the shaft lengths seen, and whether
+        #: the parts were made for a translucent arrow
+        self._piece = 0.0
+        self._seen = (math.inf, 0.0)
+        self._made_translucent = False
+
+    def parts(self) -> list[Part]:
+        if self._parts is not None and self._made_translucent != (self.opacity < 1.0):
+            self._parts = None
+        return super().parts()
+
     def _make_parts(self) -> list[Part]:
         import trimesh
+
+        from ejsrl.world._pieces import PIECE_RATIO, refit_piece
 
         start = np.asarray(self.props["start"], dtype=float).reshape(3)
         vec = np.asarray(self.props["vector"], dtype=float).reshape(3)
         length = float(np.linalg.norm(vec))
-        if length < 1e-12:
+        self._made_translucent = self.opacity < 1.0
+        if not (length >= 1e-12 and math.isfinite(length)):
             return []
         r = float(self.props["width"]) / 2
         head = min(0.3 * length, 6 * r)
-        shaft = trimesh.creation.cylinder(radius=r, height=length - head, sections=12)
-        shaft.apply_translation((0, 0, (length - head) / 2))
-        cone = trimesh.creation.cone(radius=2.5 * r, height=head, sections=12)
-        cone.apply_translation((0, 0, length - head))
-        mesh = trimesh.util.concatenate([shaft, cone])
+        shaft = length - head
         z = vec / length
         helper = np.array([1.0, 0, 0]) if abs(z[0]) < 0.9 else np.array([0, 1.0, 0])
         x = np.cross(helper, z)
         x /= np.linalg.norm(x)
-        y = np.cross(z, x)
-        T = np.eye(4)
-        T[:3, :3] = np.column_stack([x, y, z])
-        T[:3, 3] = start
-        return [Part(mesh.vertices, mesh.faces, None, T_node_part=T)]
+        R = np.column_stack([x, np.cross(z, x), z])
+
+        def at(along: float) -> Array:
+            T = np.eye(4)
+            T[:3, :3] = R
+            T[:3, 3] = start + along * z
+            return T
+
+        cone = trimesh.creation.cone(radius=2.5 * r, height=head, sections=12)
+        parts = [Part(cone.vertices, cone.faces, None, T_node_part=at(shaft))]
+        if self._made_translucent:
+            pieces = [(shaft, 0.0)]
+        else:
+            new, self._seen = refit_piece(self._piece, shaft, self._seen)
+            if new is not None:
+                self._piece = new if self._piece > 0.0 else shaft / PIECE_RATIO
+            pieces = [(self._piece, 0.0), (self._piece, shaft - self._piece)]
+        for h, along in pieces:
+            cyl = trimesh.creation.cylinder(radius=r, height=h, sections=12)
+            cyl.apply_translation((0, 0, h / 2))
+            parts.append(Part(cyl.vertices, cyl.faces, None, T_node_part=at(along)))
+        return parts
 
 
 class Line(Node):
