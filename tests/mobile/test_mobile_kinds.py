@@ -171,3 +171,66 @@ def _errors(tmp_path: Path, child: str) -> list[str]:
 def test_bad_mobile_kinds_are_build_errors_at_their_place(tmp_path, child: str, where: str, words: str) -> None:  # type: ignore[no-untyped-def]
     errors = _errors(tmp_path, child)
     assert any(e.startswith(where) and words in e for e in errors), errors
+
+
+SCENE = """\
+ejs: 1
+title: kinds 3D
+imports:
+  - from ejsrl.mobile import BinaryOccupancyGrid, LaserScanner
+model:
+  variables:
+    t: 0.0
+    x: {expr: "np.array([2.0, 1.0, 0.5])"}
+    walls: {expr: "np.eye(6, dtype=bool)"}
+    sc: {expr: "LaserScanner(BinaryOccupancyGrid(np.eye(6), cellsize=0.5), n=5, fov=pi, max_range=3.0)"}
+    P: {expr: "np.diag([0.2, 0.1, 0.01])"}
+    pts: {expr: "np.array([[0.0, 0.0, 0.1], [1.0, 1.0, 0.2]])"}
+  evolution:
+    - code: |
+        x = x + np.array([0.01, 0.0, 0.01])
+        t = t + 0.1
+view:
+  - scene:
+      - vehicle: {name: car, pose: x, length: 1.2, height: 0.4, color: steelblue}
+      - laser: {name: scan, pose: x, ranges: "sc.scan(x)", color: red}
+      - occupancy: {name: map, grid: "BinaryOccupancyGrid(walls, cellsize=0.5)", height: 0.3}
+      - path: {name: route, path: pts, color: green}
+      - ellipse: {name: unc, centre: "x[:2]", covariance: P, scale: 2, confidence: 0.5}
+      - particles: {name: cloud, particles: pts, color: orange}
+"""
+
+
+def test_the_3d_kinds_put_the_vehicle_scan_grid_path_ellipse_and_particles_on_the_plane(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from ejsrl.mobile import BinaryOccupancyGrid, LaserScanner
+
+    spec = tmp_path / "scene.ejs.yaml"
+    spec.write_text(SCENE)
+    app = load_app(build(spec, tmp_path / "app"))
+    app.play()
+    for _ in range(5):
+        app.frame()
+    assert app.error is None
+    w, x = app.scene.world, np.array(app.model.x)
+    car = w.nodes["car"]
+    T = car.T_world()
+    np.testing.assert_allclose(T[:2, 3], x[:2], atol=1e-12)
+    np.testing.assert_allclose(T[:2, 0], [math.cos(x[2]), math.sin(x[2])], atol=1e-12)
+    (part,) = car.parts()  # a prism 0.4 m high over the 1.2 m triangle, its nose 0.72 m ahead
+    assert part.vertices[:, 2].max() == pytest.approx(0.4) and part.vertices[:, 0].max() == pytest.approx(0.72)
+    scan = w.nodes["scan"].props["points"]
+    r = LaserScanner(BinaryOccupancyGrid(np.eye(6), cellsize=0.5), n=5, fov=math.pi, max_range=3.0).scan(x)
+    a = x[2] + np.linspace(-math.pi / 2, math.pi / 2, 5)
+    np.testing.assert_allclose(scan[0::2, :2], np.tile(x[:2], (5, 1)), atol=1e-12)
+    np.testing.assert_allclose(scan[1::2, :2], x[:2] + r[:, None] * np.column_stack((np.cos(a), np.sin(a))), atol=1e-12)
+    (blocks,) = w.nodes["map"].parts()  # one block 0.3 m high per occupied cell, centred on it
+    assert len(blocks.vertices) == 8 * 6
+    centres = blocks.vertices.reshape(6, 8, 3).mean(axis=1)
+    np.testing.assert_allclose(centres, [[0.5 * k, 0.5 * k, 0.15] for k in range(6)], atol=1e-12)
+    np.testing.assert_allclose(w.nodes["route"].props["points"], [[0, 0, 0.02], [1, 1, 0.02]])
+    np.testing.assert_allclose(w.nodes["cloud"].props["points"], [[0, 0, 0.02], [1, 1, 0.02]])
+    e = w.nodes["unc"].props["points"][:, :2] - x[:2]
+    m2 = np.einsum("ij,jk,ik->i", e, np.linalg.inv(4 * np.diag([0.2, 0.1])), e)
+    np.testing.assert_allclose(m2, -2 * math.log(0.5), rtol=1e-9)

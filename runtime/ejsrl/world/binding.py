@@ -119,9 +119,14 @@ class SceneSync:
         if factory is not None:
             return factory(self, element, common)
         cls = NODE_KINDS.get(element.kind)
+        decl = KINDS.get(element.kind)
+        if cls is None and decl is not None and decl.node_module is not None:
+            import importlib
+
+            importlib.import_module(decl.node_module)  # registers its node classes (ejsrl.mobile._nodes)
+            cls = NODE_KINDS.get(element.kind)
         if cls is None:
             raise ValueError(f"unknown 3D element kind {element.kind!r}")
-        decl = KINDS.get(element.kind)
         state = decl.node_extra if decl is not None else {}  # what the node keeps itself (a trail's points)
         own = {k: v for k, v in element.props.items() if k in cls.DEFAULTS and k not in state and not is_dynamic(v)}
         return cls(element.name, **own, **common)

@@ -259,5 +259,49 @@ _KINDS: tuple[Kind, ...] = (
     ), draw="none", node_extra={"commanded": None}),
 )
 
+#: mobile robots (issue #27): drawn on the plane z = 0 of their frame; nodes in ejsrl.mobile._nodes
+_MOBILE = "ejsrl.mobile._nodes"
+_MOBILE_KINDS: tuple[Kind, ...] = (
+    Kind("vehicle", "A mobile robot at a pose [x, y, theta] on the plane: a prism over its footprint (a triangle pointing along its heading by default).", (
+        Prop("pose", "vec", REQUIRED, "[x, y, theta] (m, m, rad), or an expression giving them (a vehicle's state).", node_default=(0.0, 0.0, 0.0)),
+        Prop("length", "num", 1.0, "Length of the triangle from tail to nose, metres."),
+        Prop("breadth", "num", None, "Width of the triangle, metres (default half the length)."),
+        Prop("height", "num", 0.3, "Height of the prism, metres."),
+        Prop("footprint", "expr", None, "A convex outline N x 2 in the vehicle's frame (x forward), metres, instead of the triangle."),
+    ), flat=True, node_module=_MOBILE),
+    Kind("laser", "A laser (range) scan: a ray from the sensor's pose to the end of each beam.", (
+        Prop("pose", "vec", REQUIRED, "The sensor's pose [x, y, theta] (m, m, rad).", node_default=(0.0, 0.0, 0.0)),
+        Prop("ranges", "vec", REQUIRED, "The ranges (n,) in metres, one per beam (e.g. scanner.scan(x)).", node_default=None),
+        Prop("angles", "vec", None, "Each beam's angle from the heading (n,), radians (default: evenly over fov)."),
+        Prop("fov", "num", float(np.pi), "Field of view in radians, centred on the heading (without angles)."),
+        Prop("z", "num", 0.05, "Height of the rays above the plane, metres."),
+        Prop("width", "num", 1.0, "Line width in pixels."),
+    ), draw="polyline", node_extra={"points": _no_points()}, node_module=_MOBILE),
+    Kind("occupancy", "An occupancy grid: its occupied cells as blocks on the plane.", (
+        Prop("grid", "expr", REQUIRED, "An ejsrl.mobile BinaryOccupancyGrid or OccupancyGrid, or an H x W array (row 0 at the lowest y; cells >= 0.5 occupied).", node_default=None),
+        Prop("cellsize", "num", 1.0, "Cell side in metres (for an array)."),
+        Prop("origin", "vec", (0.0, 0.0), "The centre [x, y] of cell [0, 0], metres (for an array)."),
+        Prop("height", "num", 0.5, "Height of the blocks, metres."),
+    ), flat=True, node_module=_MOBILE),
+    Kind("path", "A planned path on the plane: a line through N x 2 points or N x 3 poses.", (
+        Prop("path", "expr", REQUIRED, "The way points, N x 2 (or N x 3 poses: x and y drawn), metres.", node_default=None),
+        Prop("z", "num", 0.02, "Height above the plane, metres."),
+        Prop("width", "num", 3.0, "Line width in pixels."),
+    ), draw="polyline", node_extra={"points": _no_points()}, node_module=_MOBILE),
+    Kind("ellipse", "A covariance ellipse on the plane: where a 2-D Gaussian about centre holds confidence of its probability.", (
+        Prop("centre", "vec", REQUIRED, "Its centre [x, y], metres (the estimate).", node_default=(0.0, 0.0)),
+        Prop("covariance", "expr", REQUIRED, "The covariance, 2 x 2 (m²) or larger (its top-left 2 x 2).", node_default=None),
+        Prop("confidence", "num", 0.95, "The probability it holds, between 0 and 1."),
+        Prop("scale", "num", 1.0, "Drawn this many times larger."),
+        Prop("z", "num", 0.02, "Height above the plane, metres."),
+        Prop("width", "num", 2.0, "Line width in pixels."),
+    ), draw="polyline", node_extra={"points": _no_points()}, node_module=_MOBILE),
+    Kind("particles", "A particle filter's particles: a point at each row of an N x 2 (positions) or N x 3 (poses) array.", (
+        Prop("particles", "expr", REQUIRED, "The particles, N x 2 or N x 3 (x and y drawn), metres.", node_default=None),
+        Prop("z", "num", 0.02, "Height above the plane, metres."),
+        Prop("size", "num", 0.05, "Point size in metres."),
+    ), draw="points", node_extra={"points": _no_points()}, node_module=_MOBILE),
+)
+
 #: every 3D element kind by name, in the order of the reference
-KINDS: dict[str, Kind] = {k.name: k for k in _KINDS}
+KINDS: dict[str, Kind] = {k.name: k for k in _KINDS + _MOBILE_KINDS}
