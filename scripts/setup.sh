@@ -21,7 +21,7 @@ command -v cc >/dev/null 2>&1 || need+=(gcc libc6-dev)
 # Debian's mosquitto MQTT broker for the remote-laboratory tests (tests/plant); only the binary
 # is used, started by the tests with a config in a temporary folder on loopback ports
 [ -x /usr/sbin/mosquitto ] || need+=(mosquitto)
-# Debian's bubblewrap: examples/grading/grade.py builds and runs each hand-in in its sandbox
+# Debian's bubblewrap: ejsgen sweep --sandbox and examples/grading/grade.py build and run each hand-in in its sandbox
 # (read-only file system but its own folder, no network); only when missing
 command -v bwrap >/dev/null 2>&1 || need+=(bubblewrap)
 if [ ${#need[@]} -gt 0 ]; then

@@ -6,9 +6,9 @@
 The reference is built and run over the parameter sets (an ``ejsgen sweep`` through its
 Python API, ``ejsrl.app.sweep.sweep``); each student's spec is built, and run once per
 parameter set (``app.py --headless --set ...``, which gives a sweep's rows bit for bit), in
-a sandbox (``sandbox.py``: bubblewrap, read-only but its own folder, no network, CPU,
-memory and wall-time limits): spec code is Python and could otherwise do anything the
-teacher can. A student passes when
+a sandbox (:mod:`ejsgen._sandbox`, the one ``ejsgen sweep --sandbox`` uses: bubblewrap,
+read-only but its own folder, no network, CPU, memory and wall-time limits): spec code is
+Python and could otherwise do anything the teacher can. A student passes when
 every compared variable of every run stays within ``--rtol``/``--atol`` of the reference at
 every recorded step. The report names, for each student, the variables that differ and
 the worst difference (where and with which parameters), or why the spec does not build or
@@ -27,10 +27,9 @@ from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE))  # sandbox.py beside this file, also when run with python -P
+from ejsgen._sandbox import Limits, bwrap_hint, contained
 
-from sandbox import Limits, bwrap_hint, contained  # noqa: E402
+HERE = Path(__file__).resolve().parent
 
 
 @dataclass

@@ -10,17 +10,15 @@ from __future__ import annotations
 
 import os
 import signal
-import socket
 import subprocess
 import sys
-import threading
 import time
 import uuid
 from pathlib import Path
 
-import pytest
 
 from testkit import EXAMPLES
+from testkit.sweeps import listening, processes_with
 
 GRADE = EXAMPLES / "grading" / "grade.py"
 REFERENCE = EXAMPLES / "grading" / "reference.ejs.yaml"
@@ -61,33 +59,12 @@ def test_writing_outside_its_folder_fails_the_handin_and_writes_nothing(tmp_path
 
 
 def test_connecting_out_fails_the_handin_and_nothing_arrives(tmp_path: Path) -> None:
-    server = socket.socket()
-    server.bind(("127.0.0.1", 0))
-    server.listen(5)
-    server.settimeout(0.5)
-    port = server.getsockname()[1]
-    arrived: list[object] = []
-    stop = threading.Event()
-
-    def accept() -> None:
-        while not stop.is_set():
-            try:
-                arrived.append(server.accept())
-            except OSError:
-                continue
-
-    listener = threading.Thread(target=accept, daemon=True)
-    listener.start()
     students = tmp_path / "students"
     students.mkdir()
-    handin(students, "eve", ["import socket"], f"socket.create_connection(('127.0.0.1', {port}), timeout=5).sendall(b'answers')")
-    handin(students, "trudy", ["import urllib.request"], "urllib.request.urlopen('http://1.1.1.1/', timeout=5)")
-    try:
+    with listening() as (port, arrived):
+        handin(students, "eve", ["import socket"], f"socket.create_connection(('127.0.0.1', {port}), timeout=5).sendall(b'answers')")
+        handin(students, "trudy", ["import urllib.request"], "urllib.request.urlopen('http://1.1.1.1/', timeout=5)")
         status, lines, err = grade(students)
-    finally:
-        stop.set()
-        listener.join(5)
-        server.close()
     assert status == 0, err
     assert lines["eve.ejs.yaml"].startswith("FAIL: run 0 (c=0.5) failed: ")
     assert "Connection refused" in lines["eve.ejs.yaml"] or "unreachable" in lines["eve.ejs.yaml"], lines["eve.ejs.yaml"]
@@ -121,36 +98,6 @@ def test_a_loop_past_the_wall_limit_is_stopped(tmp_path: Path) -> None:
     assert time.monotonic() - t0 < 200
 
 
-def _sandboxed_alive(marker: str, ancestor: int | None = None, among: list[int] | None = None) -> list[int]:
-    """Processes whose command line holds ``marker``: descendants of ``ancestor`` (this test's
-    grading, not another test's running beside it on the other worker), or those of ``among``."""
-    pids = []
-    for pid in os.listdir("/proc"):
-        if not pid.isdigit() or (among is not None and int(pid) not in among):
-            continue
-        try:
-            if marker not in (Path("/proc") / pid / "cmdline").read_bytes().decode(errors="replace"):
-                continue
-            if ancestor is not None and not _descends(int(pid), ancestor):
-                continue
-            pids.append(int(pid))
-        except OSError:
-            continue
-    return pids
-
-
-def _descends(pid: int, ancestor: int) -> bool:
-    while pid > 1:
-        if pid == ancestor:
-            return True
-        try:
-            stat = (Path("/proc") / str(pid) / "stat").read_text()
-        except OSError:
-            return False
-        pid = int(stat.rsplit(")", 1)[1].split()[1])
-    return False
-
-
 def test_sigterm_stops_grading_while_a_handin_loops_and_leaves_nothing_running(tmp_path: Path) -> None:
     students = tmp_path / "students"
     students.mkdir()
@@ -160,10 +107,10 @@ def test_sigterm_stops_grading_while_a_handin_loops_and_leaves_nothing_running(t
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     marker = "run0.csv"  # the looping hand-in's run is the only command with it
     deadline = time.monotonic() + 300
-    while time.monotonic() < deadline and not _sandboxed_alive(marker, ancestor=proc.pid):
+    while time.monotonic() < deadline and not processes_with(marker, ancestor=proc.pid):
         time.sleep(0.1)
     time.sleep(1.0)
-    running = _sandboxed_alive(marker, ancestor=proc.pid)
+    running = processes_with(marker, ancestor=proc.pid)
     assert running, "the looping hand-in never ran"
     t0 = time.monotonic()
     proc.send_signal(signal.SIGTERM)
@@ -173,18 +120,24 @@ def test_sigterm_stops_grading_while_a_handin_loops_and_leaves_nothing_running(t
     assert "stopped by SIGTERM after 0 of 2 hand-ins; the others are not graded" in err
     assert "Traceback" not in err and "PASS" not in out
     left = time.monotonic() + 15  # the sandbox dies with its parent; give a loaded machine time
-    while time.monotonic() < left and _sandboxed_alive(marker, among=running):
+    while time.monotonic() < left and processes_with(marker, among=running):
         time.sleep(0.1)
-    assert _sandboxed_alive(marker, among=running) == []
+    assert processes_with(marker, among=running) == []
 
 
 def test_sigterm_while_the_reference_runs_grades_nobody(tmp_path: Path) -> None:
     students = tmp_path / "students"
     students.mkdir()
     (students / "zoe.ejs.yaml").write_text(REFERENCE.read_text(encoding="utf-8"), encoding="utf-8")
+    tmp = tmp_path / "tmp"  # grading's temporary folder lands here: the reference's build shows in it
+    tmp.mkdir()
     proc = subprocess.Popen([sys.executable, "-P", str(GRADE), str(REFERENCE), str(students), "--values", "c=0,0.1,0.2,0.3,0.4,0.5",
-                             "--duration", "2000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(8.0)  # the reference's sweep of 12 long runs is under way (each takes tens of seconds)
+                             "--duration", "2000"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, TMPDIR=str(tmp)))
+    deadline = time.monotonic() + 300  # the reference is built; its sweep of 6 long runs (tens of seconds each) starts
+    while time.monotonic() < deadline and not list(tmp.glob("ejsgen-grade-*/reference/app.py")):
+        assert proc.poll() is None, proc.communicate()
+        time.sleep(0.1)
     proc.send_signal(signal.SIGTERM)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 143, err

@@ -199,7 +199,7 @@ def _check_output(args: argparse.Namespace) -> str | None:
     return None
 
 
-def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: str) -> int:
+def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: str, sandbox: Any = None) -> int:
     """Run the sweep the parsed command line asks for; write its tables; the exit status.
 
     0 when the tables were written and some run succeeded, 1 when every run failed, 2 for a
@@ -207,6 +207,7 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     ``EXIT_CANNOT_WRITE`` (74) when a file could not be written, ``EXIT_SCHEDULER_LOST`` (69)
     when the Dask scheduler was lost. Finished runs are kept in ``OUT.parts/`` as they finish
     (:mod:`ejsrl.app.sweep_journal`); ``--resume`` runs only the ones missing there.
+    ``sandbox``: a :class:`~ejsrl.app.sweep_sandbox.ContainedRuns` that runs each run contained.
     """
     err = sys.stderr
     np.seterr(all="ignore")
@@ -242,7 +243,7 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
         print(f"error: {exc}", file=err)
         return 2
     options = RunOptions(float(args.duration), tuple(names) if names is not None else None, args.every)
-    ex = Executor(cpu_count() if args.workers is None else args.workers, dask=args.dask, scheduler=args.scheduler)
+    ex = Executor(cpu_count() if args.workers is None else args.workers, dask=args.dask, scheduler=args.scheduler, sandbox=sandbox)
     if not ex.dask and not ex.scheduler and ex.workers > len(runs):
         ex.workers = len(runs)
     parts = parts_folder(args.out)

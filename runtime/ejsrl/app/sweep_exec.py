@@ -38,13 +38,19 @@ def cpu_count() -> int:
 class Executor:
     """Where to run: ``workers`` processes (0: in this process) on this machine, or on Dask
     (``dask``: a LocalCluster of ``workers`` processes started here; ``scheduler``: the
-    address of a running cluster's scheduler, ``tcp://host:8786``)."""
+    address of a running cluster's scheduler, ``tcp://host:8786``), or ``sandbox``: each run
+    a process of its own in a sandbox, ``workers`` at a time
+    (:class:`~ejsrl.app.sweep_sandbox.ContainedRuns`)."""
 
     workers: int
     dask: bool = False
     scheduler: str | None = None
+    sandbox: Any = None
 
     def describe(self) -> str:
+        if self.sandbox is not None:
+            n = max(self.workers, 1)
+            return f"{n} sandboxed process{'es' if n != 1 else ''} at a time (bubblewrap, one per run)"
         if self.scheduler:
             return f"the Dask cluster at {self.scheduler}"
         if self.dask:
@@ -358,7 +364,9 @@ def execute(
     stopper = _StopOnSignal()
     try:
         with stopper:
-            if ex.dask or ex.scheduler:
+            if ex.sandbox is not None:
+                ex.sandbox.execute(work, options, max(ex.workers, 1), on_results)
+            elif ex.dask or ex.scheduler:
                 _run_dask(ref, work, options, ex, on_results)
             elif ex.workers == 0:
                 for batch in work:
