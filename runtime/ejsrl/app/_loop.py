@@ -191,6 +191,10 @@ class App(Controller):
             self._refresh_views()
         self._wake()
 
+    def _tell_pages(self, title: str, body: str) -> list[Any]:
+        """Show a slow ``init:``'s warning in the pages of this simulation (the handles, to remove)."""
+        return [h for v in list(self.views) if hasattr(v, "notify") for h in v.notify(None, title, body, "yellow", loading=True)]
+
     def _apply_pending(self) -> None:
         """A reset (paused, the user's settings forgotten) or an initialize (the user's
         settings kept, playing on if it was) requested during the last change or step."""
@@ -202,7 +206,7 @@ class App(Controller):
             self.error = None
             self.error_rev += 1
             self.scene.reset()
-            with watch_slow(self.model_cls, "init:"):
+            with watch_slow(self.model_cls, "init:", tell=self._tell_pages):  # also said in the tabs of this simulation
                 self.guard(self.model._ejs_reset if what == "reset" else self.model._ejs_initialize)
             self._wall0 = None  # realtime pacing starts again from the new time
             for v in self.views:

@@ -352,11 +352,13 @@ class Classroom:
             self._settle(client, token, browser)
 
     def _attach(self, session: Session, client: Any, fresh: bool) -> None:
+        from ejsrl.app._slow import telling
         from ejsrl.view.viser_view import ViserView
 
         with session.lock:
             if fresh:
-                app = self.make_app()
+                with telling(lambda title, body: [client.add_notification(title, body, color="yellow", loading=True)]):
+                    app = self.make_app()  # a slow init: is said in the tab too
                 app.on_wake = session.wake
                 session.app = app
             app = session.app

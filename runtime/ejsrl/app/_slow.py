@@ -9,18 +9,47 @@ where it is in the spec:
 
 The place is read from the running thread's stack (``sys._current_frames``): the deepest
 frame in the app's module whose line ``SPEC_LINES`` maps to the spec.
+
+A served lab also says it in the page of the tab whose simulation is stuck (a new tab's
+``init:``, or Reset after a student set a value that makes ``init:`` loop): the block's
+``tell`` callables, and those :func:`telling` set for the running thread, are called with
+the page's words (``TITLE`` and a body); each returns the notification handles it made
+(objects with ``remove()``), which are removed when the block ends.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
-from typing import TextIO
+from typing import Any, TextIO
 
-__all__ = ["SLOW_SECONDS", "watch_slow", "where_now"]
+__all__ = ["SLOW_SECONDS", "TITLE", "Tell", "telling", "watch_slow", "where_now"]
+
+log = logging.getLogger(__name__)
+
+TITLE = "The simulation is still starting"
+"""The title of the page's notification of a slow block."""
+
+Tell = Callable[[str, str], "Iterable[Any] | None"]
+"""``tell(title, body)``: show a slow block's warning in a page; returns the handles it made."""
+
+_LOCAL = threading.local()
+
+
+@contextmanager
+def telling(tell: Tell) -> Iterator[None]:
+    """While the block runs, every slow block of this thread also calls ``tell`` (a new tab's
+    session tells its tab while its ``init:`` runs)."""
+    stack: list[Tell] = _LOCAL.__dict__.setdefault("tells", [])
+    stack.append(tell)
+    try:
+        yield
+    finally:
+        stack.remove(tell)
 
 SLOW_SECONDS = float(os.environ.get("EJSRL_SLOW_SECONDS", "3"))
 """Seconds of running before ``watch_slow`` speaks (``EJSRL_SLOW_SECONDS`` overrides)."""
@@ -41,15 +70,28 @@ def where_now(thread_id: int, model_cls: type) -> str:
     return ""
 
 
+def page_text(what: str, after: float, where: str) -> str:
+    """The page's words for a block ``what`` running ``after`` seconds, now at spec place ``where``."""
+    place = f" and is at {where} now" if where else ""
+    return (f"Its {what} has been running for {after:g} s{place} (an endless loop?). It goes on when that code ends; "
+            "Ctrl+C in the terminal that serves the lab stops it.")
+
+
 @contextmanager
-def watch_slow(model_cls: type, what: str = "init:", *, after: float | None = None, log: TextIO | None = None) -> Iterator[None]:
-    """Run the block; if it runs longer than ``after`` seconds, print once where it is.
+def watch_slow(
+    model_cls: type, what: str = "init:", *, after: float | None = None, log: TextIO | None = None, tell: Tell | None = None
+) -> Iterator[None]:
+    """Run the block; if it runs longer than ``after`` seconds, print once where it is, and
+    tell the pages (``tell`` and those of :func:`telling`); their notifications go when it ends.
 
     ``what``: the code's name in the message (``init:``); ``log``: where (standard error).
     """
     after = SLOW_SECONDS if after is None else after
     thread_id = threading.get_ident()
+    tells = [*_LOCAL.__dict__.get("tells", ()), *([tell] if tell is not None else [])]
     done = threading.Event()
+    shown: list[Any] = []
+    shown_lock = threading.Lock()
 
     def watch() -> None:
         if done.wait(after):
@@ -58,10 +100,32 @@ def watch_slow(model_cls: type, what: str = "init:", *, after: float | None = No
         text = f"{what} has been running for {after:g} s" + (" and is at this line now" if where else "")
         print(f"{where + ': ' if where else ''}warning: {text} (an endless loop?); Ctrl+C stops it",
               file=log or sys.stderr, flush=True)
+        body = page_text(what, after, where)
+        for t in tells:
+            try:
+                handles = list(t(TITLE, body) or ())
+            except Exception:  # a page that went away
+                log.debug("telling a page of a slow block failed", exc_info=True)
+                continue
+            with shown_lock:
+                if done.is_set():  # the block ended meanwhile
+                    _remove(handles)
+                else:
+                    shown.extend(handles)
 
     watcher = threading.Thread(target=watch, name="ejsrl-slow-watch", daemon=True)
     watcher.start()
     try:
         yield
     finally:
-        done.set()
+        with shown_lock:
+            done.set()
+            _remove(shown)
+
+
+def _remove(handles: Iterable[Any]) -> None:
+    for handle in handles:
+        try:
+            handle.remove()
+        except Exception:  # its tab is gone
+            log.debug("removing a slow block's notification failed", exc_info=True)

@@ -229,11 +229,12 @@ class ViserView:
         self._guarded("reset", self.panel.on_reset)
 
     # -- helpers ----------------------------------------------------------------------------
-    def notify(self, client: Any, title: str, body: str, color: str = "blue") -> list[Any]:
+    def notify(self, client: Any, title: str, body: str, color: str = "blue", *, loading: bool = False) -> list[Any]:
         """Show a notification to ``client``, or to everyone this view shows the app to if
         None (its own client, or every connected client for a shared view).
 
-        Red ones (errors) stay until closed; returns the notification handles.
+        Red ones (errors) and ``loading`` ones (a spinner: something still going on, removed
+        by its handle when it ends) stay until closed; returns the notification handles.
         """
         if client is not None:
             clients = [client]
@@ -241,11 +242,11 @@ class ViserView:
             clients = [] if self._closed else [self.client]
         else:
             clients = list(self.server.get_clients().values())
-        auto_close = None if color == "red" else 6.0
+        auto_close = None if color == "red" or loading else 6.0
         handles = []
         for c in clients:
             try:
-                handles.append(c.add_notification(title, body, color=color, auto_close_seconds=auto_close))
+                handles.append(c.add_notification(title, body, color=color, auto_close_seconds=auto_close, loading=loading))
             except Exception:
                 log.debug("notification to a client failed", exc_info=True)
         return handles
