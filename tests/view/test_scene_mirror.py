@@ -127,7 +127,7 @@ def test_points_lines_and_text_update_in_place(scene):
     mirror.sync(w)
     handles = [mirror._nodes[n].geoms[0] for n in "plt"]
     p.set(points=np.ones((7, 3)))
-    line.set(points=np.arange(210.0).reshape(70, 3))  # (a line of up to 64 segments would be drawn anew as pieces)
+    line.set(points=np.arange(210.0).reshape(70, 3))  # (a line of up to 24 segments would be drawn anew as pieces)
     t.set(text="b")
     mirror.sync(w)
     assert [mirror._nodes[n].geoms[0] for n in "plt"] == handles

@@ -21,8 +21,8 @@ when a piece must be made anew:
   a turning polygon, a link drawn as a polyline) is fitted to the points last sent by Kabsch's
   method and sent as the pose of its geometry; the first time its shape changes (a zigzag
   spring that stretches, a chain of springs) it is drawn anew as pieces, two a segment, if it
-  has at most ``MAX_PIECE_SEGMENTS`` segments (4 messages a segment that moves, a frame);
-  a longer line keeps sending its points and shows a frame late;
+  has at most ``MAX_PIECE_SEGMENTS`` segments (up to 4 messages a segment, a frame); a
+  longer line keeps sending its points and shows a frame late;
 - a ``trail`` is one segment set of all its points (sent as points, or as a pose while it
   moves rigidly: a point going round a circle at a steady speed) under pieces on its newest
   ``TRAIL_HEAD`` segments: the set shows its new points a frame late, but the pieces that
@@ -52,8 +52,11 @@ RIGID_LINES = True
 
 
 #: a ``line`` of at most this many segments whose shape changes is drawn as pieces (two a
-#: segment, moved by poses); a longer one sends its points (shown a browser frame late)
-MAX_PIECE_SEGMENTS = 64
+#: segment, moved by poses: a zigzag spring of up to 11 coils); a longer one sends its points
+#: (shown a browser frame late). Pieces cost messages: a spring of 19 segments takes ~60 a frame
+#: where its points took one (bench/scene_sync.py); a long chain of springs whose masses are a
+#: point cloud of more than ``MAX_POSED_POINTS`` stays as it was, points and masses in step
+MAX_PIECE_SEGMENTS = 24
 
 #: a trail's newest segments drawn as pieces over its segment set (two: the set may be two
 #: updates behind when a loaded browser takes two of them in one frame)
@@ -298,7 +301,7 @@ class LineDraw:
 #: a point cloud of at most this many points whose points move apart (the masses of a chain of
 #: springs) is drawn anew as one posed point each, so that it keeps step with the lines drawn as
 #: pieces beside it; a larger one sends its points (shown a browser frame late)
-MAX_POSED_POINTS = 64
+MAX_POSED_POINTS = 24
 
 
 class PointsDraw:
