@@ -119,14 +119,9 @@ class SceneSync:
         if factory is not None:
             return factory(self, element, common)
         cls = NODE_KINDS.get(element.kind)
-        decl = KINDS.get(element.kind)
-        if cls is None and decl is not None and decl.node_module is not None:
-            import importlib
-
-            importlib.import_module(decl.node_module)  # registers its node classes (ejsrl.mobile._nodes)
-            cls = NODE_KINDS.get(element.kind)
         if cls is None:
             raise ValueError(f"unknown 3D element kind {element.kind!r}")
+        decl = KINDS.get(element.kind)
         state = decl.node_extra if decl is not None else {}  # what the node keeps itself (a trail's points)
         own = {k: v for k, v in element.props.items() if k in cls.DEFAULTS and k not in state and not is_dynamic(v)}
         return cls(element.name, **own, **common)
@@ -235,9 +230,22 @@ def _mesh_node(sync: SceneSync, element: Node3D, common: dict[str, Any]) -> Node
     return NODE_KINDS["mesh"](element.name, mesh_parts=tuple(parts), scale=1.0 if is_dynamic(scale) else scale, file=str(file), **common)
 
 
+def _module_node(sync: SceneSync, element: Node3D, common: dict[str, Any]) -> Node:
+    """A node whose class lives in its kind's ``node_module`` (the mobile robots' kinds:
+    ``ejsrl.mobile._nodes``), made from the element's constant properties."""
+    import importlib
+
+    decl = KINDS[element.kind]
+    module = importlib.import_module(str(decl.node_module))
+    cls = next(c for c in vars(module).values() if isinstance(c, type) and issubclass(c, Node) and c.__dict__.get("kind") == element.kind)
+    own = {k: v for k, v in element.props.items() if k in cls.DEFAULTS and k not in decl.node_extra and not is_dynamic(v)}
+    return cls(element.name, **own, **common)
+
+
 #: kinds whose nodes need more than their constant properties (files to load); every other
 #: kind's node is its ``NODE_KINDS`` class made from the element's constant properties
 _FACTORIES: dict[str, Callable[[SceneSync, Node3D, dict[str, Any]], Node]] = {"robot": _robot_node, "mesh": _mesh_node}
+_FACTORIES.update({name: _module_node for name, k in KINDS.items() if k.node_module is not None and name not in _FACTORIES})
 
 
 def _raiser(exc: Exception) -> Callable[[Any], Any]:
