@@ -1,0 +1,123 @@
+"""The PRM-and-laser lab in a real browser (issue #27's mobile kinds): after driving, the
+pixels where the model's vehicle is are the vehicle's fill, the laser's returns (where an
+independent LaserScanner's beams stop on the floor plan) are red dots, the map's walls the
+laser has seen are black and the cells it has not seen grey; dragging the goal gives a new
+PRM path ending there. Its gallery picture is taken here."""
+
+from __future__ import annotations
+
+import io
+import math
+import re
+import tempfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from testkit.browser import hide_notifications, save_shot, wait_until
+
+SLOW = 120_000
+
+
+@pytest.fixture(scope="module")
+def prm_lab():
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from testkit import EXAMPLES
+
+    tmp = tempfile.TemporaryDirectory()
+    app = load_app(build(EXAMPLES / "mobile_prm_laser.ejs.yaml", Path(tmp.name) / "app"))
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
+    try:
+        yield app, f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+        tmp.cleanup()
+
+
+def _far_from_segments(p: np.ndarray, A: np.ndarray, B: np.ndarray, d: float) -> bool:
+    """Is the point p (2,) farther than d from every segment A[i]-B[i] (m)?"""
+    AB = B - A
+    t = np.clip(np.einsum("ij,ij->i", p - A, AB) / np.maximum(np.einsum("ij,ij->i", AB, AB), 1e-12), 0.0, 1.0)
+    return bool(np.hypot(*(A + t[:, None] * AB - p).T).min() > d)
+
+
+def _pixels(page) -> np.ndarray:  # type: ignore[no-untyped-def]
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB")).astype(int)
+
+
+@pytest.mark.browser
+def test_prm_laser_lab_draws_the_robot_its_scan_and_the_map_where_the_model_says(prm_lab, browser_context):
+    from ejsrl.mobile import BinaryOccupancyGrid, LaserScanner
+
+    app, url = prm_lab
+    page = browser_context.new_page()
+    page.bring_to_front()
+    page.set_default_timeout(SLOW)
+    try:
+        page.goto(url)
+        page.wait_for_selector("canvas.ejs2d-c[data-drawn]", timeout=SLOW)
+        hide_notifications(page)
+        wait_until(lambda: "/s/" in page.evaluate("location.href"), what="the tab's session address")
+        token = re.search(r"/s/([A-Za-z0-9_-]+)/", page.evaluate("location.href")).group(1)
+        lab = app.classroom.sessions[token].app
+        m = lab.model
+        box = page.locator("canvas.ejs2d-c").first.bounding_box()
+
+        def css(x: float, y: float) -> tuple[float, float]:
+            px, py = page.evaluate(f"window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], {x}, {y})")
+            return box["x"] + px, box["y"] + py
+
+        # drag the goal to the middle room's top: a new path ends there
+        page.mouse.move(*css(m.gx, m.gy))
+        page.mouse.down()
+        page.mouse.move(*css(15.0, 17.0), steps=6)
+        page.mouse.up()
+        wait_until(lambda: abs(m.gx - 15.0) < 0.1 and abs(m.gy - 17.0) < 0.1 and len(m.path) >= 2
+                   and np.hypot(*(np.asarray(m.path)[-1] - [m.gx, m.gy])) < 1e-9, what="a new path to the dragged goal")
+        page.keyboard.press("Space")
+        wait_until(lambda: lab.is_playing(), what="Space: play")
+        wait_until(lambda: m.t > 6.0, timeout=120, what="6 s of driving")
+        page.keyboard.press("Space")
+        wait_until(lambda: not lab.is_playing(), what="Space: pause")
+        pose, known = np.array(m.pose), np.array(m.known)
+        wait_until(lambda: page.evaluate("Object.values(window.__ejs2d.panels)[0].text").count(f"{m.seen} of 2400") > 0,
+                   what="the paused frame drawn")
+        shot = _pixels(page)
+
+        def rgb(x: float, y: float) -> np.ndarray:
+            u, v = css(x, y)
+            return shot[int(round(v)), int(round(u))]
+
+        # the vehicle: its fill (#a5d8ff) at the centroid of its triangle, ahead of the pose
+        c = pose[:2] + 0.2 / 3 * 1.2 * np.array([math.cos(pose[2]), math.sin(pose[2])])
+        r, g, b = rgb(*c)
+        assert b > 220 and r < 200 and abs(g - 216) < 40, (r, g, b)
+        # the laser: a red dot where each beam stops on a wall (an independent scanner)
+        scanner = LaserScanner(BinaryOccupancyGrid(np.asarray(m.walls), cellsize=0.5), n=61, fov=math.pi, max_range=8.0)
+        ranges = scanner.scan(pose)
+        a = pose[2] + scanner.angles
+        hits = [(pose[0] + d * math.cos(t), pose[1] + d * math.sin(t)) for d, t in zip(ranges, a) if d < 8.0]
+        assert len(hits) >= 5
+        red = [rgb(*h) for h in hits]
+        reddish = sum(1 for r, g, b in red if r > 180 and g < 140 and b < 140)
+        assert reddish >= 0.8 * len(hits), red
+        # the map: cells the laser has not seen grey (0.5: halfway from white to black), walls
+        # it has seen black (a few may lie under the roadmap's lines: most of them)
+        rows, cols = np.nonzero(known == 0.5)
+        centres = 0.5 * np.column_stack((cols, rows))
+        A, B = np.asarray(m.roadmap_a), np.asarray(m.roadmap_b)
+        clear = np.array([_far_from_segments(p, A, B, 0.35) for p in centres])  # not under a roadmap line
+        pick = np.flatnonzero(clear)[np.linspace(0, clear.sum() - 1, 20).astype(int)]
+        grey = [rgb(*centres[k]) for k in pick]
+        assert sum(1 for p in grey if np.abs(p - 128).max() < 20) >= 18, grey
+        rows, cols = np.nonzero(known == 1.0)
+        black = [rgb(0.5 * c, 0.5 * r) for r, c in zip(rows, cols)]
+        assert len(black) >= 10 and sum(1 for p in black if p.max() < 60) >= 0.7 * len(black), black[:10]
+        save_shot(page, "mobile_prm_laser")
+    finally:
+        page.close()
