@@ -40,11 +40,27 @@ def test_blurred_polygons_are_found_as_gftt_finds_them() -> None:
     assert given >= 0.75
 
 
-def test_a_blurred_checkerboards_corners_come_back() -> None:
-    rng = np.random.default_rng(21)
-    scenes = [bench.checkerboard(rng, 1.5, 2.0) for _ in range(3)]
-    assert _recall(scenes, susan_corners)[0] < 0.1  # the paper's mask alone loses them
-    assert _recall(scenes, lambda i: susan_corners(i, blur="auto"))[0] >= 0.4
+def _errors(scenes, det) -> float:
+    """The median distance (px) of the corners found within 1.5 px of a true one."""
+    d = [bench.score(np.asarray(det(img)).reshape(-1, 2), v)[2] for img, v in scenes]
+    return float(np.nanmedian(d))
+
+
+@pytest.mark.parametrize("noise", [1.0, 3.0])
+@pytest.mark.parametrize("blur", [0.8, 1.0, 1.25, 1.5])
+def test_blurred_noisy_checkerboards_are_found_as_gftt_and_cornersubpix_find_them(blur: float, noise: float) -> None:
+    """Boards of 24-36 px squares turned by up to 0.5 rad (a seed the bench never used), blurred
+    and noisy: SUSAN with blur='auto' finds their inner corners within 5 points of GFTT +
+    cornerSubPix asked for as many corners (the same precision, within 5 points), each within
+    0.3 px at the median."""
+    rng = np.random.default_rng(7)
+    scenes = [bench.checkerboard(rng, blur, noise) for _ in range(3)]
+    auto, prec = _recall(scenes, lambda i: susan_corners(i, blur="auto"))
+    gftt, gprec = _recall(scenes, lambda i: bench.gftt_refined(i, max(1, len(susan_corners(i, blur="auto")))))
+    assert auto >= gftt - 0.05 and prec >= gprec - 0.05, (auto, gftt, prec, gprec)
+    assert _errors(scenes, lambda i: susan_corners(i, blur="auto")) <= 0.3
+    if blur >= 1.25:  # the paper's mask alone loses most of them
+        assert _recall(scenes, susan_corners)[0] < auto - 0.3
 
 
 def test_sharp_pictures_are_searched_as_before() -> None:
@@ -62,3 +78,18 @@ def test_a_bad_blur_says_what_it_takes() -> None:
         susan_corners(img, blur="yes")
     with pytest.raises(ValueError, match=r"blur is the image's blur in pixels \(>= 0\)"):
         susan_corners(img, blur=-1)
+
+
+@pytest.mark.parametrize("blur", [1.0, 1.5])
+def test_rendered_boxes_with_the_cameras_blur_are_found_as_gftt_finds_them(blur: float) -> None:
+    """Boxes rendered by the virtual camera (anti-aliased, its blur and noise 2): every visible
+    vertex (the scene's ground truth) found within 5 points of GFTT + cornerSubPix at the same
+    count and precision, 0.3 px at the median (a seed the bench never used)."""
+    from ejsrl.world.rendering import Realism
+
+    rng = np.random.default_rng(7)
+    scenes = [bench.cubes(rng, Realism(antialias=3, blur=blur, noise=2.0)) for _ in range(3)]
+    auto, prec = _recall(scenes, lambda i: susan_corners(i, blur="auto"))
+    gftt, gprec = _recall(scenes, lambda i: bench.gftt_refined(i, max(1, len(susan_corners(i, blur="auto")))))
+    assert auto >= gftt - 0.05 and prec >= gprec - 0.05, (auto, gftt, prec, gprec)
+    assert _errors(scenes, lambda i: susan_corners(i, blur="auto")) <= 0.3

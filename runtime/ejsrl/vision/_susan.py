@@ -744,10 +744,11 @@ def susan_corners(
     ``blur``: the image's blur, for blurred pictures (a defocused or moving camera, a
     virtual camera's ``blur`` option): None (default) searches the image as it is; a number
     is the camera's blur sigma in pixels; ``"auto"`` reads it from the image
-    (``_susan_scale.estimate_blur``, ~1.5 ms at 640x480). When it reads above 1 px the mask
-    is widened in proportion (the image averaged down by 1.7 sigma, the corners brought back
-    and refined on the full image: see ``ejsrl.vision._susan_scale``); sharper images are
-    searched as with None.
+    (``_susan_scale.estimate_blur``, ~1.5 ms at 640x480). When it reads above 0.9 px the mask
+    is widened in proportion (the image averaged down by 1.7 sigma, the corners refined there,
+    brought back and refined on the full image in a window widened alike: see
+    ``ejsrl.vision._susan_scale``, with the recall it measures); sharper images are searched
+    as with None.
 
     The response is ``g - n`` where the USAN area ``n < g``. The false-positive tests
     (see ``_corner_tests``: the centroid and contiguity tests of the original, and a test
@@ -783,10 +784,14 @@ def susan_corners(
         _sigma, f = _susan_scale.blur_scale(gray, blur)
         if f > 1.0:
             opts = dict(g=g, nms_radius=nms_radius, quality=quality, min_response=min_response, max_corners=max_corners)
+            # refined where they were found, brought back, and refined again on the full image in
+            # the refinement's window widened by f (a 7 x 7 one sees only the middle of a blurred
+            # corner: boards at 1.5 px 0.38 px off, 0.10 so; rendered cubes 0.44 -> 0.27 px)
             pts, resp = _susan_scale.scaled_corners(
-                gray, f, lambda small: susan_corners(small, t, subpixel=False, return_response=True, **opts),
-                (lambda full, p: _refine(full, p, _kernels())) if subpixel else None,
+                gray, f, lambda small: susan_corners(small, t, subpixel=subpixel, return_response=True, **opts), None,
             )
+            if subpixel and len(pts):  # and on the full image, in a window widened as the mask was
+                pts = _refine(gray, np.floor(pts + 0.5), _kernels(), w=int(round(_REFINE_W * f)))
             return (pts, resp) if return_response else pts
     H, W = gray.shape
     gthr = 0.5 * len(SUSAN_MASK) if g is None else float(g)
@@ -1179,8 +1184,16 @@ _REFINE_D = np.arange(-_REFINE_W, _REFINE_W + 1)
 _REFINE_WQ = np.rint(64 * np.exp(-((_REFINE_D[:, None] / _REFINE_W) ** 2) - (_REFINE_D[None, :] / _REFINE_W) ** 2)).astype(np.int64)
 
 
-def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64], kernels: ModuleType | None) -> NDArray[np.float64]:
-    """Sub-pixel corners (N, 2) from the whole-pixel corners ``pts`` (N, 2), ``(x, y)``.
+@functools.lru_cache(maxsize=8)
+def _refine_weights(w: int) -> NDArray[np.int64]:
+    """(2w+1, 2w+1) int64: the refinement window's weights (``_REFINE_WQ`` for w = 3)."""
+    d = np.arange(-w, w + 1)
+    return np.rint(64 * np.exp(-((d[:, None] / w) ** 2) - (d[None, :] / w) ** 2)).astype(np.int64)
+
+
+def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64], kernels: ModuleType | None, w: int = _REFINE_W) -> NDArray[np.float64]:
+    """Sub-pixel corners (N, 2) from the whole-pixel corners ``pts`` (N, 2), ``(x, y)``, in windows of
+    (2w+1)^2 pixels (w = 3: 7 x 7; a blurred image's search widens it: ``susan_corners(blur=)``).
 
     Each corner moves to the point that best meets the lines through its window's pixels
     along their edges (Foerstner's corner: the least-squares point ``c`` with ``g . (p - c) = 0``
@@ -1199,17 +1212,18 @@ def _refine(gray: NDArray[np.uint8], pts: NDArray[np.float64], kernels: ModuleTy
     ``cornerSubPix`` (tests/vision/test_susan_accuracy.py).
     """
     out = np.empty_like(pts)
+    wq = _REFINE_WQ if w == _REFINE_W else _refine_weights(int(w))
     if kernels is not None:
         h = len(pts) // 2
-        halves = [(gray, part, _REFINE_WQ, _REFINE_MOVES, into) for part, into in ((pts[:h], out[:h]), (pts[h:], out[h:]))]
+        halves = [(gray, part, wq, _REFINE_MOVES, into) for part, into in ((pts[:h], out[:h]), (pts[h:], out[h:]))]
         _two(h >= 256 and susan_threads() > 1, kernels.refine, *halves)  # each corner on its own: the same either way
         return out
     H, W = gray.shape
-    w = _REFINE_W
-    f = gray.ravel().astype(np.int32)  # int32 products and sums (at most 49 * 64 * 255^2 * 6), int64 from the sums on
-    offs = (_REFINE_D[:, None] * W + _REFINE_D[None, :]).ravel()
-    m = _REFINE_WQ.ravel().astype(np.int32)
-    dx, dy = np.tile(_REFINE_D, 2 * w + 1).astype(np.int32), np.repeat(_REFINE_D, 2 * w + 1).astype(np.int32)
+    d = np.arange(-w, w + 1)
+    f = gray.ravel().astype(np.int32)  # int32 products (at most 64 * 255^2 * w), int64 sums
+    offs = (d[:, None] * W + d[None, :]).ravel()
+    m = wq.ravel().astype(np.int32)
+    dx, dy = np.tile(d, 2 * w + 1).astype(np.int32), np.repeat(d, 2 * w + 1).astype(np.int32)
     x0, y0 = pts[:, 0].astype(np.int64), pts[:, 1].astype(np.int64)
     cx, cy = x0.copy(), y0.copy()
     out[:] = pts
