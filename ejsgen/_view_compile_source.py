@@ -22,7 +22,7 @@ from ejsgen.errors import SpecError
 if TYPE_CHECKING:
     from ejsgen._view_compile import ViewCompiler
 
-__all__ = ["compile_source", "VIDEO_SUFFIXES"]
+__all__ = ["VIDEO_SUFFIXES", "compile_source"]
 
 #: video files a camera's ``source`` may name (what OpenCV's FFmpeg back end reads)
 VIDEO_SUFFIXES = (".mp4", ".avi", ".mkv", ".mov", ".webm", ".m4v", ".mpg", ".mpeg", ".wmv", ".ogv")

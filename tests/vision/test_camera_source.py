@@ -16,30 +16,7 @@ from ejsgen.cli import build
 from ejsgen.errors import SpecErrors
 from ejsrl.app import load_app
 from testkit.labs import headless
-
-W, H, N, FPS = 160, 120, 24, 12.0
-
-
-def _frame(i: int) -> np.ndarray:
-    """BGR frame i: a white 20 px square whose left edge is at x = 10 + 4 i, on dark blue."""
-    img = np.zeros((H, W, 3), np.uint8)
-    img[:] = (90, 20, 10)
-    img[50:70, 10 + 4 * i : 30 + 4 * i] = 255
-    return img
-
-
-def _true_x(i: int, scale: float = 1.0) -> float:
-    """The square's centre column in frame i, in an image ``scale`` times the video's width."""
-    return (10 + 4 * i + 10) * scale - 0.5
-
-
-def _write_video(path: Path) -> Path:
-    out = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), FPS, (W, H))
-    assert out.isOpened()
-    for i in range(N):
-        out.write(_frame(i))
-    out.release()
-    return path
+from testkit.video import FPS, N, W, frame, true_x, write_video
 
 
 def _lab(folder: Path, source: str, resolution: str = "[160, 120]") -> Path:
@@ -70,13 +47,13 @@ def _lab(folder: Path, source: str, resolution: str = "[160, 120]") -> Path:
 
 
 def test_a_camera_element_reads_a_video_at_the_simulation_time_in_each_session(tmp_path: Path) -> None:
-    _write_video(tmp_path / "clip.avi")
+    write_video(tmp_path / "clip.avi")
     app = build(_lab(tmp_path, "clip.avi"), tmp_path / "app")
     assert (tmp_path / "app" / "clip.avi").is_file()  # the video travels with the app
     d = headless(app, 1.0, vars="t,x,w")
     frames = np.rint(d["t"][1:] * FPS).astype(int) - 1  # x is measured before t advances
     assert len(frames) == 12 and (d["w"][1:] == W).all()
-    np.testing.assert_allclose(d["x"][1:], [_true_x(i) for i in frames], atol=0.3)
+    np.testing.assert_allclose(d["x"][1:], [true_x(i) for i in frames], atol=0.3)
     # served: every tab's session (an App as the classroom makes them) reads its own video
     first = load_app(app)
     second = type(first)(first.model_cls, first.view, sim=first.sim, meta=first.meta, base_dir=first.base_dir)
@@ -84,7 +61,7 @@ def test_a_camera_element_reads_a_video_at_the_simulation_time_in_each_session(t
         first.step_once()
     second.step_once()
     assert first.error is None and second.error is None
-    assert first.model.x == pytest.approx(_true_x(5), abs=0.3) and second.model.x == pytest.approx(_true_x(0), abs=0.3)
+    assert first.model.x == pytest.approx(true_x(5), abs=0.3) and second.model.x == pytest.approx(true_x(0), abs=0.3)
     assert first._camera_sources is not second._camera_sources
     # the camera's frame is what the image element shows; a real source has no depth image
     np.testing.assert_array_equal(first.capture("cam"), cv2.cvtColor(_decoded(tmp_path / "clip.avi", 6), cv2.COLOR_BGR2RGB))
@@ -104,13 +81,13 @@ def _decoded(path: Path, i: int) -> np.ndarray:
 def test_an_image_folder_resized_to_the_cameras_resolution(tmp_path: Path) -> None:
     (tmp_path / "frames").mkdir()
     for i in range(N):
-        cv2.imwrite(str(tmp_path / "frames" / f"f{i:03d}.png"), _frame(i))
+        cv2.imwrite(str(tmp_path / "frames" / f"f{i:03d}.png"), frame(i))
     app = build(_lab(tmp_path, "frames", "[320, 240]"), tmp_path / "app")
     d = headless(app, 0.5, vars="t,x,w")
     # an image sequence runs at 30 frames a second: x is measured at t - dt, in frame floor(30 (t - dt))
     frames = np.floor((d["t"][1:] - 1 / 12) * 30 + 1e-6).astype(int)
     assert (d["w"][1:] == 320).all()
-    np.testing.assert_allclose(d["x"][1:], [_true_x(i % N, 2.0) for i in frames], atol=0.6)
+    np.testing.assert_allclose(d["x"][1:], [true_x(i % N, 2.0) for i in frames], atol=0.6)
 
 
 @pytest.mark.parametrize(("source", "message"), [
@@ -121,7 +98,7 @@ def test_an_image_folder_resized_to_the_cameras_resolution(tmp_path: Path) -> No
     ("'frames/*.png'", r"lab.ejs.yaml:20:\d+: error: .*no image files match 'frames/\*.png'"),
 ])
 def test_bad_sources_are_build_errors_at_their_place(tmp_path: Path, source: str, message: str) -> None:
-    _write_video(tmp_path / "clip.avi")
+    write_video(tmp_path / "clip.avi")
     (tmp_path / "notes.txt").write_text("not a video")
     with pytest.raises(SpecErrors, match=message):
         build(_lab(tmp_path, source), tmp_path / "app")

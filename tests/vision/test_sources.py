@@ -14,31 +14,12 @@ import pytest
 from ejsrl.vision import Pipeline, centroid
 from ejsrl.vision.sources import ImageSource
 from testkit.labs import headless
-
-W, H, N, FPS = 160, 120, 24, 12.0
-
-
-def _frame(i: int) -> np.ndarray:
-    """BGR frame i: a white 20 px square whose left edge is at x = 10 + 4 i, on dark blue."""
-    img = np.zeros((H, W, 3), np.uint8)
-    img[:] = (90, 20, 10)  # BGR: dark blue
-    img[50:70, 10 + 4 * i : 30 + 4 * i] = 255
-    return img
-
-
-def _true_x(i: int) -> float:
-    return 10 + 4 * i + 9.5  # the square's centre column
+from testkit.video import FPS, H, N, W, frame, true_x, write_video
 
 
 @pytest.fixture()
 def video(tmp_path: Path) -> Path:
-    path = tmp_path / "clip.avi"
-    out = cv2.VideoWriter(str(path), cv2.VideoWriter_fourcc(*"MJPG"), FPS, (W, H))
-    assert out.isOpened()
-    for i in range(N):
-        out.write(_frame(i))
-    out.release()
-    return path
+    return write_video(tmp_path / "clip.avi")
 
 
 def _x_of(rgb: np.ndarray) -> float:
@@ -54,17 +35,17 @@ def test_a_video_file_goes_through_the_pipeline_frame_by_frame(video: Path) -> N
         rgb = src.read()
         assert rgb.shape == (H, W, 3) and rgb.dtype == np.uint8
         xs.append(_x_of(rgb))
-    np.testing.assert_allclose(xs, [_true_x(i) for i in range(N)], atol=0.3)
+    np.testing.assert_allclose(xs, [true_x(i) for i in range(N)], atol=0.3)
     # RGB, not OpenCV's BGR: the background is blue
     assert tuple(int(c) for c in src.read()[5, 5]) == pytest.approx((10, 20, 90), abs=6)
     # it looped: that last read was frame 0 again; frame_at follows the clock (12 fps)
-    assert _x_of(src.frame_at(1.0)) == pytest.approx(_true_x(12), abs=0.3)
-    assert _x_of(src.frame_at(0.25)) == pytest.approx(_true_x(3), abs=0.3)
-    assert _x_of(src.frame_at(2.5)) == pytest.approx(_true_x(30 % N), abs=0.3)
+    assert _x_of(src.frame_at(1.0)) == pytest.approx(true_x(12), abs=0.3)
+    assert _x_of(src.frame_at(0.25)) == pytest.approx(true_x(3), abs=0.3)
+    assert _x_of(src.frame_at(2.5)) == pytest.approx(true_x(30 % N), abs=0.3)
     # each source reads on its own (one per session): a second one starts at frame 0
     other = ImageSource(video, loop=False, size=(80, 60))
     assert other.read().shape == (60, 80, 3)
-    assert _x_of(src.read()) == pytest.approx(_true_x(7), abs=0.3)  # src went on from frame 6
+    assert _x_of(src.read()) == pytest.approx(true_x(7), abs=0.3)  # src went on from frame 6
     for _ in range(N - 1):
         other.read()
     with pytest.raises(EOFError, match="has no more frames"):
@@ -75,11 +56,11 @@ def test_an_image_sequence_reads_in_name_order(tmp_path: Path) -> None:
     folder = tmp_path / "frames"
     folder.mkdir()
     for i in (3, 0, 2, 1):  # written out of order
-        cv2.imwrite(str(folder / f"f{i:03d}.png"), _frame(i))
+        cv2.imwrite(str(folder / f"f{i:03d}.png"), frame(i))
     (folder / "notes.txt").write_text("not an image")
     for src in (ImageSource(folder), ImageSource(str(folder / "*.png"))):
         assert src.kind == "images" and src.frame_count == 4
-        assert [_x_of(src.read()) for _ in range(5)] == pytest.approx([_true_x(i) for i in (0, 1, 2, 3, 0)], abs=1e-9)
+        assert [_x_of(src.read()) for _ in range(5)] == pytest.approx([true_x(i) for i in (0, 1, 2, 3, 0)], abs=1e-9)
 
 
 def test_missing_devices_and_files_say_what_to_do(tmp_path: Path) -> None:
@@ -123,7 +104,7 @@ def test_a_built_app_reads_its_video_asset_each_step(video: Path, tmp_path: Path
     d = headless(app, 1.0, vars="t,x")
     frames = np.rint(d["t"][1:] * FPS).astype(int) - 1  # row 0 is the start; x is measured before t advances
     assert len(frames) == 12
-    np.testing.assert_allclose(d["x"][1:], [_true_x(i % N) for i in frames], atol=0.3)
+    np.testing.assert_allclose(d["x"][1:], [true_x(i % N) for i in frames], atol=0.3)
     # served, every tab's session is an App made as the classroom makes them: each reads its own source
     from ejsrl.app import load_app
 
@@ -133,5 +114,5 @@ def test_a_built_app_reads_its_video_asset_each_step(video: Path, tmp_path: Path
     for _ in range(5):
         first.step_once()
     second.step_once()
-    assert first.model.x == pytest.approx(_true_x(4), abs=0.3) and second.model.x == pytest.approx(_true_x(0), abs=0.3)
+    assert first.model.x == pytest.approx(true_x(4), abs=0.3) and second.model.x == pytest.approx(true_x(0), abs=0.3)
     assert first.model.src.index == 5 and second.model.src.index == 1  # the next frame each would read

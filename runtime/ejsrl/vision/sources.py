@@ -37,7 +37,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["ImageSource", "IMAGE_SUFFIXES", "CameraSources"]
+__all__ = ["IMAGE_SUFFIXES", "CameraSources", "ImageSource"]
 
 #: image files a folder source reads
 IMAGE_SUFFIXES: tuple[str, ...] = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm")

@@ -56,7 +56,7 @@ def marker_decals(
     src: list[int] = []
     bary: list[NDArray[np.float64]] = []
     for f in faces:
-        k = int(round(coords[f, 0, 2])) - 1
+        k = round(coords[f, 0, 2]) - 1
         if k < 0:
             continue
         bits = bitmaps[k]
