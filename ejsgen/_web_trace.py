@@ -1,0 +1,93 @@
+"""Which modules a built lab loads: the list a web build trims the standard library zip to.
+
+:func:`traced_modules` runs the lab natively in a child process, as the browser will: the
+packages a browser lacks are made unimportable first (:data:`HIDDEN`, so the runtime's
+stand-ins of :mod:`ejsrl.web._absent` are what loads), then the page's lab is made
+(:class:`ejsrl.web.lab.WebLab`), its client's first camera message handled, a few frames played
+and a one-second headless run made. The names in ``sys.modules`` afterwards are the answer. Every top-level package the browser's
+Python does not have (neither in its zip nor in the lab) is unimportable in that run.
+
+The browser's Python (3.15, NumPy 2.5, SciPy 1.18) is newer than this one, so the zip keeps
+whole packages where a module of them was loaded, and a safety list
+(:data:`ejsgen._web_stdlib.ALWAYS`) of what newer CPython modules import on their own.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+__all__ = ["traced_modules", "HIDDEN", "TraceError"]
+
+#: packages the browser's Python does not have: hidden from the traced run
+HIDDEN = ("msgspec", "websockets", "zstandard", "rich", "cv2", "ssl", "_ssl")
+
+_SCRIPT = r"""
+import importlib.abc, importlib.util, json, os, sys
+hidden = set(json.loads(os.environ["EJSWEB_HIDDEN"]))
+there = set(json.loads(os.environ["EJSWEB_THERE"])) | set(sys.stdlib_module_names)
+def absent(name):
+    top = name.split(".")[0]
+    return top in hidden or top not in there
+_find = importlib.util.find_spec
+def find_spec(name, package=None):
+    if absent(name):
+        return None
+    return _find(name, package)
+importlib.util.find_spec = find_spec
+class Hide(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if absent(name):
+            for finder in sys.meta_path:
+                if type(finder).__name__ == "_Absent":
+                    spec = finder.find_spec(name)
+                    if spec is not None:
+                        return spec
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
+for name in [m for m in sys.modules if absent(m)]:
+    del sys.modules[name]
+sys.meta_path.insert(0, Hide())
+sys.path.insert(0, os.environ["EJSWEB_LAB"])
+io_dir = os.environ["EJSWEB_IO"]
+from ejsrl.web import lab as L
+L.INBOX, L.OUTBOX = os.path.join(io_dir, "inbox"), os.path.join(io_dir, "outbox")
+lab = L.open_lab("app", lab_dir=os.environ["EJSWEB_LAB"])
+lab.frame()
+from ejsrl.web import _msgpack
+camera = {"type": "ViewerCameraMessage", "wxyz": [1.0, 0.0, 0.0, 0.0], "position": [3.0, 3.0, 3.0],
+          "image_height": 600, "image_width": 800, "fov": 1.0, "near": 0.01, "far": 1000.0,
+          "look_at": [0.0, 0.0, 0.0], "up_direction": [0.0, 0.0, 1.0]}
+raw = _msgpack.encode(camera)
+with open(L.INBOX, "wb") as f:
+    f.write(len(raw).to_bytes(4, "little") + raw)
+lab.frame()
+lab.app.play()
+for _ in range(10):
+    lab.frame()
+L.headless_csv(lab.module, 0.2, path=os.path.join(io_dir, "run.csv"))
+print("\x1e" + json.dumps(sorted(sys.modules)))
+"""
+
+
+class TraceError(RuntimeError):
+    """The lab could not be run natively to find what it imports."""
+
+
+def traced_modules(lab_dir: Path, io_dir: Path, there: list[str], *, timeout: float = 300.0) -> list[str]:
+    """The names of the modules the lab in ``lab_dir`` (a built app folder with ``app.py``)
+    loads when it runs as a web page; ``io_dir``: a scratch folder for its files; ``there``:
+    the top-level packages the browser's Python has besides the standard library (the zip's
+    and the lab's): any other is made unimportable for the run, as it is in the browser."""
+    io_dir.mkdir(parents=True, exist_ok=True)
+    env = dict(os.environ, EJSWEB_HIDDEN=json.dumps(HIDDEN), EJSWEB_THERE=json.dumps(sorted(there)),
+               EJSWEB_LAB=str(lab_dir), EJSWEB_IO=str(io_dir),
+               PYTHONDONTWRITEBYTECODE="1")
+    done = subprocess.run([sys.executable, "-c", _SCRIPT], env=env, capture_output=True, text=True, timeout=timeout,
+                          cwd=str(io_dir), check=False)
+    for line in reversed(done.stdout.split("\n")):  # not splitlines(): it splits at \x1e too
+        if line.startswith("\x1e"):
+            return list(json.loads(line[1:]))
+    raise TraceError(f"running the lab to find its imports failed:\n{done.stderr[-3000:]}")
