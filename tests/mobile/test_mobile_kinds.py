@@ -234,3 +234,34 @@ def test_the_3d_kinds_put_the_vehicle_scan_grid_path_ellipse_and_particles_on_th
     e = w.nodes["unc"].props["points"][:, :2] - x[:2]
     m2 = np.einsum("ij,jk,ik->i", e, np.linalg.inv(4 * np.diag([0.2, 0.1])), e)
     np.testing.assert_allclose(m2, -2 * math.log(0.5), rtol=1e-9)
+
+
+def test_the_browser_mirror_draws_the_3d_kinds_and_moves_the_vehicle_by_its_pose(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """viser's scene (what the browser is sent): a mesh for the vehicle and the grid, lines
+    for the scan, path and ellipse, a point cloud; a new pose moves the vehicle's frame
+    and sends no new mesh."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from ejsrl.view._scene_mirror import SceneMirror
+    from ejsrl.view.viser_view import make_server
+
+    spec = tmp_path / "scene.ejs.yaml"
+    spec.write_text(SCENE)
+    app = load_app(build(spec, tmp_path / "app"))
+    server, _url = make_server("127.0.0.1", 0)
+    try:
+        mirror = SceneMirror(server.scene)
+        app.play()
+        app.frame()
+        mirror.sync(app.scene.world)
+        kinds = {n: type(mirror._nodes[n].geoms[0]).__name__ for n in ("car", "scan", "map", "route", "unc", "cloud")}
+        assert kinds["cloud"] == "PointCloudHandle" and "Mesh" in kinds["car"] and "Mesh" in kinds["map"], kinds
+        assert all("Line" in kinds[n] or "Spline" in kinds[n] for n in ("scan", "route", "unc")), kinds
+        created = mirror.counters["create"]
+        app.frame()
+        mirror.sync(app.scene.world)
+        x = np.array(app.model.x)
+        assert mirror._nodes["car"].frame.position == pytest.approx((x[0], x[1], 0.0))
+        assert mirror.counters["create"] == created and mirror.counters["geometry"] == 0
+    finally:
+        server.stop()
