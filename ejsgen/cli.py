@@ -137,6 +137,13 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_build(args: argparse.Namespace) -> int:
+    if args.web:  # a static web page that runs the lab in the browser (ejsgen._web_build, specs/web.md)
+        from ejsgen._web_build import build_web
+
+        site = build_web(args.spec, args.output or f"{default_out_dir(Path(args.spec))}-web")
+        print(f"built {site.out} in {site.seconds:.1f} s: a web page, {site.download_bytes / 1e6:.1f} MB for a first "
+              f"visit; try it: python -m http.server -d {shlex.quote(str(site.out))} 8000")
+        return 0
     start = time.perf_counter()
     out = build(args.spec, args.output, bundle=args.bundle)
     took = time.perf_counter() - start
@@ -269,6 +276,8 @@ def _parser(sweep: bool = True) -> argparse.ArgumentParser:
     b.add_argument("spec", metavar="SPEC")
     b.add_argument("-o", "--output", metavar="DIR", help="output folder (default dist/NAME)")
     b.add_argument("--bundle", action="store_true", help="also write a single-file NAME.pyz that carries the runtime")
+    b.add_argument("--web", action="store_true",
+                   help="build a static web page that runs the lab in the browser, no server (needs ejsgen[web]; default DIR dist/NAME-web)")
     r = sub.add_parser(
         "run",
         help="build a spec and run the app; other options go to the app",
