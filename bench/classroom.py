@@ -10,8 +10,9 @@ the handshake (subprotocol, camera message), read and decode every message, and 
 Play on their own session. Over ``--seconds`` we measure, per student, the display frames
 delivered (the time readout's updates) and the simulated time per wall second over what
 the lab asks for (1.0 = full rate); on the server, its CPU seconds per session-second and
-its RSS. N goes up a ladder until a step fails (some student below 25 frames/s or below
-0.95 of the asked rate). Unless ``--no-browser``, one real Chromium page then opens the
+per frame sent, and its RSS. N goes up a ladder until a step fails (some student below 25 frames/s or below
+0.95 of the asked rate); the last line sets the largest N held beside the ``--max-sessions``
+the app would take by default (measured as it measures it at start). Unless ``--no-browser``, one real Chromium page then opens the
 lab, presses Play and reads its own time readout twice (the rate it shows).
 
 The students' clients run in this process, the server in its own: on a 2-core machine
@@ -230,6 +231,18 @@ def lab_settings(app_dir: Path) -> tuple[float, float]:
     return fps, pace
 
 
+def default_places(app_dir: Path, processes: int) -> tuple[int, float]:
+    """(places, frame seconds): the ``--max-sessions`` the app would take by default when served
+    from ``processes`` copies, as each copy measures it at start (``ejsrl.app._capacity``), and
+    the measured frame it comes from."""
+    from ejsrl.app import load_app
+    from ejsrl.app._capacity import default_max_sessions, measure_frame_cost
+
+    app = load_app(app_dir)
+    cost = measure_frame_cost(app)
+    return processes * default_max_sessions(cost, float(app.sim.fps), cpus=1.0), cost
+
+
 def chromium_check(port: int, seconds: float = 4.0) -> str:
     """One real page joins, presses Play, and reads its own time readout twice."""
     from playwright.sync_api import sync_playwright
@@ -269,6 +282,8 @@ def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser
         # first one (viser's page, compressors, the lab's meshes); the memory of an extra
         # session is measured from here
         processes = max(1, len(server.pids()) - 1)
+        default, frame_cost = default_places(app_dir, processes)
+        cost_load = os.getloadavg()[0]
         asyncio.run(_measure(server.port, processes, 1.0, server, pace, fps))
         time.sleep(2.5)
         one_rss = server.rss_mb()
@@ -280,13 +295,15 @@ def run_lab(name: str, sizes: list[int], seconds: float, out_root: Path, browser
             best = n if ok else best
             print(f"   N={n:3d}: fps min {min(r['fps']):5.1f} median {sorted(r['fps'])[n // 2]:5.1f}; rate min {min(r['rate']):.2f} "
                   f"median {sorted(r['rate'])[n // 2]:.2f}; server CPU {r['cpu']:.2f} cores = {1000 * r['cpu'] / n:.1f} ms per "
-                  f"session-second ({' + '.join(f'{c:.2f}' for c in r['each'])} by process; students' clients {r['students_cpu']:.2f} cores); RSS {r['rss']:.0f} MB, {(r['rss'] - one_rss) / n:.1f} MB per extra session; "
+                  f"session-second, {1000 * r['cpu'] / max(sum(r['fps']), 1e-9):.2f} ms per frame sent "
+                  f"({' + '.join(f'{c:.2f}' for c in r['each'])} by process; students' clients {r['students_cpu']:.2f} cores); RSS {r['rss']:.0f} MB, {(r['rss'] - one_rss) / n:.1f} MB per extra session; "
                   f"load {r['load']:.1f}, Python speed {python_speed():.2f} s  {'HELD' if ok else 'NOT HELD'}", flush=True)
             time.sleep(2.5)  # the sessions are freed (--grace 1)
             if not ok:
                 break
         met = "MET" if best >= TARGETS[name] else "NOT MET"
-        print(f"   largest N at full rate: {best} (target {TARGETS[name]}): {met}", flush=True)
+        print(f"   largest N at full rate: {best} (target {TARGETS[name]}): {met}; the app's default --max-sessions "
+              f"here: {default} (a measured frame of {1000 * frame_cost:.2f} ms, load {cost_load:.1f})", flush=True)
         if browser:  # one real page, alone on the server (its readout says if it runs slow)
             print("   " + chromium_check(server.port), flush=True)
         print(f"   after everyone left: RSS {server.rss_mb():.0f} MB", flush=True)
