@@ -11,7 +11,7 @@ kinds of the same names (:mod:`ejsrl.world.kinds`).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING, Any, Union
+from typing import TYPE_CHECKING, Any, Callable, Union
 
 from pydantic import Field
 
@@ -127,11 +127,18 @@ MOBILE_PROPS = {"pose", "length", "breadth", "footprint", "ranges", "angles", "f
                 "cellsize", "origin", "points", "covariance", "confidence", "scale"}
 
 
-def _shape_of(vc: "ViewCompiler", path: "Path_", what: str) -> tuple[bool, tuple[int, ...] | None]:
+def _expression(vc: "ViewCompiler", value: str, path: "Path_", what: str, fits: Callable[[tuple[int, ...]], bool],
+                need: str, hint: Callable[[tuple[int, ...]], str]) -> Any:
+    """An expression property (``E.Dynamic``) whose shape, when known, ``fits``; else the
+    error '{what} must be {need}, but ... has shape ...' with ``hint(shape)``; None after an error."""
     res = vc.c.expr_source(path, what)
     if res is None:
-        return False, None
-    return True, infer_shape(res[1], vc.c.var_shapes)
+        return None
+    shape = infer_shape(res[1], vc.c.var_shapes)
+    if shape is not None and not fits(shape):
+        vc.c.errors.append(SpecError(vc.c.loc(path), f"{what} must be {need}, but '{value}' has shape {shape}", hint(shape)))
+        return None
+    return vc.dynamic(path, "", what, value)
 
 
 def compile_prop(vc: "ViewCompiler", kind: str, prop: str, value: Any, path: "Path_", what: str) -> tuple[bool, Any]:
@@ -157,34 +164,16 @@ def compile_prop(vc: "ViewCompiler", kind: str, prop: str, value: Any, path: "Pa
         return True, vc.vector(value, path, "", what, 2)
     if prop in ("ranges", "angles"):
         if isinstance(value, str):
-            ok, shape = _shape_of(vc, path, what)
-            if not ok:
-                return True, None
-            if shape is not None and len(shape) != 1:
-                c.errors.append(SpecError(c.loc(path), f"{what} must be a vector (n,), one per beam, but '{value}' has shape {shape}",
-                                          "a scan's ranges: scanner.scan(x), shape (n,)"))
-                return True, None
-            return True, vc.dynamic(path, "", what, value)
+            return True, _expression(vc, value, path, what, lambda sh: len(sh) == 1, "a vector (n,), one per beam",
+                                     lambda sh: "a scan's ranges: scanner.scan(x), shape (n,)")
         return True, vc.vector(value, path, "", what, None)
     if prop == "grid":
-        ok, shape = _shape_of(vc, path, what)
-        if not ok:
-            return True, None
-        if shape is not None and len(shape) != 2:
-            c.errors.append(SpecError(c.loc(path), f"{what} must be an occupancy grid or an H x W array, but '{value}' has shape {shape}",
-                                      "BinaryOccupancyGrid(array, cellsize=..., origin=...) from ejsrl.mobile, or a 2-D array"))
-            return True, None
-        return True, vc.dynamic(path, "", what, value)
+        return True, _expression(vc, value, path, what, lambda sh: len(sh) == 2, "an occupancy grid or an H x W array",
+                                 lambda sh: "BinaryOccupancyGrid(array, cellsize=..., origin=...) from ejsrl.mobile, or a 2-D array")
     if prop == "covariance":
         if isinstance(value, str):
-            ok, shape = _shape_of(vc, path, what)
-            if not ok:
-                return True, None
-            if shape is not None and not (len(shape) == 2 and shape[0] == shape[1] and shape[0] >= 2):
-                c.errors.append(SpecError(c.loc(path), f"{what} must be a square covariance matrix, 2 x 2 or larger, but '{value}' has shape {shape}",
-                                          "an EKF's: ekf.P_est (its top-left 2 x 2 is drawn)"))
-                return True, None
-            return True, vc.dynamic(path, "", what, value)
+            return True, _expression(vc, value, path, what, lambda sh: len(sh) == 2 and sh[0] == sh[1] >= 2,
+                                     "a square covariance matrix, 2 x 2 or larger", lambda sh: "an EKF's: ekf.P_est (its top-left 2 x 2 is drawn)")
         if not (isinstance(value, list) and len(value) >= 2 and all(isinstance(r, list) and len(r) == len(value) for r in value)):
             c.errors.append(SpecError(c.loc(path), f"{what} must be a square matrix [[sxx, sxy], [sxy, syy]] or an expression"))
             return True, None
@@ -193,14 +182,8 @@ def compile_prop(vc: "ViewCompiler", kind: str, prop: str, value: Any, path: "Pa
     cols = (2,) if prop == "footprint" else (2, 3)
     need = "an N x 2 array of [x, y] rows" if cols == (2,) else "an N x 2 (positions) or N x 3 (poses) array"
     if isinstance(value, str):
-        ok, shape = _shape_of(vc, path, what)
-        if not ok:
-            return True, None
-        if shape is not None and not (len(shape) == 2 and shape[1] in cols):
-            hint = "a 2 x N array: transpose it with .T" if len(shape) == 2 and shape[0] in cols else ""
-            c.errors.append(SpecError(c.loc(path), f"{what} must be {need}, but '{value}' has shape {shape}", hint))
-            return True, None
-        return True, vc.dynamic(path, "", what, value)
+        return True, _expression(vc, value, path, what, lambda sh: len(sh) == 2 and sh[1] in cols, need,
+                                 lambda sh: "a 2 x N array: transpose it with .T" if len(sh) == 2 and sh[0] in cols else "")
     widths = {len(r) for r in value}
     if len(widths) != 1 or not widths <= set(cols):
         c.errors.append(SpecError(c.loc(path), f"{what} must be {need}: every row [x, y]" + ("" if cols == (2,) else " or [x, y, theta]")))

@@ -141,9 +141,11 @@ class PathNode(_Derived):
     SOURCES = ("path", "z")
 
     def _points(self) -> np.ndarray:
-        if self.props.get("path") is None:
+        """The rows of the node's array property (its first source) at ``z``."""
+        rows = self.props.get(self.SOURCES[0])
+        if rows is None:
             return np.zeros((0, 3))
-        return _lift(_xy(self.props["path"], "a path"), float(self.props["z"]))
+        return _lift(_xy(rows, f"a {self.kind}'s {self.SOURCES[0]}"), float(self.props["z"]))
 
 
 class EllipseNode(_Derived):
@@ -167,16 +169,11 @@ class EllipseNode(_Derived):
         return _lift(ellipse_points(s * s * P[:2, :2], c, confidence=float(p["confidence"])), float(p["z"]))
 
 
-class ParticlesNode(_Derived):
+class ParticlesNode(PathNode):
     """A point at each row of ``particles`` (N x 2 or N x 3 poses), ``z`` above the plane."""
 
     kind = "particles"
     SOURCES = ("particles", "z")
-
-    def _points(self) -> np.ndarray:
-        if self.props.get("particles") is None:
-            return np.zeros((0, 3))
-        return _lift(_xy(self.props["particles"], "particles"), float(self.props["z"]))
 
 
 class OccupancyNode(Node):
