@@ -25,7 +25,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ejsrl.plant._creds import Credentials
-from ejsrl.plant._mqtt import make_client
+from ejsrl.plant._mqtt import json_object, make_client, no_delay
 from ejsrl.plant._video import PlantClock, VideoFrame, parse_frame
 
 __all__ = ["PlantLink", "LinkBase", "Limits"]
@@ -231,7 +231,7 @@ class PlantLink(LinkBase):
         with self._lock:
             self._seq += 1
             seq = self._seq
-            self._sent = {k: v for k, v in self._sent.items() if k > seq - 100}
+            self._sent.pop(seq - 100, None)     # an ack that never came is forgotten after 100 commands
             self._sent[seq] = time.perf_counter()
         msg: dict[str, Any] = {"epoch": st["epoch"], "seq": seq, "t": self._sent[seq], "q": qa.tolist()}
         if gripper is not None:
@@ -261,6 +261,7 @@ class PlantLink(LinkBase):
                 self._changed.notify_all()
             return
         self._refused = False
+        no_delay(client)
         topics = [(f"{self.prefix}/state", 0), (f"{self.prefix}/online", 1)]
         client.subscribe(topics + ([(f"{self.prefix}/video", 0)] if self.video_wanted else []))
         with self._lock:
@@ -293,11 +294,8 @@ class PlantLink(LinkBase):
                 self._changed.notify_all()
             return
         now, arrived = time.perf_counter(), time.monotonic()
-        try:
-            st = json.loads(msg.payload)
-        except (ValueError, UnicodeDecodeError):
-            return
-        if not isinstance(st, dict):
+        st = json_object(msg.payload, 1 << 16)
+        if st is None:
             return
         with self._lock:
             ack = st.get("ack") or {}

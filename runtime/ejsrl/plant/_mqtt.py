@@ -11,6 +11,7 @@ that the plant is gone).
 from __future__ import annotations
 
 import json
+import socket
 import threading
 import time
 from typing import TYPE_CHECKING, Any
@@ -21,7 +22,7 @@ from ._creds import Credentials
 if TYPE_CHECKING:
     from ._camera import PlantCamera
 
-__all__ = ["MqttPlant", "import_paho"]
+__all__ = ["MqttPlant", "import_paho", "make_client", "json_object", "no_delay"]
 
 
 def import_paho() -> Any:
@@ -31,6 +32,29 @@ def import_paho() -> Any:
     except ImportError as e:  # pragma: no cover - the hint is the point
         raise ImportError("the MQTT transport needs paho-mqtt: python3 -m pip install 'ejsgen[plant]'") from e
     return mqtt
+
+
+def json_object(payload: bytes, limit: int) -> dict[str, Any] | None:
+    """The JSON object in a message of at most ``limit`` bytes, or None (too long, not JSON, not an object)."""
+    if len(payload) > limit:
+        return None
+    try:
+        data = json.loads(payload)
+    except (ValueError, UnicodeDecodeError):
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def no_delay(client: Any) -> None:
+    """Send each message at once (TCP_NODELAY): with Nagle's algorithm a small message waits for
+    the broker's acknowledgement of the one before it, which Linux delays up to 40 ms; the plant's
+    50 Hz state made 1-2 % of the command round trips 40 ms long. Call it on every connect."""
+    sock = client.socket()
+    if sock is not None:
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        except OSError:  # pragma: no cover - not a TCP socket (a websocket transport)
+            pass
 
 
 def make_client(client_id: str, creds: Credentials) -> Any:
@@ -96,6 +120,7 @@ class MqttPlant:
     def _on_connect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
         if reason.is_failure:
             return
+        no_delay(client)
         p = self.prefix
         client.subscribe([(f"{p}/cmd", 0), (f"{p}/lease", 0), (f"{p}/heartbeat", 0), (f"{p}/estop", 0)])
         client.publish(f"{p}/online", "1", qos=1, retain=True)
@@ -103,13 +128,8 @@ class MqttPlant:
         self.connected.set()
 
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
-        if len(msg.payload) > 4096:
-            return
-        try:
-            data = json.loads(msg.payload)
-        except (ValueError, UnicodeDecodeError):
-            return
-        if not isinstance(data, dict):
+        data = json_object(msg.payload, 4096)
+        if data is None:
             return
         kind = msg.topic.rsplit("/", 1)[-1]
         session = str(data.get("session", ""))
