@@ -11,6 +11,8 @@ with a check that both give the same answer first.
 - EKF localisation and EKF-SLAM, 100 s at 10 Hz (1,000 steps, 20 landmarks) with the same
   seeds: the final estimates must be equal;
 - PRM (300 points) on the house: random on both sides, compared by path length;
+- the lattice planner on a 40 x 40 cell sample of the house (the whole lattice, then 20
+  queries): the path costs must be equal;
 - pose-graph optimisation of the Toolbox's killian-small.toro: the optimised poses compared;
 - a particle filter (1,000 particles, uniform start, 20 s): random, so compared by the
   median final error over seeds;
@@ -148,6 +150,37 @@ def main() -> None:
     r = report("PRM, house, kitchen -> br3 (plan + query)", res,
                f"path lengths {lr:.1f} m and {lo:.1f} m (the grid's shortest: {M.path_length(path_o):.1f} m)")
     met += [(r > 1, f"PRM faster: {r:.2f}x")]
+
+    # lattice planner: the whole lattice on a 40 x 40 m crop of the house at 1 m a cell (the
+    # Toolbox's lattice is a pgraph graph), then 20 queries from the root; equal costs
+    import contextlib
+    import io
+
+    lat = floor[100:300:5, 100:300:5].astype(bool)  # every 5th cell of a 200 x 200 crop
+    lat[20, 20] = False
+    ogl = rtb.BinaryOccupancyGrid(lat, cellsize=1.0, origin=(-20, -20))
+    oursl = M.BinaryOccupancyGrid(lat, cellsize=1.0, origin=(-20, -20))
+    probe = M.LatticePlanner(oursl)
+    probe.plan()
+    goals = probe.vertices[np.random.default_rng(0).choice(len(probe.vertices), 20, replace=False)]
+
+    def lat_rtb():  # type: ignore[no-untyped-def]
+        p = rtb.LatticePlanner(occgrid=ogl)
+        with contextlib.redirect_stdout(io.StringIO()):  # it prints every iteration
+            p.plan()
+        return [p.query(start=(0, 0, 0), goal=g)[1].cost for g in goals]
+
+    def lat_ours():  # type: ignore[no-untyped-def]
+        p = M.LatticePlanner(oursl)
+        p.plan()
+        return [p.query((0, 0, 0), g)[1].cost for g in goals]
+
+    res = interleaved({"Toolbox LatticePlanner": lat_rtb, "ejsrl LatticePlanner": lat_ours}, max(1, args.repeat // 2))
+    cr, co = np.array(res["Toolbox LatticePlanner"][1]), np.array(res["ejsrl LatticePlanner"][1])
+    same = bool(np.allclose(cr, co, atol=1e-9))
+    r = report(f"Lattice planner, house 40 x 40 m at 1 m ({len(probe.vertices)} poses; plan + 20 queries)", res,
+               f"path costs equal: {same}")
+    met += [(same, "lattice: the Toolbox's path costs"), (r > 1, f"lattice planner faster: {r:.2f}x")]
 
     # pose graph: the Toolbox's killian-small.toro (1,941 poses, 3,995 edges), Gauss-Newton
     import rtbdata
