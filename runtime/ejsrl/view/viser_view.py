@@ -34,6 +34,7 @@ from ejsrl.view._guard import Verdict, guard_of, start_server
 from ejsrl.view._gui import ControlBinding, Panel
 from ejsrl.view._camera import ViewCamera
 from ejsrl.view._scene_mirror import SceneMirror
+from ejsrl.view._shared_camera import SharedCamera
 from ejsrl.view._validate import validate_control
 
 __all__ = ["ViserView", "make_server", "control_check"]
@@ -114,6 +115,7 @@ class ViserView:
         #: not sent (plots still record their points)
         self.hold = False
         self._broken: set[str] = set()
+        self._shared_camera: SharedCamera | None = None
         self._closed = False
         target = client if client is not None else server
         self._target = target
@@ -172,6 +174,15 @@ class ViserView:
                 with self._target.atomic():
                     self.camera.show(self._cameras())
 
+    def _frame_cameras(self) -> list[Any]:
+        """The cameras a frame moves (a followed object): a tab's own; for a shared view, every
+        tab's at once through the server's queue, with the frame's poses (ejsrl.view._shared_camera)."""
+        if self.client is not None:
+            return self._cameras()
+        if self._shared_camera is None:
+            self._shared_camera = SharedCamera(self.server, self._cameras)
+        return [self._shared_camera] if self.server.get_clients() else []
+
     def _cameras(self) -> list[Any]:
         """The cameras of every tab this view shows the app to."""
         if self.client is not None:
@@ -211,7 +222,7 @@ class ViserView:
             world = self._world()
             if world is not None:
                 self._guarded("scene", lambda: self.scene.sync(world))
-                self._guarded("camera", lambda: self.camera.on_frame(self._cameras()))
+                self._guarded("camera", lambda: self.camera.on_frame(self._frame_cameras()))
             self._guarded("alerts", self._show_alerts)
 
     def adopt(self, old: ViserView) -> None:
