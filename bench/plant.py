@@ -87,7 +87,8 @@ def _cpu(pid: int) -> float:
 
 
 def _uptime() -> str:
-    return Path("/proc/loadavg").read_text().split(" ", 3)[:3].__str__()
+    """The load averages over 1, 5 and 15 minutes, as uptime prints them."""
+    return "/".join(Path("/proc/loadavg").read_text().split()[:3])
 
 
 class _Ours:
@@ -249,6 +250,18 @@ def main(argv: list[str] | None = None) -> int:
             holder.wait()
         print(f"watchdog (limit 0.5 s) after SIGKILL of the holder (load {_uptime()}): trip median {np.median(trips) * 1e3:.0f} ms "
               f"(worst {max(trips) * 1e3:.0f}), at rest median {np.median(rests) * 1e3:.0f} ms (worst {max(rests) * 1e3:.0f})")
+        link.close()
+        plant.terminate()
+        plant.wait(10)
+
+        # the same round trips while the plant's camera streams (its default: 320 x 240, 10 frames/s)
+        plant = _start_plant(port)
+        link = PlantLink("127.0.0.1", port, session="bench-camera")
+        assert link.wait_for(lambda l: l.connected and l.state is not None, 30)
+        link.request_lease()
+        assert link.wait_for(lambda l: l.holds_lease, 30)
+        r = _round_trips(_Ours(link), theirs, a.n, plant.pid, echo.pid)
+        _print_round(a.rounds + 1, r, "camera on, 320 x 240 at 10 frames/s")
         link.close()
         plant.terminate()
         plant.wait(10)

@@ -133,7 +133,7 @@ def check(spec: Path, *, timeout: float = 15.0, listen: float = 2.0, credentials
         if any(c.to == "joints" for c in plant.commands.values()):
             say(len(q) == 5, f"the plant measures {len(q)} joints; the lab commands 5")
         if link.clock.offset is not None:
-            print(f"     the plant's clock is {-link.clock.offset:+.3f} s from this machine's (transit included)")
+            print(f"     the plant's clock is {0.0 + round(-link.clock.offset, 3):+.3f} s from this machine's (transit included)")
         if plant.video is not None:
             _check_video(link, plant.video.stale, listen, say)
         if st.get("fault"):
