@@ -232,3 +232,97 @@ def test_the_plant_refuses_a_bad_camera_size(tmp_path: Path, text: str) -> None:
     r = subprocess.run([sys.executable, "-m", "ejsrl.plant", "--mqtt", "127.0.0.1:1", "--camera", text],
                        capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and ("--camera" in r.stderr or "16..1920" in r.stderr), r.stderr
+
+
+class _Handle:
+    """A GUI element as the plant panel uses it (viser's handles: value, visible, label, content)."""
+
+    def __init__(self, **kw) -> None:
+        self.visible, self.label, self.content, self.value = True, "", "", None
+        self.__dict__.update(kw)
+        self.sent: list[bytes] = []
+
+    def __setattr__(self, name: str, value) -> None:
+        if name == "_data":
+            self.sent.append(value)
+        object.__setattr__(self, name, value)
+
+    def on_update(self, fn):
+        return fn
+
+    on_click = on_update
+
+
+class _Gui:
+    def __init__(self) -> None:
+        self.image: _Handle | None = None
+
+    def add_dropdown(self, label, options, initial_value, hint=None):
+        return _Handle(value=initial_value)
+
+    def add_button(self, label, color=None, hint=None, visible=True):
+        return _Handle(visible=visible)
+
+    def add_markdown(self, content):
+        return _Handle(content=content)
+
+    def add_image(self, image, label=None, format="jpeg", visible=True):
+        self.image = _Handle(label=label, visible=visible)
+        return self.image
+
+
+def test_the_panel_sends_at_most_its_rate_shows_the_age_and_flags_a_paused_plant_stale(
+        broker: Broker, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """The plant streams 30 frames/s; a page asks for 5 (video: {rate: 5}): the panel sends the
+    plant's own JPEG bytes at most 5 times a second, only in Real plant mode, and writes the age."""
+    import re
+    import types
+
+    from ejsrl.app._plant_link import PlantDef, PlantMeasurement
+    from ejsrl.plant._panel import PlantPanel
+
+    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--fps", "30"])
+    monkeypatch.setenv("EJSRL_PLANT_PORT", str(broker.port))
+    defn = PlantDef("127.0.0.1", 1, video_stale=0.5, video_rate=5.0, measurements=[PlantMeasurement("age_ms", "video_age", scale=1e-3)])
+    model = types.SimpleNamespace(_plant=lambda: defn, age_ms=0.0)
+    gui = _Gui()
+    panel = PlantPanel(gui, types.SimpleNamespace(model=model))
+    try:
+        assert panel.link.wait_for(lambda l: l.state is not None, 30), panel.link.note
+
+        def run(seconds: float) -> None:
+            end = time.monotonic() + seconds
+            while time.monotonic() < end:
+                panel.refresh()          # the app's frames, 60 a second
+                time.sleep(1 / 60)
+
+        run(1.0)
+        assert gui.image.sent == [] and not gui.image.visible and "Video" not in panel.status.content  # Simulation mode
+        panel.set_real(True)
+        assert panel.link.wait_for(lambda l: l.frame is not None, 20)
+        n0, t0 = len(gui.image.sent), time.monotonic()
+        run(3.0)
+        sent = len(gui.image.sent) - n0
+        assert 3 <= sent <= 5 * (time.monotonic() - t0) + 1, sent
+        assert gui.image.visible and gui.image.sent[-1][:2] == b"\xff\xd8" and gui.image.sent[-1][-2:] == b"\xff\xd9"
+        m = re.search(r"\*\*Video:\*\* (\d+) ms old", panel.status.content)
+        assert m and int(m.group(1)) < 1000, panel.status.content
+        assert 0 < model.age_ms < 1000
+        plant.proc.send_signal(signal.SIGSTOP)
+        try:
+            run(1.5)
+            assert "**Video: STALE** (the newest frame is" in panel.status.content, panel.status.content
+            assert gui.image.label == "Plant camera: STALE" and model.age_ms > 1000
+            n = len(gui.image.sent)
+            run(0.5)
+            assert len(gui.image.sent) == n          # nothing new to send
+        finally:
+            plant.proc.send_signal(signal.SIGCONT)
+        assert panel.link.wait_for(lambda l: l.video_age() < 0.5, 20)
+        run(0.5)
+        assert gui.image.label == "Plant camera" and "STALE" not in panel.status.content
+        panel.set_real(False)
+        assert not gui.image.visible and not panel.link.video_wanted
+    finally:
+        panel.close()
+        plant.stop()
