@@ -13,6 +13,7 @@ from __future__ import annotations
 import importlib.util
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -21,8 +22,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from ejsrl.mobile import BinaryOccupancyGrid, LatticePlanner, NoPathError
 
-from conftest import FIXTURES
-
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
 REF = json.loads((FIXTURES / "lattice_rtb.json").read_text())
 
 

@@ -42,7 +42,8 @@ def _prism(outline: np.ndarray, z0: float, z1: float) -> Part:
     """A prism over a convex outline (k, 2) from z0 to z1 (fan-triangulated caps)."""
     k = len(outline)
     v = np.vstack((_lift(outline, z0), _lift(outline, z1)))
-    if np.cross(outline[1] - outline[0], outline[2] - outline[0]) < 0:  # make it counter-clockwise
+    (ax, ay), (bx, by) = outline[1] - outline[0], outline[2] - outline[0]
+    if ax * by - ay * bx < 0:  # make it counter-clockwise
         v = np.vstack((_lift(outline[::-1], z0), _lift(outline[::-1], z1)))
     faces = [[0, j + 1, j] for j in range(1, k - 1)] + [[k, k + j, k + j + 1] for j in range(1, k - 1)]
     for j in range(k):
