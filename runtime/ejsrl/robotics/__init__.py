@@ -17,16 +17,18 @@ Everything takes and returns NumPy arrays, SI units and radians.
 
 from __future__ import annotations
 
-from . import transforms
-from .link import ETSLink, Link, PrismaticDH, PrismaticMDH, RevoluteDH, RevoluteMDH
-from .robot import Robot
-from .urdf import load_urdf
-from .pose import SE3, SO3
-from .quaternion import UnitQuaternion
+from ejsrl._lazy import lazy_exports
 
-from . import models  # noqa: E402  (models need Robot)
-from . import ik, trajectory  # noqa: E402
-from .trajectory import mstraj  # noqa: E402
+# Each name is imported when first read (ejsrl._lazy; the submodules models, ik, trajectory and
+# transforms too): a lab that only needs ``transforms`` (every 3D scene) loads nothing else.
+__getattr__, __dir__ = lazy_exports(__name__, {
+    ".link": ("ETSLink", "Link", "PrismaticDH", "PrismaticMDH", "RevoluteDH", "RevoluteMDH"),
+    ".robot": ("Robot",),
+    ".urdf": ("load_urdf",),
+    ".pose": ("SE3", "SO3"),
+    ".quaternion": ("UnitQuaternion",),
+    ".trajectory": ("mstraj",),
+})
 
 __all__ = [
     "Link",

@@ -15,12 +15,13 @@ segment: slowest axis, segment time, clock) and ``via``.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .trajectory import Trajectory
+if TYPE_CHECKING:
+    from .trajectory import Trajectory  # imported below, when mstraj runs: trajectory imports this module
 
 __all__ = ["mstraj", "MstrajInfo"]
 
@@ -196,6 +197,8 @@ def mstraj(
     Q = np.vstack(qs)
     t = dt * np.arange(len(Q))
     breaks = np.concatenate(([0.0], np.cumsum(spans))) - dt  # the first sample is dt after the start
+    from .trajectory import Trajectory
+
     traj = Trajectory(breaks, np.array(coefs), num=t, kind="mstraj")
     traj.q, traj.qd, traj.qdd = Q, np.vstack(qds), np.vstack(qdds)
     traj.arrive = arrive  # type: ignore[attr-defined]
