@@ -30,39 +30,16 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))  # testkit.guard_client: the raw viser client
 sys.path.insert(0, str(ROOT / "bench"))
 
-from classroom import Server  # noqa: E402  (the lab's app.py in its own process)
+sys.path.insert(0, str(ROOT / "tests" / "browser"))
 
-#: a zigzag spring on an oscillating plate, a ball on an ellipse with its trail, a velocity arrow
-SPRING_TRAIL = """\
-ejs: 1
-title: Spring, trail and arrow
-model:
-  variables:
-    t: 0.0
-    dt: 0.01
-    x: 0.3
-    v: 0.0
-    phi: 0.0
-  evolution:
-    - ode: {equations: {x: v, v: -90*x, phi: 7.0}}
-  custom: |
-    def spring(a, b):
-        a = np.asarray(a, dtype=float)
-        b = np.asarray(b, dtype=float)
-        s = np.linspace(0.0, 1.0, 17)
-        pts = np.outer(1.0 - s, a + [0.08, 0, 0]) + np.outer(s, b - [0.08, 0, 0])
-        pts[1:-1:2, 2] += 0.06
-        pts[2:-1:2, 2] -= 0.06
-        return np.vstack([a, pts, b])
-view:
-  - scene:
-      - box: {name: plate, position: [x, 0, -0.45], size: [0.2, 0.02, 0.2], color: red}
-      - line: {name: spring, points: "spring([-1.23, 0, -0.45], [x - 0.1, 0, -0.45])", color: blue}
-      - arrow: {name: velocity, start: [x, 0, -0.2], vector: ["0.2*v", 0, 0], width: 0.01, color: green}
-      - sphere: {name: ball, position: ["0.45*cos(phi)", 0, "0.45 + 0.25*sin(phi)"], radius: 0.04}
-      - trail: {name: path, point: "[0.45*cos(phi), 0, 0.45 + 0.25*sin(phi)]", max_points: 10, color: magenta}
-simulation: {fps: 30, autoplay: false}
-"""
+from classroom import Server  # noqa: E402  (the lab's app.py in its own process)
+from test_line_sync_browser import LAB  # noqa: E402
+
+#: the browser test's lab (a zigzag spring on an oscillating plate, a ball on an ellipse with its
+#: trail) with a velocity arrow on the plate; paused at first (the client presses Play)
+SPRING_TRAIL = LAB.replace("simulation: {fps: 30, autoplay: true}", """\
+      - arrow: {name: velocity, start: [x, 0, -0.2], vector: ["0.2*v", 0, 0], width: 0.01, color: "#00a000"}
+simulation: {fps: 30, autoplay: false}""")
 
 LABS = {
     "pendulum": ROOT / "examples" / "pendulum.ejs.yaml",

@@ -205,17 +205,25 @@ class _Pieces:
                 x.h.visible = shown and style_shown
 
 
-class LineDraw:
-    """How one line (or trail) node is drawn: a segment set (``handles``: none or one) and pieces."""
+class _Draw:
+    """What a line or a point cloud node was last sent: its handles, its style (set again only
+    when it changes) and, when :meth:`update` returned False, whether to draw it anew as pieces
+    (or posed points): ``changing``."""
+
+    def __init__(self, handles: list[_Handle]) -> None:
+        self.handles = handles
+        self.sent: tuple | None = None
+        self.changing = False
+
+
+class LineDraw(_Draw):
+    """How one line (or trail) node is drawn: a segment set (``handles``: none or one) and pieces;
+    its style is (colour, width, shown)."""
 
     def __init__(self, handles: list[_Handle], pieces: list[_Pieces], kind: str) -> None:
-        self.handles = handles
+        super().__init__(handles)
         self.pieces = pieces
         self.kind = kind
-        #: the style last set (colour, width, shown): set again only when it changes
-        self.sent: tuple | None = None
-        #: set by :meth:`update` when it returns False: draw the line anew as pieces
-        self.changing = False
 
     @property
     def geoms(self) -> list[Any]:
@@ -304,18 +312,14 @@ class LineDraw:
 MAX_POSED_POINTS = 24
 
 
-class PointsDraw:
+class PointsDraw(_Draw):
     """How one point cloud node is drawn: one cloud (moved by a pose while it moves as a whole,
     else sent its points), or one posed single-point cloud per point once its points have moved
-    apart, if it has at most ``MAX_POSED_POINTS``."""
+    apart, if it has at most ``MAX_POSED_POINTS``; its style is (colour, size, count)."""
 
     def __init__(self, handles: list[_Handle], posed: bool) -> None:
-        self.handles = handles
+        super().__init__(handles)
         self.posed = posed
-        #: the style last set (colour, size, count): set again only when it changes
-        self.sent: tuple | None = None
-        #: set by :meth:`update` when it returns False: draw the cloud anew as posed points
-        self.changing = False
 
     @property
     def geoms(self) -> list[Any]:
