@@ -93,6 +93,7 @@ class LinkBase:
         self.latencies: list[float] = []
         self.wants_lease = False
         self._seq = 0
+        self._sent: dict[int, float] = {}                 # commands in flight: seq -> perf_counter when sent
         self._last_q: np.ndarray | None = None
         self._last_t: float | None = None
         self._lock = threading.Lock()
@@ -147,6 +148,29 @@ class LinkBase:
         return True
 
     # ---- what the transports call -------------------------------------------------------------
+    def _now_connected(self) -> None:
+        """The transport (re)connected: commands are enabled again, nothing sent before is in
+        flight any more (no stale command is replayed), and a lease still wanted is asked for."""
+        with self._changed:
+            self.connected = True
+            self._sent.clear()
+            self.note = "connected"
+            self._changed.notify_all()
+        if self.wants_lease:
+            self.request_lease()  # type: ignore[attr-defined] - each transport's own
+
+    def _now_lost(self, why: str | None = None, *, offline: bool = False) -> None:
+        """The connection is gone: say so at once and disable commands (``why``: a note of its
+        own, e.g. the broker refusing the credentials; ``offline``: no plant state either)."""
+        with self._changed:
+            self.connected = False
+            if offline:
+                self.plant_online = False
+            self.note = why or "connection to the plant lost: commands disabled, reconnecting"
+            self._changed.notify_all()
+        if self.on_state is not None:
+            self.on_state()
+
     def _take_state(self, st: dict[str, Any], arrived: float) -> bool:
         """Keep a state message that arrived at ``arrived`` (monotonic s); the caller holds the
         lock. True when the plant restarted since the last one (its queue and clock are new)."""
@@ -184,7 +208,6 @@ class PlantLink(LinkBase):
         self.alive = alive
         self._refused = False
         self._asked = 0.0
-        self._sent: dict[int, float] = {}
         self._stop = threading.Event()
         self.client = make_client(f"ejsrl-app-{self.session}", creds or Credentials())
         self.client.reconnect_delay_set(min_delay=0.1, max_delay=2)
@@ -264,22 +287,10 @@ class PlantLink(LinkBase):
         no_delay(client)
         topics = [(f"{self.prefix}/state", 0), (f"{self.prefix}/online", 1)]
         client.subscribe(topics + ([(f"{self.prefix}/video", 0)] if self.video_wanted else []))
-        with self._lock:
-            self.connected = True
-            self._sent.clear()                # nothing in flight survives a reconnect
-            self.note = "connected"
-            self._changed.notify_all()
-        if self.wants_lease:
-            self.request_lease()
+        self._now_connected()
 
     def _on_disconnect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
-        with self._lock:
-            self.connected = False
-            if not self._refused:
-                self.note = "connection to the plant lost: commands disabled, reconnecting"
-            self._changed.notify_all()
-        if self.on_state is not None:
-            self.on_state()
+        self._now_lost(self.note if self._refused else None)
 
     def _on_message(self, client: Any, userdata: Any, msg: Any) -> None:
         if msg.topic.endswith("/video"):

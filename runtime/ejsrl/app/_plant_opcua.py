@@ -124,9 +124,7 @@ class OpcUaLink(LinkBase):
                 state = self._obj.get_child(f"{self._idx}:State")
                 video, video_seq = (self._obj.get_child(f"{self._idx}:{n}") for n in ("Video", "VideoSeq"))
                 seen = None
-                self._set(connected=True, note="connected")
-                if self.wants_lease:
-                    self._call("Lease", self.session, "request")
+                self._now_connected()
                 next_beat = 0.0
                 while not self._stop.is_set():
                     now = time.monotonic()
@@ -148,8 +146,7 @@ class OpcUaLink(LinkBase):
                         self.on_state()
                     self._stop.wait(1.0 / self.rate)
             except Exception as e:  # noqa: BLE001 - lost: say so at once, then reconnect
-                self._set(connected=False, plant_online=False,
-                          note=f"connection to the plant lost ({type(e).__name__}): commands disabled, reconnecting")
+                self._now_lost(f"connection to the plant lost ({type(e).__name__}): commands disabled, reconnecting", offline=True)
             finally:
                 self._obj = None
                 try:
