@@ -326,3 +326,47 @@ def test_the_panel_sends_at_most_its_rate_shows_the_age_and_flags_a_paused_plant
     finally:
         panel.close()
         plant.stop()
+
+
+@pytest.mark.parametrize("progressive", [False, True])
+def test_jpeg_size_agrees_with_opencv(progressive: bool) -> None:
+    """The app reads a frame's size from its JPEG header without decoding it: the same size
+    OpenCV decodes, for baseline and progressive JPEGs; a cut or padded one is refused."""
+    import cv2
+
+    from ejsrl.plant._video import jpeg_size
+
+    rng = np.random.default_rng(3)
+    for w, h in ((16, 16), (320, 240), (641, 479), (1920, 1080)):
+        img = rng.integers(0, 255, (h, w, 3), dtype=np.uint8)
+        ok, buf = cv2.imencode(".jpg", img, [cv2.IMWRITE_JPEG_QUALITY, 70, cv2.IMWRITE_JPEG_PROGRESSIVE, int(progressive)])
+        data = buf.tobytes()
+        decoded = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+        assert jpeg_size(data) == (decoded.shape[1], decoded.shape[0]) == (w, h)
+        assert jpeg_size(data[:-1]) is None and jpeg_size(data + b"\x00") is None and jpeg_size(data[:600]) is None
+
+
+def test_plant_clock_takes_the_fastest_transit_and_follows_a_drifting_clock() -> None:
+    """Arrivals of a plant's stamps with random transit (0.2 ms to 30 ms) and a clock 1234.5 s
+    ahead: the offset is the true one plus the fastest transit; a plant clock that drifts 100 ppm
+    is followed within the window; a restart (reset) forgets the old clock."""
+    from ejsrl.plant._video import PlantClock
+
+    rng = np.random.default_rng(1)
+    clock = PlantClock(window=30.0)
+    true_offset = -1234.5          # local = plant + offset
+    for k in range(50 * 20):       # 20 s of 50 Hz states
+        local = 100.0 + k * 0.02
+        transit = 0.0002 + rng.exponential(0.005)
+        clock.add(local - true_offset - transit, local)
+    assert clock.offset is not None and 0 <= clock.offset - true_offset < 0.001
+    assert abs(clock.age(50.0, 200.0) - (200.0 - (50.0 + true_offset))) < 0.001
+    for k in range(50 * 120):      # two more minutes, the plant's clock running 100 ppm slow
+        local = 120.0 + k * 0.02
+        clock.add(local - true_offset - 1e-4 * (local - 120.0) - 0.0002, local)
+    assert abs(clock.offset - (true_offset + 1e-4 * 120.0 + 0.0002)) < 0.004   # within 30 s of drift (3 ms)
+    clock.reset()
+    assert clock.offset is None and clock.age(1.0) is None
+    clock.add(float("nan"), 1.0)
+    clock.add("x", 1.0)
+    assert clock.offset is None
