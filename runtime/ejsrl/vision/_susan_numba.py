@@ -230,12 +230,16 @@ def side_tests(gray, share, idx, rows, lo, hi, v, dark, contig, g100, floor, cho
         l8 = np.int32(lo[i])
         span = max(np.int32(hi[i]) - l8, np.int32(1))
         tab = share[np.int64(dark[i]), span]
-        n_ = 0
+        # the side's USAN and its moments in one pass (integers: the same sums in any order)
+        n_, sx_, sy_ = 0, 0, 0
         for dy in range(-3, 4):
             w = _HALF[dy + 3]
             base = p + dy * W
             for dx in range(-w, w + 1):
-                n_ += tab[np.uint64(min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))]
+                c = tab[np.uint64(min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))]
+                n_ += c
+                sx_ += c * dx
+                sy_ += c * dy
         n = n_ * _UNFIX  # exact: below 2^53, times a power of 2
         # _mid_response: what the side falls short of a straight edge through the nucleus pixel
         h = np.float64(hi[i])
@@ -245,14 +249,6 @@ def side_tests(gray, share, idx, rows, lo, hi, v, dark, contig, g100, floor, cho
         if not (rr >= floor and rr > 0):
             continue
         # the centroid and contiguity tests of the side's USAN
-        sx_, sy_ = 0, 0
-        for dy in range(-3, 4):
-            w = _HALF[dy + 3]
-            base = p + dy * W
-            for dx in range(-w, w + 1):
-                c = tab[np.uint64(min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))]
-                sx_ += c * dx
-                sy_ += c * dy
         sx, sy = sx_ * _UNFIX, sy_ * _UNFIX
         if not sx * sx + sy * sy > 0.5 * n * n:
             continue
