@@ -11,10 +11,17 @@ from testkit import ARTIFACTS, EXAMPLES
 
 def pytest_configure(config: pytest.Config) -> None:
     ARTIFACTS.mkdir(exist_ok=True)
+    # xdist registers it; without xdist (-p no:xdist) the mark is still known
+    config.addinivalue_line("markers", "xdist_group(name): tests of one group run on one xdist worker")
 
 
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Browser tests share one xdist worker (with ``--dist loadgroup``): one Chromium at a time."""
+    """Browser tests share one xdist worker (with ``--dist loadgroup``): one Chromium at a time.
+
+    It must run before xdist's own hook, which reads the ``xdist_group`` marks into the test
+    ids the scheduler groups by (``tryfirst``): after it, the marks came too late and each
+    worker started its own Chromium."""
     for item in items:
         if item.get_closest_marker("browser") is not None:
             item.add_marker(pytest.mark.xdist_group("browser"))
@@ -65,7 +72,11 @@ def browser_context(tmp_path_factory):
             args=ARGS,
             viewport={"width": 1280, "height": 800},
         )
-        context.set_default_timeout(30_000)
+        # waits on the page: limits that hold on a busy machine (testkit.browser.WAIT_SECONDS)
+        from testkit.browser import WAIT_SECONDS
+
+        context.set_default_timeout(WAIT_SECONDS * 1000)
+        context.set_default_navigation_timeout(WAIT_SECONDS * 1000)
         try:
             yield context
         finally:

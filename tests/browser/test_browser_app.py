@@ -73,6 +73,6 @@ def test_user_code_errors_are_shown_in_the_panel(served_app, page):
     ARTIFACTS.mkdir(exist_ok=True)
     page.screenshot(path=str(ARTIFACTS / "error_shown.png"))
     page.get_by_role("button", name="Reset").click()
-    box.wait_for(state="hidden", timeout=10_000)
-    note.wait_for(state="detached", timeout=10_000)
+    box.wait_for(state="hidden")
+    note.wait_for(state="detached")
     assert app.error is None

@@ -33,14 +33,14 @@ def test_capture_and_tour_show_the_estimate(built, page):
         page.get_by_role("button", name="Capture", exact=True).wait_for(timeout=45_000)
         assert page.get_by_text("Camera calibration with a chessboard", exact=True).first.is_visible()
         close_notifications(page)
-        wait_until(lambda: panel_image(page).count() > 0, timeout=20, what="the camera's view in the panel")
+        wait_until(lambda: panel_image(page).count() > 0, what="the camera's view in the panel")
         first = np.asarray(Image.open(io.BytesIO(panel_image(page).screenshot())).convert("RGB")).astype(int)
         # the board is in the camera's view: dark squares and light ones
         grey = first.mean(axis=2)
         assert (grey < 60).mean() > 0.02 and (grey > 150).mean() > 0.3
 
         page.get_by_role("button", name="Capture", exact=True).click()
-        wait_until(lambda: "Views: 1" in _panel_text(page), timeout=20, what="the first view to be counted")
+        wait_until(lambda: "Views: 1" in _panel_text(page), what="the first view to be counted")
         assert "view 1 added" in _panel_text(page)
         assert re.search(r"fx = \u2013 px", _panel_text(page)), "no estimate from one view: a dash, not nan"
         assert not re.search(r"\bnan\b", _panel_text(page))
@@ -48,7 +48,7 @@ def test_capture_and_tour_show_the_estimate(built, page):
         page.get_by_role("button", name="Take the tour").click()
         wait_until(lambda: app.model.tour_index == 12 and not app.is_playing(), timeout=90, what="the tour to end")
         assert app.error is None
-        wait_until(lambda: "Views: 13" in _panel_text(page), timeout=20, what="13 views in the panel")
+        wait_until(lambda: "Views: 13" in _panel_text(page), what="13 views in the panel")
         text = _panel_text(page)
         fx, fy = (float(v) for v in re.search(r"fx = ([\d.]+) px .*fy = ([\d.]+) px", text).groups())
         cx, cy = (float(v) for v in re.search(r"cx = ([\d.]+) px .*cy = ([\d.]+) px", text).groups())

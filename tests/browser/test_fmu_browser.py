@@ -66,7 +66,7 @@ def test_the_fmu_lab_plays_reaches_the_set_points_and_shows_an_fmu_failure(serve
     assert app.error is None
     assert np.abs(app.model.q - SET_POINTS).max() < 0.02  # at the set points, driven by the FMU's torques
     assert np.linalg.norm(app.world["arm3.link3"].T_world()[:3, 3] - link0[:3, 3]) > 0.05
-    wait_until(lambda: np.mean(np.abs(scene_pixels(page) - before).sum(axis=2) > 30) > 0.002, timeout=20, what="the arm to move on screen")
+    wait_until(lambda: np.mean(np.abs(scene_pixels(page) - before).sum(axis=2) > 30) > 0.002, what="the arm to move on screen")
     hide_notices(page)
     png = page.screenshot()
     ARTIFACTS.mkdir(exist_ok=True)
@@ -79,17 +79,17 @@ def test_the_fmu_lab_plays_reaches_the_set_points_and_shows_an_fmu_failure(serve
     slider = page.get_by_role("slider").filter(visible=True).last
     slider.focus()
     slider.press("Home")  # 1 A: below the current that holds the arm up against gravity
-    wait_until(lambda: app.error is not None, timeout=30, what="the FMU to refuse the step")
+    wait_until(lambda: app.error is not None, what="the FMU to refuse the step")
     assert not app.is_playing()
     spec = (ROOT / "examples" / "paper" / "fmu_motor_control.ejs.yaml").read_text().splitlines()
     line = next(k for k, text in enumerate(spec, 1) if text.strip() == "drives:")
-    page.locator("b", has_text=f"Error at fmu_motor_control.ejs.yaml:{line}:3").first.wait_for(timeout=20_000)
+    page.locator("b", has_text=f"Error at fmu_motor_control.ejs.yaml:{line}:3").first.wait_for()
     assert "exceeds the amplifier's limit i_max = 1 A" in page.content()  # the FMU's own message
     (ARTIFACTS / "lab_fmu_motor_control_error.png").write_bytes(page.screenshot())
 
     old = app.model._ejs_fmus
     page.get_by_role("button", name="Reset").first.click()
-    wait_until(lambda: app.model._ejs_fmus not in (None, old), timeout=30, what="Reset to instantiate the FMU again")
+    wait_until(lambda: app.model._ejs_fmus not in (None, old), what="Reset to instantiate the FMU again")
     with app.lock:
         assert old.closed and app.error is None and app.model.t == 0.0
     assert app.model.i_max == 1000.0

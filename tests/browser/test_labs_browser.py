@@ -63,7 +63,7 @@ def test_lab_plays_in_the_browser(served, page):
     close_notifications(page)
     servo = lab.spec.endswith("visual_servoing_eih")
     if servo:
-        wait_until(lambda: panel_image(page).count() > 0, timeout=20, what="the camera image in the panel")
+        wait_until(lambda: panel_image(page).count() > 0, what="the camera image in the panel")
         picture0 = panel_image(page).screenshot()
         src0 = panel_image(page).get_attribute("src")
 
@@ -72,7 +72,7 @@ def test_lab_plays_in_the_browser(served, page):
 
     page.get_by_role("button", name=lab.play).first.click()
     t0 = app.model.t
-    wait_until(lambda: app.model.t > t0 + lab.play_for, timeout=30, what=f"t to advance {lab.play_for} s after Play")
+    wait_until(lambda: app.model.t > t0 + lab.play_for, what=f"t to advance {lab.play_for} s after Play")
     assert app.is_playing() and app.error is None
 
     # the arm moved in the world ...
@@ -82,7 +82,7 @@ def test_lab_plays_in_the_browser(served, page):
     wait_until(lambda: np.mean(np.abs(canvas_pixels(page) - before).sum(axis=2) > 30) > 0.002, timeout=20,
                what="the 3D view to change")
     if servo:
-        wait_until(lambda: panel_image(page).get_attribute("src") != src0, timeout=20, what="a new camera image")
+        wait_until(lambda: panel_image(page).get_attribute("src") != src0, what="a new camera image")
         picture1 = np.asarray(Image.open(io.BytesIO(panel_image(page).screenshot())).convert("RGB")).astype(int)
         first = np.asarray(Image.open(io.BytesIO(picture0)).convert("RGB")).astype(int)
         assert picture1.shape == first.shape

@@ -32,7 +32,7 @@ def test_the_marker_lab_finds_servoes_and_shows_the_cloud(built, page):
         page.wait_for_selector("canvas", state="attached", timeout=45_000)
         page.get_by_role("button", name="Restart").wait_for(timeout=45_000)
         close_notifications(page)
-        wait_until(lambda: "marker 7 found" in _text(page), timeout=30, what="the status line")
+        wait_until(lambda: "marker 7 found" in _text(page), what="the status line")
         # the point cloud: the orange points are drawn in the 3D view
         assert len(app.model.cloud) > 1000
         px = canvas_pixels(page)
@@ -41,7 +41,7 @@ def test_the_marker_lab_finds_servoes_and_shows_the_cloud(built, page):
 
         page.get_by_role("button", name="Play").first.click()
         wait_until(lambda: bool(app.model.done), timeout=120, what="the servo to reach its goal")
-        wait_until(lambda: "Done: the camera is at its goal pose" in _text(page), timeout=20, what="Done in the panel")
+        wait_until(lambda: "Done: the camera is at its goal pose" in _text(page), what="Done in the panel")
         really = float(re.search(r"really: ([0-9.]+) mm", _text(page)).group(1))
         assert really < 3.0 and app.model.true_err < 3.0
         save_shot(page, "marker_servoing")
@@ -50,9 +50,9 @@ def test_the_marker_lab_finds_servoes_and_shows_the_cloud(built, page):
         box = page.get_by_label("Marker id to follow")
         box.fill("8")
         box.press("Enter")
-        wait_until(lambda: app.model.marker_id == 8, timeout=20, what="the marker id on the server")
+        wait_until(lambda: app.model.marker_id == 8, what="the marker id on the server")
         page.get_by_role("button", name="Restart").click()
-        wait_until(lambda: "Marker 8 not in view: the servo has stopped" in _text(page), timeout=30, what="the lost marker")
+        wait_until(lambda: "Marker 8 not in view: the servo has stopped" in _text(page), what="the lost marker")
         assert not app.model.found and np.all(app.model.qdot == 0)
         # the picture the browser shows (no corner circles now): OpenCV finds marker 7 in its pixels
         img = panel_image(page)
@@ -61,5 +61,5 @@ def test_the_marker_lab_finds_servoes_and_shows_the_cloud(built, page):
             shown = np.asarray(Image.open(io.BytesIO(img.screenshot())).convert("RGB"))
             return [m.id for m in detect_markers(shown, "aruco_4x4_50")]
 
-        wait_until(lambda: shown_ids() == [7], timeout=30, what="marker 7 in the browser's picture")
+        wait_until(lambda: shown_ids() == [7], what="marker 7 in the browser's picture")
         assert app.error is None

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from testkit.browser import ARTIFACTS, canvas_pixels, serving, wait_until
+from testkit.browser import ARTIFACTS, canvas_pixels, serving, settled, wait_until
 from testkit import EXAMPLES
 
 
@@ -38,8 +38,7 @@ def test_pendulum_in_the_browser(pendulum_app, page):
     page.screenshot(path=str(ARTIFACTS / "pendulum_loaded.png"))
 
     bob0 = app.world["bob"].T_world()[:3, 3].copy()
-    page.wait_for_timeout(1500)  # let the first frames of the 3D view settle before comparing pixels
-    before = canvas_pixels(page)
+    before = settled(lambda: canvas_pixels(page), what="the first frames of the 3D view")  # before comparing pixels
 
     slider = page.get_by_role("slider").first
     slider.focus()
@@ -52,7 +51,7 @@ def test_pendulum_in_the_browser(pendulum_app, page):
     def moved_on_screen() -> bool:
         return np.mean(np.abs(canvas_pixels(page) - before) > 30) > 0.001
 
-    wait_until(moved_on_screen, timeout=20, what="the bob to move on screen")
+    wait_until(moved_on_screen, what="the bob to move on screen")
 
     page.get_by_role("button", name="Play").click()
     wait_until(lambda: app.model.t > 0.5, what="t > 0.5 after Play")

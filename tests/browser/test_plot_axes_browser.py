@@ -69,22 +69,22 @@ def test_a_strip_chart_shows_its_last_window_and_a_flat_line_looks_flat(page):
         page.add_init_script(RECORD_TEXT)
         page.goto(url)
         page.get_by_role("button", name="Play").first.wait_for(timeout=45_000)
-        wait_until(lambda: len(_charts(page)) == 2, timeout=30, what="two plots in the panel")
+        wait_until(lambda: len(_charts(page)) == 2, what="two plots in the panel")
         # play a little, reset (the plots empty), play again: what a student does
         page.get_by_role("button", name="Play").first.click()
-        wait_until(lambda: app.model.t > 0.5, timeout=30, what="t to advance after Play")
+        wait_until(lambda: app.model.t > 0.5, what="t to advance after Play")
         page.get_by_role("button", name="Reset").first.click()
-        wait_until(lambda: app.model.t < 0.5, timeout=10, what="the reset")
+        wait_until(lambda: app.model.t < 0.5, what="the reset")
         page.get_by_role("button", name="Play").first.click()
-        wait_until(lambda: app.model.t > WINDOW + 1.5, timeout=30, what="t to run 1.5 s past the window")
+        wait_until(lambda: app.model.t > WINDOW + 1.5, what="t to run 1.5 s past the window")
 
         def settled() -> bool:
             c = _chart(page, "Signal")
             return bool(c) and c["last"] is not None and c["last"] > WINDOW + 1.0 and len(tick_labels(c["texts"])[0]) >= 2
 
-        wait_until(settled, timeout=20, what="the signal chart to hold data past its window")
+        wait_until(settled, what="the signal chart to hold data past its window")
         page.get_by_role("button", name="Pause").first.click()
-        wait_until(lambda: not app.is_playing(), timeout=10, what="the lab to pause")
+        wait_until(lambda: not app.is_playing(), what="the lab to pause")
         t_end = app.model.t
         wait_until(lambda: abs((_chart(page, "Signal").get("last") or 0.0) - t_end) < 1e-5, timeout=10,
                    what="the chart to show the last point")

@@ -66,9 +66,9 @@ def shown(lab: Path, browser_context):
         page.get_by_role("button", name="Stop").first.click()
         wait_until(lambda: not app.is_playing(), what="the lab to stop")
         t = app.model.t
-        wait_until(lambda: all(plot(page, title).get("drawn") for title in ("Phase", "Curve", "Small", "Log")), timeout=30, what="four plots drawn")
+        wait_until(lambda: all(plot(page, title).get("drawn") for title in ("Phase", "Curve", "Small", "Log")), what="four plots drawn")
         # the last frames reach the page (the curve's phase shows the time it stopped at)
-        wait_until(lambda: _curve_is_at(plot(page, "Curve"), t), timeout=30, what="the stopped frame")
+        wait_until(lambda: _curve_is_at(plot(page, "Curve"), t), what="the stopped frame")
         ARTIFACTS.mkdir(exist_ok=True)
         page.screenshot(path=str(ARTIFACTS / "plot_kinds.png"), full_page=True)
         yield app, page

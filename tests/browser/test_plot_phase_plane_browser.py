@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from testkit.browser import close_notifications, save_shot, serving, wait_until
+from testkit.browser import close_notifications, save_shot, serving, settled, wait_until
 from testkit.charts import RECORD_TEXT, near_color, plot, plot_pixels, tick_labels, tick_number, to_px
 
 ROYALBLUE = (65, 105, 225)
@@ -26,7 +26,8 @@ def test_the_phase_plane_lab_draws_its_orbit_curves_energy_and_histogram(built, 
         app.pause()
         wait_until(lambda: all(plot(page, title).get("drawn") for title in ("Phase plane", "Energy", "Time spent at each angle")),
                    timeout=30, what="the three plots drawn")
-        page.wait_for_timeout(500)  # the paused frame reaches the page
+        settled(lambda: [{k: v for k, v in plot(page, title).items() if k != "drawn"} for title in ("Phase plane", "Energy")],
+                what="the paused frame to reach the page")
         close_notifications(page)
 
         phase = plot(page, "Phase plane")

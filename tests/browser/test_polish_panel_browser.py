@@ -115,7 +115,7 @@ def test_lorenz_first_view_shows_the_whole_attractor(built, page):
             return bool(np.all(np.abs(ndc) < 1.0) and (ndc.max(axis=0) - ndc.min(axis=0)).max() > 0.6)
 
         try:
-            wait_until(framed, timeout=20, what="the first view to frame the attractor")
+            wait_until(framed, what="the first view to frame the attractor")
         except AssertionError:
             pass  # the assertions below say what is wrong
         ndc = project(camera, points)
@@ -167,7 +167,7 @@ def test_a_lab_without_a_scene_gives_the_window_to_its_panel(built, page):
         assert (strip.max(axis=(0, 1)) - strip.min(axis=(0, 1))).max() == 0, "something shows left of the panel"
         # the plots use the room: as wide as the panel, and still wholly readable in height
         chart = page.locator("div[data-key^=\"plot-\"] canvas").first
-        wait_until(lambda: (chart.bounding_box() or {}).get("width", 0) > 0, timeout=20, what="the first chart to be laid out")
+        wait_until(lambda: (chart.bounding_box() or {}).get("width", 0) > 0, what="the first chart to be laid out")
         box = chart.bounding_box()
         assert box["width"] > 0.75 * width and box["height"] < 0.5 * page.viewport_size["height"], box
         shot(page, "no_scene")

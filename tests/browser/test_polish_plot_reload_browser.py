@@ -63,8 +63,9 @@ def test_a_reloaded_tab_shows_its_strip_chart_with_axes(lab, built, page):
             c = _chart(page)
             return bool(c) and c["n"] > 100 and bool(c["texts"])
 
-        wait_until(drawn, timeout=30, what="the reloaded chart to hold the kept data")
-        page.wait_for_timeout(1_500)  # it keeps playing: a few more points, the window not full yet
+        wait_until(drawn, what="the reloaded chart to hold the kept data")
+        n0 = _chart(page)["n"]
+        wait_until(lambda: _chart(page)["n"] > n0 + 10, what="a few more points: it keeps playing")  # the window not full yet
         c = _chart(page)
         assert session.app.is_playing() and c["last"] < WINDOW - 2.0, c["last"]
         ARTIFACTS.mkdir(exist_ok=True)

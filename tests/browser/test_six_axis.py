@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from testkit.browser import ARTIFACTS, canvas_pixels, serving, wait_until
+from testkit.browser import ARTIFACTS, canvas_pixels, serving, settled, wait_until
 from testkit import EXAMPLES
 
 
@@ -62,8 +62,7 @@ def test_six_axis_arm_slider_and_inverse_kinematics_in_the_browser(six_axis_app,
     # the arm is drawn where its forward kinematics puts it
     q0 = app.model.q.copy()
     np.testing.assert_allclose(link_poses(app), robot.fkine_all(q0), atol=1e-12)
-    page.wait_for_timeout(1500)  # let the first frames of the 3D view settle before comparing pixels
-    before = canvas_pixels(page)
+    before = settled(lambda: canvas_pixels(page), what="the first frames of the 3D view")  # before comparing pixels
 
     # q1 to its maximum with the keyboard: the waist turns the whole arm
     slider = page.get_by_role("slider").first
@@ -76,10 +75,10 @@ def test_six_axis_arm_slider_and_inverse_kinematics_in_the_browser(six_axis_app,
         except AssertionError:
             print("slider: model", app.model.q[0], "shown", slider.get_attribute("aria-valuenow"))
     assert abs(app.model.q[0] - 3.14) < 1e-9, "q1's slider never reached the server"
-    wait_until(lambda: np.allclose(link_poses(app), robot.fkine_all(app.model.q), atol=1e-12), timeout=30, what="the links at fkine_all(q)")
+    wait_until(lambda: np.allclose(link_poses(app), robot.fkine_all(app.model.q), atol=1e-12), what="the links at fkine_all(q)")
     moved = np.linalg.norm(link_poses(app)[6][:3, 3] - robot.fkine_all(q0)[6][:3, 3])
     assert moved > 0.5  # the tool swung to the other side
-    wait_until(lambda: np.mean(np.abs(canvas_pixels(page) - before) > 30) > 0.002, timeout=30, what="the arm to move on screen")
+    wait_until(lambda: np.mean(np.abs(canvas_pixels(page) - before) > 30) > 0.002, what="the arm to move on screen")
     page.screenshot(path=str(ARTIFACTS / "six_axis_after_slider.png"))
 
     # type a target pose, press Solve
@@ -89,14 +88,14 @@ def test_six_axis_arm_slider_and_inverse_kinematics_in_the_browser(six_axis_app,
     q_typed = app.model.q.copy()
     np.testing.assert_allclose(q_typed, [3.14, *q0[1:]])  # typing alone does not move the arm
     page.get_by_role("button", name="Solve").click()
-    wait_until(lambda: not np.allclose(app.model.q, q_typed), timeout=30, what="the joints to change after Solve")
+    wait_until(lambda: not np.allclose(app.model.q, q_typed), what="the joints to change after Solve")
     with app.lock:
         q, T_target = app.model.q.copy(), app.model.T_target.copy()
     T = robot.fkine(q)
     np.testing.assert_allclose(T_target[:3, 3], [0.15, 0.5, 0.3], atol=1e-12)
     np.testing.assert_allclose(T[:3, 3], T_target[:3, 3], atol=1e-8)
     np.testing.assert_allclose(T[:3, :3], T_target[:3, :3], atol=1e-8)
-    wait_until(lambda: page.get_by_text("Solved.").count() > 0, timeout=30, what="the status label")
-    wait_until(lambda: page.get_by_text("Tool at x = 0.150, y = 0.500, z = 0.300 m").count() > 0, timeout=30, what="the readout of the new tool pose")
+    wait_until(lambda: page.get_by_text("Solved.").count() > 0, what="the status label")
+    wait_until(lambda: page.get_by_text("Tool at x = 0.150, y = 0.500, z = 0.300 m").count() > 0, what="the readout of the new tool pose")
     np.testing.assert_allclose(link_poses(app), robot.fkine_all(q), atol=1e-12)
     assert app.error is None

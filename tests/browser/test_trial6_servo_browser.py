@@ -49,9 +49,9 @@ def _key(page, app, index: int, key: str, done) -> None:
 def test_a_lost_target_is_said_plainly_and_reset_brings_it_back(built, page):
     with serving(built(LAB)) as (app, url):
         _open(page, url)
-        wait_until(lambda: "Servoing: the corners are moving" in _text(page), timeout=30, what="the status line")
+        wait_until(lambda: "Servoing: the corners are moving" in _text(page), what="the status line")
         page.get_by_text("Start configuration", exact=True).first.click()
-        wait_until(lambda: page.get_by_role("slider").count() >= 10, timeout=20, what="the start sliders")
+        wait_until(lambda: page.get_by_role("slider").count() >= 10, what="the start sliders")
         # sliders: gain, tolerance, size, goal turn, then q1 .. q6
         _key(page, app, 4, "Home", lambda: app.model.q_start_deg[0] == 0)
         _key(page, app, 8, "End", lambda: app.model.q_start_deg[4] == -10)
@@ -61,7 +61,7 @@ def test_a_lost_target_is_said_plainly_and_reset_brings_it_back(built, page):
         app.pause()
         found = app.model.found
         assert found < 4
-        wait_until(lambda: f"Target lost: {found} of 4 corners found" in _text(page), timeout=20, what="the lost-target status")
+        wait_until(lambda: f"Target lost: {found} of 4 corners found" in _text(page), what="the lost-target status")
         close_notifications(page)  # the alert is gone: the status stays
         page.wait_for_timeout(1000)
         text = _text(page)
@@ -73,8 +73,8 @@ def test_a_lost_target_is_said_plainly_and_reset_brings_it_back(built, page):
         assert app.model.seen.shape == (found, 2)
 
         page.get_by_role("button", name="Reset").first.click()
-        wait_until(lambda: list(app.model.q_start_deg) == [34, 45, -182, 8, -48, -135], timeout=20, what="the default start")
-        wait_until(lambda: "Servoing: the corners are moving" in _text(page), timeout=30, what="servoing again after Reset")
+        wait_until(lambda: list(app.model.q_start_deg) == [34, 45, -182, 8, -48, -135], what="the default start")
+        wait_until(lambda: "Servoing: the corners are moving" in _text(page), what="servoing again after Reset")
         assert "Target lost" not in _text(page)
         assert app.error is None
 

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from testkit.browser import ARTIFACTS, serving, wait_until, project
+from testkit.browser import ARTIFACTS, serving, settled, wait_until, project
 from ejsgen.cli import build
 
 TITLE = "A rather long title for a lab, which the panel shows whole"
@@ -134,15 +134,14 @@ def test_arrow_keys_on_a_slider_leave_the_3d_view_alone(polish_lab, page):
     wait_until(lambda: len(clients()) == 1, what="the page to connect")
     camera = clients()[0].camera
     wait_until(lambda: camera.position is not None, what="the browser's camera")
-    page.wait_for_timeout(500)  # let the first view settle (framing is applied on connect)
-    before = np.array(camera.position)
+    before = settled(lambda: np.array(camera.position), what="the first view (framing is applied on connect)")
     slider = page.get_by_role("slider").first
     slider.focus()
     page.keyboard.down("ArrowRight")
     page.wait_for_timeout(600)
     page.keyboard.up("ArrowRight")
     wait_until(lambda: app.model.a > 1.05, what="the slider to move a")
-    page.wait_for_timeout(500)
+    settled(lambda: np.array(camera.position), what="the camera after the key")
     assert np.allclose(np.array(camera.position), before, atol=1e-6), "the 3D view moved with the slider's arrow key"
     # elsewhere, the arrow keys still turn the view
     box = page.locator("canvas[data-engine]").first.bounding_box()
@@ -167,7 +166,7 @@ def test_a_trail_is_drawn_in_its_own_colour(polish_lab, page):
     def purple_pixels() -> int:
         return int((np.abs(scene_pixels(page) - purple).sum(axis=2) < 40).sum())
 
-    wait_until(lambda: purple_pixels() > 100, timeout=20, what="the trail's mediumpurple in the 3D view")
+    wait_until(lambda: purple_pixels() > 100, what="the trail's mediumpurple in the 3D view")
     shot(page, "trail")
 
 
@@ -206,7 +205,7 @@ def test_the_first_view_frames_the_scene(name, built, page):
         camera = clients()[0].camera
         wait_until(lambda: camera.look_at is not None and np.linalg.norm(np.asarray(camera.position) - [3.0, 3.0, 3.0]) > 1e-6,
                    what="the framed camera to be reported back")
-        page.wait_for_timeout(500)
+        settled(lambda: (tuple(camera.position), tuple(camera.look_at)), what="the framed camera to settle")
         with app.lock:
             pts = content_points(name, app.world)
         ndc = project(camera, pts)
@@ -223,7 +222,7 @@ def test_the_camera_image_of_a_camera_lab_is_in_sight(built, page):
     with serving(built("paper/visual_servoing_eih")) as (app, url):
         open_lab(page, url)
         image = page.locator("img[src^='blob:']").first
-        image.wait_for(timeout=30_000)
+        image.wait_for()
         wait_until(lambda: image.bounding_box() is not None and image.bounding_box()["height"] > 100,
                    what="the camera image to be shown")
         assert in_viewport(page, image), image.bounding_box()
@@ -260,8 +259,8 @@ def test_plot_tick_labels_are_not_cut_at_the_edges(tmp_path, page):
         page.get_by_role("button", name="Play").first.click()
         wait_until(lambda: app.model.t > 123466, what="a window of points in the plot")
         app.pause()
-        page.wait_for_timeout(800)
         canvas = page.locator("div[data-key^=\"plot-\"] canvas").first
+        settled(lambda: canvas.screenshot(), what="the paused plot")
         png = np.asarray(Image.open(io.BytesIO(canvas.screenshot())).convert("RGB")).astype(int)
         ink = png.sum(axis=2) < 500  # text and lines, not the white background
         # no tick label touches the chart's left or right edge (it would be cut there)

@@ -40,7 +40,7 @@ def test_the_urdf_arm_is_drawn_with_its_meshes_and_follows_the_demo_path(served,
     wrist = app.world["ur5.link6"].T_world().copy()
 
     page.get_by_role("checkbox").first.check()
-    wait_until(lambda: app.model.demo, timeout=20, what="the demo checkbox to reach the model")
+    wait_until(lambda: app.model.demo, what="the demo checkbox to reach the model")
     page.get_by_role("button", name="Play").first.click()
     wait_until(lambda: app.model.k > 40, timeout=90, what="40 samples of the demo path")
     assert app.error is None
@@ -49,7 +49,7 @@ def test_the_urdf_arm_is_drawn_with_its_meshes_and_follows_the_demo_path(served,
     wait_until(lambda: np.mean(np.abs(canvas_pixels(page) - before).sum(axis=2) > 30) > 0.002, timeout=20,
                what="the arm to move on screen")
     page.get_by_role("button", name="Pause").first.click()
-    wait_until(lambda: not app.is_playing(), timeout=20, what="Pause")
+    wait_until(lambda: not app.is_playing(), what="Pause")
     buttons = page.locator(".mantine-Notification-closeButton")  # the GPU-less browser's WebGL notice
     for i in range(buttons.count()):
         try:

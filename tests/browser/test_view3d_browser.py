@@ -18,7 +18,7 @@ import re
 import numpy as np
 import pytest
 
-from testkit.browser import ARTIFACTS, wait_until
+from testkit.browser import ARTIFACTS, settled, wait_until
 
 SLOW = 120_000
 
@@ -147,10 +147,8 @@ def test_the_spec_camera_set_view_reset_view_and_a_reload(shared, page):
     app, url = shared
     open_lab(page, url)
     wait_until(camera_at(app, SPEC_POSITION, SPEC_TARGET, fov=SPEC_FOV), what="the spec's camera, reported by the browser")
-    page.wait_for_timeout(300)  # the picture of the reported camera
-
     # the marker sphere is where the spec's camera, worked out from the spec's numbers, draws it
-    img = canvas(page)
+    img = settled(lambda: canvas(page), what="the picture of the reported camera")
     h, w = img.shape[:2]
     want = pixel_of(np.array([0.6, 0.0, 0.3]), SPEC_POSITION, SPEC_TARGET, np.array([0.0, 0.0, 1.0]), SPEC_FOV, (w, h))
     seen = disc(img, "green")
@@ -171,9 +169,8 @@ def test_the_spec_camera_set_view_reset_view_and_a_reload(shared, page):
             return False
 
     wait_until(looks_down, what="the camera to look straight down after set_view(preset='top')")
-    page.wait_for_timeout(300)
     cam = the_client(app).camera
-    img = canvas(page)
+    img = settled(lambda: canvas(page), what="the picture of the camera looking down")
     want = pixel_of(np.array([0.6, 0.0, 0.3]), np.asarray(cam.position), np.asarray(cam.look_at), np.array([0.0, 1.0, 0.0]),
                     math.radians(30), (img.shape[1], img.shape[0]))
     seen = disc(img, "green")

@@ -104,7 +104,7 @@ def test_a_save_reloads_the_tab_keeping_its_values_and_a_broken_save_shows_the_e
         p_before = shown(page)[1]
         spec.write_text(SPEC.format(s=2.5, kmax=50, word="After", color="crimson"))
         saved = time.monotonic()
-        wait_until(lambda: (shown(page) or ("",))[0] == "After", timeout=10, what="the new label")
+        wait_until(lambda: (shown(page) or ("",))[0] == "After", what="the new label")
         seen = time.monotonic() - saved
         word, p, s, k = shown(page)
         assert s == 2.5  # its initial value changed: the new one
@@ -126,7 +126,7 @@ def test_a_save_reloads_the_tab_keeping_its_values_and_a_broken_save_shows_the_e
         spec.write_text(SPEC.format(s=2.5, kmax=50, word="After", color="crimson")
                         .replace("v: -k*x", "v: -k*xx  # <img src=x onerror=window.__pwned=1>"))
         error = page.locator("pre.ejs-build-error")
-        error.wait_for(timeout=10_000)
+        error.wait_for()
         text = error.inner_text()
         assert re.search(rf"{re.escape(str(spec))}:16:17: error: unknown name 'xx'; did you mean 'x'\?", text), text
         assert "v: -k*xx  # <img src=x onerror=window.__pwned=1>" in text  # the offending line, shown as text
@@ -139,7 +139,7 @@ def test_a_save_reloads_the_tab_keeping_its_values_and_a_broken_save_shows_the_e
 
         # fixed: the lab comes back, with its values
         spec.write_text(SPEC.format(s=2.5, kmax=50, word="Fixed", color="crimson"))
-        wait_until(lambda: (shown(page) or ("",))[0] == "Fixed", timeout=10, what="the lab back after the fix")
+        wait_until(lambda: (shown(page) or ("",))[0] == "Fixed", what="the lab back after the fix")
         assert page.locator("pre.ejs-build-error").count() == 0
         word, p_fixed, s, k = shown(page)
         assert k == 20 and s == 2.5 and p_fixed >= p

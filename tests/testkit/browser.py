@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import os
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -15,14 +16,49 @@ import numpy as np
 from testkit import ARTIFACTS
 
 
-def wait_until(condition: Callable[[], bool], *, timeout: float = 30.0, what: str = "condition") -> None:
-    """Poll ``condition`` (state on the server) until it holds, or fail saying what was awaited."""
+#: the seconds a wait on the page or the server may take by default: what a machine busy with
+#: two other CPU-bound processes (and the suite's other worker) needs, with room to spare
+WAIT_SECONDS = float(os.environ.get("EJSGEN_TEST_WAIT_SECONDS", "90"))
+
+
+def wait_until(condition: Callable[[], bool], *, timeout: float | None = None, what: str = "condition") -> None:
+    """Poll ``condition`` (state on the server) until it holds, or fail saying what was awaited.
+
+    ``timeout``: seconds (default ``WAIT_SECONDS``)."""
+    timeout = WAIT_SECONDS if timeout is None else timeout
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         if condition():
             return
         time.sleep(0.05)
-    raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+    if condition():  # a last look: the process may have been descheduled past the deadline
+        return
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what}")
+
+
+def settled(grab: Callable[[], Any], *, quiet: float = 0.5, timeout: float | None = None, what: str = "the page to settle") -> Any:
+    """What ``grab()`` returns once it has stayed the same for ``quiet`` seconds (the 3D view's
+    pixels after its first frames, a plot after a pause): a wait on the page's state instead
+    of a fixed sleep, which a busy machine outlasts. Values compare with ``numpy.array_equal``."""
+    timeout = WAIT_SECONDS if timeout is None else timeout
+    deadline = time.monotonic() + timeout
+    last = grab()
+    since = time.monotonic()
+    while time.monotonic() < deadline:
+        time.sleep(0.1)
+        now = grab()
+        if not _same(now, last):
+            last, since = now, time.monotonic()
+        elif time.monotonic() - since >= quiet:
+            return now
+    raise AssertionError(f"timed out after {timeout:g} s waiting for {what} (it kept changing)")
+
+
+def _same(a: Any, b: Any) -> bool:
+    try:
+        return bool(np.array_equal(a, b)) if isinstance(a, np.ndarray) or isinstance(b, np.ndarray) else a == b
+    except (TypeError, ValueError):
+        return False
 
 
 @contextmanager
