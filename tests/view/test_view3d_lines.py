@@ -343,3 +343,20 @@ def test_an_arrow_that_changes_length_is_moved_by_poses(mirrored):
         assert shaft[0][1] >= shaft[1][0] - 1e-6, k
         assert names <= {f"{ROOT}/v/g{i}" for i in range(3)} | {f"{ROOT}/v"}, names
     assert rebuilt <= 3, rebuilt  # the shaft's pieces made again while the lengths seen grow, then none
+
+
+def test_a_line_with_a_nan_point_leaves_the_scene_going(mirrored):
+    """A point that is not a number (an expression divided by zero) is sent as it is, and the
+    line's next finite points are drawn again (its rigid fit used to fail on the nan it kept,
+    and with it every later frame of the whole scene)."""
+    world, mirror, sent = mirrored
+    line = world.add(Line("l", points=np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]] * 10)))  # 29 segments
+    mirror.sync(world)
+    bad = line.props["points"].copy()
+    bad[1] = np.nan
+    line.set(points=bad)
+    mirror.sync(world)
+    good = np.column_stack([np.arange(30.0), np.zeros(30), np.zeros(30)])
+    line.set(points=good)
+    mirror.sync(world)
+    assert np.allclose(drawn(mirror, "l"), good, atol=1e-6)

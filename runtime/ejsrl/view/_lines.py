@@ -76,11 +76,11 @@ def rigid_fit(ref: np.ndarray, pts: np.ndarray) -> np.ndarray | None:
     """The rigid motion (4, 4) that takes the points ``ref`` (N, 3) onto ``pts`` (N, 3), if one does.
 
     Kabsch's method (the rotation from the SVD of the points' cross-covariance, no
-    reflection); None when the counts differ, there are fewer than 2 points, a point is
-    not finite, or a point lands farther than 1e-9 m + 1e-7 of the points' extent from
+    reflection); None when the counts differ, there are fewer than 2 points, a point (of
+    either) is not finite, or a point lands farther than 1e-9 m + 1e-7 of the points' extent from
     its target (the shape changed: a spring stretched, a line grew).
     """
-    if ref.shape != pts.shape or len(pts) < 2 or not np.all(np.isfinite(pts)):
+    if ref.shape != pts.shape or len(pts) < 2 or not np.all(np.isfinite(pts)) or not np.all(np.isfinite(ref)):
         return None
     ca, cb = ref.mean(axis=0), pts.mean(axis=0)
     a, b = ref - ca, pts - cb
@@ -140,7 +140,8 @@ class _Handle:
 
     def points(self, pts: np.ndarray) -> None:
         """Send ``pts`` (N, 3, node frame) as new points, in the frame the handle is posed in."""
-        self.local = (pts - self.T[:3, 3]) @ self.T[:3, :3]
+        with np.errstate(invalid="ignore", over="ignore"):  # a point may be nan or inf (then so is its local one)
+            self.local = (pts - self.T[:3, 3]) @ self.T[:3, :3]
         set_prop(self.h, "points", polyline_segments(self.local))
 
 
@@ -368,7 +369,8 @@ class PointsDraw(_Draw):
                 self.changing = True  # its points moved apart: one posed point each from now on
                 return False
             else:
-                g.local = (pts - g.T[:3, 3]) @ g.T[:3, :3]
+                with np.errstate(invalid="ignore", over="ignore"):
+                    g.local = (pts - g.T[:3, 3]) @ g.T[:3, :3]
                 set_prop(g.h, "points", g.local.astype(np.float32))
         if style != self.sent:
             for x in self.handles:
