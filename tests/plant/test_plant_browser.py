@@ -44,11 +44,11 @@ def _arm_v(page) -> float:
 
 
 def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page, tmp_path: Path,
-                                              monkeypatch: pytest.MonkeyPatch) -> None:
+                                              monkeypatch: pytest.MonkeyPatch, request: pytest.FixtureRequest) -> None:
     from ejsgen.cli import build
 
     plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--slot", "300"])
-    request_finalizer = plant.stop
+    request.addfinalizer(plant.stop)             # stopped even when the test fails half-way
 
     monkeypatch.setenv("EJSRL_PLANT_PORT", str(broker.port))
     app_dir = build(EXAMPLES / "paper" / "robualab.ejs.yaml", tmp_path / "robualab")
@@ -105,7 +105,6 @@ def test_mode_switch_queue_and_emergency_stop(broker: Broker, link_factory, page
         plant.proc.send_signal(signal.SIGKILL)
         wait_until(lambda: "Video: STALE" in _panel_text(page), timeout=30, what="the stale video flagged")
         assert "offline" in _panel_text(page)
-    request_finalizer()
 
 
 def _real_mode(page) -> None:
