@@ -46,6 +46,16 @@ def test_building_a_lab_that_uses_susan_compiles_its_kernels_in_the_background(t
     assert not list(tmp.glob("ejsrl-susan-numba-*")) and not cache.exists()  # no SUSAN: nothing started
     took = build(root / "examples" / "paper" / "visual_servoing_eih.ejs.yaml", tmp_path / "servo")
     assert not list(tmp.glob("ejsrl-susan-numba-*.done"))  # the build returned before the compile (12 s or more) ended
+    # another build meanwhile leaves the compile to the child at it (once it holds the cache's lock)
+    from ejsrl.vision.warm import _compiling
+
+    deadline = time.monotonic() + 120
+    while not (list(tmp.glob("ejsrl-susan-numba-*.lock")) and _compiling(next(tmp.glob("ejsrl-susan-numba-*.lock")))):
+        assert time.monotonic() < deadline, "the child never took the cache's lock"
+        time.sleep(0.05)
+    ask = "from ejsrl.vision.warm import start_in_background; print(start_in_background())"
+    r = subprocess.run([sys.executable, "-c", ask], capture_output=True, text=True, env=env, timeout=300)
+    assert "being compiled into numba's cache already" in r.stdout, r.stdout + r.stderr
     deadline = time.monotonic() + 600
     while not list(tmp.glob("ejsrl-susan-numba-*.done")):
         assert time.monotonic() < deadline, "the background compile did not finish"

@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib.util
 import sys
 import time
+from pathlib import Path
 
 __all__ = ["main", "start_in_background", "uses_susan"]
 
@@ -46,6 +47,8 @@ def start_in_background() -> str:
     try:
         if _susan._cache_mark("done").exists():
             return "SUSAN's kernels are in numba's cache already"
+        if _compiling(_susan._cache_mark("lock")):  # another build's (or app's) child is at it: one is enough
+            return "SUSAN's kernels are being compiled into numba's cache already"
     except OSError:  # a .pyz: nothing numba could cache
         return "numba cannot cache kernels run from here"
     pid = _susan._spawn_warm_child()
@@ -54,6 +57,18 @@ def start_in_background() -> str:
     # reap it when it ends, so a long-lived caller (``ejsgen run``) leaves no zombie
     threading.Thread(target=os.waitpid, args=(pid, 0), name="ejsrl-susan-warm-reaper", daemon=True).start()
     return f"compiling SUSAN's kernels into numba's cache in the background (process {pid})"
+
+
+def _compiling(lock: Path) -> bool:
+    """Whether a process holds ``lock`` (the compiling child's ``flock``) now."""
+    import fcntl
+
+    try:
+        with open(lock, "a") as f:
+            fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)  # released on close
+    except BlockingIOError:
+        return True
+    return False
 
 
 def main() -> int:
