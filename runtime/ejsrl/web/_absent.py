@@ -91,7 +91,7 @@ def install() -> None:
     package that really is importable is left alone."""
     from ejsrl.web import _msgpack
 
-    if importlib.util.find_spec("msgspec") is None and "msgspec" not in sys.modules:
+    if "msgspec" not in sys.modules and importlib.util.find_spec("msgspec") is None:
         msgspec = types.ModuleType("msgspec", "msgspec.msgpack for a browser build (ejsrl.web._msgpack)")
         msgspec.msgpack = _msgpack  # type: ignore[attr-defined]
         msgspec.DecodeError = _msgpack.DecodeError  # type: ignore[attr-defined]

@@ -109,12 +109,18 @@ class WebLab:
         _write(OUTBOX, out or b"")
         return out
 
-    def state(self) -> dict[str, Any]:
-        """The model's time and playing state, for the page and its tests."""
+    def state(self, names: Sequence[str] = ()) -> dict[str, Any]:
+        """The model's time, playing state, frame count, error and the values of the model
+        variables ``names`` (floats, or lists for arrays), for the page and its tests."""
         model = self.app.model
         t = model._ejs_time() if model.INDEPENDENT is not None else None
+        values = {}
+        for name in names:
+            if name in getattr(model, "VARIABLES", {}):
+                value = getattr(model, name)
+                values[name] = value.tolist() if hasattr(value, "tolist") else value
         return {"t": t, "playing": self.app.is_playing(), "frames": self.app.frame_count,
-                "error": None if self.app.error is None else str(self.app.error.message)}
+                "error": None if self.app.error is None else str(self.app.error.message), "values": values}
 
 
 def headless_csv(module: ModuleType, duration: float, *, variables: Sequence[str] | None = None,

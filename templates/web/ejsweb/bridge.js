@@ -78,7 +78,7 @@
         show(`Loading the lab… ${mb(got)} of ${mb(Math.max(size, got))} MB`);
       } else if (msg.type === "ready") {
         ready = true;
-        api.fps = msg.fps;
+        api.sim = { fps: msg.fps, steps: msg.steps, realtime: msg.realtime };
         Object.assign(api.timing, msg.timing, { ready: performance.now() - t0 });
         show("Starting the lab…");
         resolveReady();

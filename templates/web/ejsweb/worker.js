@@ -124,10 +124,13 @@ async function boot() {
   exports = instance.exports;
   wasi.initialize(instance);
   const started = performance.now() - t0;
-  const info = ask("import sys\nsys.path.insert(0, '/lab')\nfrom ejsrl.web.lab import open_lab\n" +
-    "lab = open_lab('app')\n_v = {'fps': lab.fps, 'title': lab.app.meta.title}");
+  const info = ask("import sys, time\n_t0 = time.perf_counter()\nsys.path.insert(0, '/lab')\n" +
+    "from ejsrl.web.lab import open_lab\n_t1 = time.perf_counter()\nlab = open_lab('app')\n" +
+    "_v = {'fps': lab.fps, 'steps': lab.sim.steps_per_display, 'realtime': bool(lab.sim.realtime), " +
+    "'title': lab.app.meta.title, 'runtime': _t1 - _t0, 'open': time.perf_counter() - _t1}");
   fps = info.fps;
-  postMessage({ type: "ready", fps, title: info.title, timing: { fetched, started, lab: performance.now() - t0 } });
+  const timing = { fetched, started, importRuntime: info.runtime * 1000, openLab: info.open * 1000, lab: performance.now() - t0 };
+  postMessage({ type: "ready", fps, steps: info.steps, realtime: info.realtime, title: info.title, timing });
 }
 
 /** Replace viser's binary placeholders ({__binary_index, dtype}) with typed arrays over `buffer`. */
@@ -206,7 +209,11 @@ function loop() {
 }
 
 function call(what, args) {
-  if (what === "state") return { ...ask("_v = lab.state()"), frameMs };
+  if (what === "state") {
+    const names = (args.vars || []).map(String);
+    if (!names.every((v) => /^[A-Za-z_][A-Za-z0-9_]*$/.test(v))) throw new Error("state: bad variable name");
+    return { ...ask(`_v = lab.state(${JSON.stringify(names)})`), frameMs };
+  }
   if (what === "headless") {
     const duration = Number(args.duration);
     if (!Number.isFinite(duration) || duration <= 0) throw new Error("headless: duration must be a positive number");
@@ -218,10 +225,10 @@ function call(what, args) {
       `_v = headless_csv(lab.module, ${duration}, variables=${names.length ? JSON.stringify(names) : "None"}, every=${every})`);
     return { status, csv: new TextDecoder().decode(io["run.csv"].data), ms: performance.now() - t };
   }
-  if (what === "steps") { // the cost of n model steps in this browser (bench/web.py)
-    const n = Math.max(1, Math.floor(Number(args.n) || 1));
-    return ask(`import time\n_m = lab.app\n_t = time.perf_counter()\n_m._run_steps(${n}) if False else [_m.model._ejs_step() for _ in range(${n})]\n` +
-      "_v = (time.perf_counter() - _t)");
+  if (what === "steps") { // the CPU time of n model steps in this browser (bench/web.py)
+    const n = Math.max(1, Math.min(1000000, Math.floor(Number(args.n) || 1)));
+    return ask(`import time\n_m = lab.app.model\n_t = time.process_time()\nfor _ in range(${n}):\n    _m._ejs_step()\n` +
+      "_v = time.process_time() - _t");
   }
   throw new Error("unknown call " + what);
 }
