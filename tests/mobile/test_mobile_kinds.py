@@ -265,3 +265,31 @@ def test_the_browser_mirror_draws_the_3d_kinds_and_moves_the_vehicle_by_its_pose
         assert mirror.counters["create"] == created and mirror.counters["geometry"] == 0
     finally:
         server.stop()
+
+
+def test_the_3d_lattice_lab_drives_its_plan_to_the_goal_pose_among_the_shelves(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    """examples/mobile_lattice_3d: the plan's cost is its moves' costs (1 a straight metre,
+    turn_cost a quarter turn) and it ends on the goal pose; the car, driven by pure pursuit
+    along the arcs, ends there too; the scene holds a block per shelf cell, the car at its
+    pose and one ray per beam."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+
+    app = load_app(build(ROOT / "examples" / "mobile_lattice_3d.ejs.yaml", tmp_path / "app"))
+    m = app.model
+    moves = m.moves
+    assert m.cost == pytest.approx(moves.count("S") + m.turn_cost * (moves.count("L") + moves.count("R")))
+    np.testing.assert_allclose(np.asarray(m.plan)[-1], [m.gx, m.gy, math.radians(m.gh)], atol=1e-9)
+    app.play()
+    for _ in range(int(30 / 0.05)):  # 30 s of driving (display frames step the model as the app's loop does)
+        app.frame()
+        if math.hypot(m.pose[0] - m.gx, m.pose[1] - m.gy) < 0.12:
+            break
+    assert app.error is None
+    assert math.hypot(m.pose[0] - m.gx, m.pose[1] - m.gy) < 0.12
+    assert abs(math.remainder(m.pose[2] - math.radians(m.gh), 2 * math.pi)) < 0.15
+    w = app.scene.world
+    (blocks,) = w.nodes["shelves"].parts()
+    assert len(blocks.vertices) == 8 * int(np.count_nonzero(m.shelves))
+    np.testing.assert_allclose(w.nodes["car"].T_world()[:2, 3], np.asarray(m.pose)[:2], atol=1e-12)
+    assert w.nodes["scan"].props["points"].shape == (62, 3)

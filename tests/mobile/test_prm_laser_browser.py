@@ -121,3 +121,60 @@ def test_prm_laser_lab_draws_the_robot_its_scan_and_the_map_where_the_model_says
         save_shot(page, "mobile_prm_laser")
     finally:
         page.close()
+
+
+@pytest.fixture(scope="module")
+def lattice_lab():
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from testkit import EXAMPLES
+
+    tmp = tempfile.TemporaryDirectory()
+    app = load_app(build(EXAMPLES / "mobile_lattice_3d.ejs.yaml", Path(tmp.name) / "app"))
+    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
+    try:
+        yield app, f"http://127.0.0.1:{server.get_port()}"
+    finally:
+        app.stop()
+        server.stop()
+        tmp.cleanup()
+
+
+@pytest.mark.browser
+def test_the_3d_lattice_lab_shows_the_car_driving_its_plan_with_its_laser(lattice_lab, browser_context):
+    """The 3D scene in the browser: the car (blue) moves across the picture as it drives the
+    plan, the laser's rays (red) are drawn, the car ends on the goal. Its gallery picture."""
+    from PIL import Image
+
+    app, url = lattice_lab
+    page = browser_context.new_page()
+    page.bring_to_front()
+    page.set_default_timeout(SLOW)
+    try:
+        page.goto(url)
+        page.wait_for_selector("canvas", state="attached", timeout=SLOW)
+        page.get_by_role("button", name="Restore view").first.wait_for(timeout=SLOW)
+        hide_notifications(page)
+        wait_until(lambda: "/s/" in page.evaluate("location.href"), what="the tab's session address")
+        token = re.search(r"/s/([A-Za-z0-9_-]+)/", page.evaluate("location.href")).group(1)
+        lab = app.classroom.sessions[token].app
+        m = lab.model
+
+        def blue_and_red() -> tuple[np.ndarray | None, int]:
+            img = np.asarray(Image.open(io.BytesIO(page.locator("canvas").first.screenshot())).convert("RGB")).astype(int)
+            r, g, b = img[..., 0], img[..., 1], img[..., 2]
+            ys, xs = np.nonzero((b > r + 60) & (b > g + 20))  # the car, #1c7ed6 shaded
+            red = int(np.count_nonzero((r > g + 80) & (r > b + 80)))  # the laser, #f03e3e
+            return (np.array([xs.mean(), ys.mean()]) if len(xs) > 20 else None), red
+
+        wait_until(lambda: blue_and_red()[0] is not None and blue_and_red()[1] > 50, timeout=60, what="the car and its laser drawn")
+        start, _ = blue_and_red()
+        page.get_by_role("button", name="Play").first.click()
+        wait_until(lambda: m.t > 8.0, timeout=120, what="8 s of driving")
+        save_shot(page, "mobile_lattice_3d")
+        moved, red = blue_and_red()
+        assert moved is not None and red > 50
+        assert np.hypot(*(moved - start)) > 40  # the car crossed the picture (pixels)
+        wait_until(lambda: math.hypot(m.pose[0] - m.gx, m.pose[1] - m.gy) < 0.12, timeout=120, what="the car on the goal")
+    finally:
+        page.close()
