@@ -172,11 +172,12 @@ class ViserView:
                 if world is not None:
                     drop_commanded(world)
                 with self._target.atomic():
-                    self.camera.show(self._cameras())
+                    self.camera.show(self._frame_cameras())
 
     def _frame_cameras(self) -> list[Any]:
-        """The cameras a frame moves (a followed object): a tab's own; for a shared view, every
-        tab's at once through the server's queue, with the frame's poses (ejsrl.view._shared_camera)."""
+        """The cameras a frame (a followed object, ``set_view``) or Restore view moves: a tab's own;
+        for a shared view, every tab's at once through the server's queue, with the frame's poses,
+        so that a tab opened later is replayed the camera it now has (ejsrl.view._shared_camera)."""
         if self.client is not None:
             return self._cameras()
         if self._shared_camera is None:
