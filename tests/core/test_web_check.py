@@ -259,3 +259,21 @@ def test_the_stated_limit_is_the_documented_one() -> None:
     doc = (Path(__file__).resolve().parents[2] / "specs" / "web.md").read_text(encoding="utf-8")
     assert f"{DATA_LIMIT_BYTES // 2**20} MB" in doc
     assert "What `--web` refuses" in doc and "What runs in the browser" in doc
+
+
+def test_build_web_refuses_at_the_command_line_and_writes_nothing(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    text = HEAD.replace("title: Web check\n", "title: Web check\nimports:\n  - import cv2\n") + "plant:\n  commands:\n    x: {to: joints}\n"
+    (tmp_path / "lab.ejs.yaml").write_text(text, encoding="utf-8")
+    r = subprocess.run([sys.executable, "-m", "ejsgen", "build", "lab.ejs.yaml", "--web", "-o", "site"], cwd=tmp_path,
+                       capture_output=True, text=True, timeout=300)
+    assert r.returncode != 0
+    lines = [line for line in r.stderr.splitlines() if ": error: " in line]
+    (l1, c1), (l2, c2) = position(text, "import cv2"), position(text, "plant:")
+    assert lines[0].startswith(f"lab.ejs.yaml:{l1}:{c1}: error: OpenCV (`cv2`) cannot run in a browser"), r.stderr
+    assert lines[1].startswith(f"lab.ejs.yaml:{l2}:{c2}: error: a remote plant (`plant:`) cannot run in a browser"), r.stderr
+    assert "Traceback" not in r.stderr
+    assert not (tmp_path / "site").exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["lab.ejs.yaml"]
