@@ -20,14 +20,14 @@ from testkit.browser import hide_notifications, save_shot, wait_until
 SLOW = 120_000
 
 
-@pytest.fixture(scope="module")
-def prm_lab():
+def _served(name: str):  # type: ignore[no-untyped-def]
+    """The example ``name`` built and served, one simulation per tab: (app, url), then stopped."""
     from ejsgen.cli import build
     from ejsrl.app import load_app
     from testkit import EXAMPLES
 
     tmp = tempfile.TemporaryDirectory()
-    app = load_app(build(EXAMPLES / "mobile_prm_laser.ejs.yaml", Path(tmp.name) / "app"))
+    app = load_app(build(EXAMPLES / f"{name}.ejs.yaml", Path(tmp.name) / "app"))
     server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
     try:
         yield app, f"http://127.0.0.1:{server.get_port()}"
@@ -35,6 +35,11 @@ def prm_lab():
         app.stop()
         server.stop()
         tmp.cleanup()
+
+
+@pytest.fixture(scope="module")
+def prm_lab():
+    yield from _served("mobile_prm_laser")
 
 
 def _far_from_segments(p: np.ndarray, A: np.ndarray, B: np.ndarray, d: float) -> bool:
@@ -125,19 +130,7 @@ def test_prm_laser_lab_draws_the_robot_its_scan_and_the_map_where_the_model_says
 
 @pytest.fixture(scope="module")
 def lattice_lab():
-    from ejsgen.cli import build
-    from ejsrl.app import load_app
-    from testkit import EXAMPLES
-
-    tmp = tempfile.TemporaryDirectory()
-    app = load_app(build(EXAMPLES / "mobile_lattice_3d.ejs.yaml", Path(tmp.name) / "app"))
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
-    try:
-        yield app, f"http://127.0.0.1:{server.get_port()}"
-    finally:
-        app.stop()
-        server.stop()
-        tmp.cleanup()
+    yield from _served("mobile_lattice_3d")
 
 
 @pytest.mark.browser
