@@ -290,9 +290,7 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
         with zipfile.ZipFile(art.stdlib_zip) as z:
             tops = zip_tops(z.namelist())
         modules = set(traced_modules(lab_dir, tmp / "io", sorted(tops | {"ejsrl", "viser", "app"})))
-        loaded_sources = [lab_dir / "app.py"] + [lab_dir / (m.replace(".", "/") + ".py") for m in modules]
-        loaded_sources += [lab_dir / m.replace(".", "/") / "__init__.py" for m in modules]
-        modules |= imported_names(p for p in loaded_sources if p.exists())
+        modules |= imported_names([lab_dir / "app.py"])  # the lab's own code, every branch of it
         py = _mkdir(out / "python")
         zip_name = art.stdlib_zip_guest_name if hasattr(art, "stdlib_zip_guest_name") else "python315.zip"
         trim_stdlib(art.stdlib_zip, tmp / zip_name, sorted(modules))

@@ -25,23 +25,16 @@ __all__ = ["ALWAYS", "SCIPY_CORE", "trim_stdlib", "imported_names", "zip_tops"]
 #: modules newer CPython imports by itself at start-up or from common modules (3.12-3.15)
 ALWAYS = (
     "encodings", "_colorize", "annotationlib", "_py_warnings", "_opcode_metadata", "_pydatetime", "_strptime",
-    "_sitebuiltins", "site", "importlib", "collections", "re", "traceback", "linecache", "tokenize", "token",
-    "typing", "functools", "types", "warnings", "codecs", "io", "abc", "os", "stat", "posixpath", "genericpath",
-    "_collections_abc", "keyword", "operator", "reprlib", "enum", "contextlib", "weakref", "_weakrefset", "copyreg",
-    "dataclasses", "inspect", "dis", "opcode", "ast", "string", "textwrap", "json", "struct", "numbers", "datetime",
-    "locale", "random", "bisect", "heapq", "hashlib", "base64", "threading", "queue", "concurrent", "asyncio",
-    "selectors", "copy", "fnmatch", "pathlib", "shutil", "tempfile", "zipfile", "glob", "csv", "io", "pprint",
-    "logging", "signal", "math", "fractions", "decimal", "_pydecimal", "difflib", "gettext", "argparse", "shlex",
-    "platform", "sysconfig", "typing_extensions", "uuid", "secrets", "hmac", "mimetypes", "urllib", "http",
-    "email", "html", "ipaddress", "socket", "gzip", "bz2", "lzma", "compression", "_compression", "zoneinfo",
-    "calendar", "colorsys", "webbrowser", "subprocess", "runpy", "pkgutil", "numpy",
+    "_sitebuiltins", "importlib", "collections", "re", "json", "concurrent", "asyncio", "logging", "pathlib",
+    "zipfile", "compression", "zoneinfo", "typing_extensions", "numpy",
 )
 
 #: SciPy's subpackages that its others import: kept whenever SciPy is used
 SCIPY_CORE = ("_lib", "linalg", "sparse", "special", "_external")
 
 #: never kept: tests, build tools, type stubs and what a page cannot run
-_DROP_PARTS = {"tests", "test", "f2py", "_pyinstaller", "doc", "idlelib", "tkinter",
+_DROP_PARTS = {"tests", "test", "f2py", "_pyinstaller", "doc", "idlelib", "tkinter", "turtle.pyc", "pdb.pyc",
+               "pydoc.pyc", "doctest.pyc", "turtledemo",
                "turtledemo", "ensurepip", "pydoc_data", "_pyrepl", "profiling", "lib2to3", "venv"}
 
 

@@ -10,6 +10,7 @@
   "use strict";
   const RealWorker = window.Worker;
   const base = new URL("ejsweb/", document.baseURI);
+  const started = performance.now();
   let python = null;
   let socket = null; // the viser client's side, once it made its websocket worker
   let ready = false;
@@ -54,11 +55,20 @@
   }
   const mb = (n) => (n / 1e6).toFixed(1);
 
+  // The client is told it is connected as soon as it asks (a websocket that opened), so what
+  // it sends first (its camera, which makes the lab build its panel) is kept here until the
+  // lab's Python is ready, then handed over in order.
+  const early = [];
   function connect() {
-    if (!ready || !wanted || connected || socket === null) return;
-    connected = true;
-    socket.emit({ type: "connected" });
-    python.postMessage({ type: "connect" });
+    if (!wanted || socket === null) return;
+    if (!connected) {
+      connected = true;
+      socket.emit({ type: "connected" });
+    }
+    if (ready && early !== null) {
+      for (const message of early.splice(0)) python.postMessage({ type: "send", message });
+      python.postMessage({ type: "connect" });
+    }
   }
 
   function startPython() {
@@ -68,6 +78,9 @@
       const msg = e.data;
       if (msg.type === "batch") {
         if (!api.timing.firstBatch) api.timing.firstBatch = performance.now() - t0;
+        if (!api.timing.panel && msg.messages.some((m) => m.type === "GuiButtonMessage")) {
+          api.timing.panel = performance.now() - t0; // the panel's controls reach the client
+        }
         if (socket !== null) socket.emit({ type: "message_batch", messages: msg.messages });
         hide();
       } else if (msg.type === "progress") {
@@ -115,8 +128,10 @@
     }
     postMessage(data) {
       if (data.type === "send") {
-        if (connected) python.postMessage({ type: "send", message: data.message });
+        if (ready) python.postMessage({ type: "send", message: data.message });
+        else if (early.length < 1000) early.push(data.message);
       } else if (data.type === "set_server" || data.type === "retry") {
+        if (!api.timing.clientAsked) api.timing.clientAsked = performance.now() - started;
         wanted = true;
         connect();
       }

@@ -21,6 +21,7 @@ let stdout = [];
 let fps = 30;
 let connected = false;
 let inbox = [];
+let cameraAt = 0; // when the client's first camera message came (it makes the lab build its panel)
 const io = { inbox: new File([]), outbox: new File([]), "run.csv": new File([]) };
 
 /** Fetch `url` (gzip-compressed: `url` ends in .gz) into a Uint8Array, reporting progress. */
@@ -212,7 +213,7 @@ function call(what, args) {
   if (what === "state") {
     const names = (args.vars || []).map(String);
     if (!names.every((v) => /^[A-Za-z_][A-Za-z0-9_]*$/.test(v))) throw new Error("state: bad variable name");
-    return { ...ask(`_v = lab.state(${JSON.stringify(names)})`), frameMs };
+    return { ...ask(`_v = lab.state(${JSON.stringify(names)})`), frameMs, cameraAt };
   }
   if (what === "headless") {
     const duration = Number(args.duration);
@@ -225,10 +226,10 @@ function call(what, args) {
       `_v = headless_csv(lab.module, ${duration}, variables=${names.length ? JSON.stringify(names) : "None"}, every=${every})`);
     return { status, csv: new TextDecoder().decode(io["run.csv"].data), ms: performance.now() - t };
   }
-  if (what === "steps") { // the CPU time of n model steps in this browser (bench/web.py)
+  if (what === "steps") { // seconds of n model steps in this browser (bench/web.py): the shim has no CPU clock
     const n = Math.max(1, Math.min(1000000, Math.floor(Number(args.n) || 1)));
-    return ask(`import time\n_m = lab.app.model\n_t = time.process_time()\nfor _ in range(${n}):\n    _m._ejs_step()\n` +
-      "_v = time.process_time() - _t");
+    return ask(`import time\n_m = lab.app.model\n_t = time.perf_counter()\nfor _ in range(${n}):\n    _m._ejs_step()\n` +
+      "_v = time.perf_counter() - _t");
   }
   throw new Error("unknown call " + what);
 }
@@ -236,6 +237,7 @@ function call(what, args) {
 onmessage = (e) => {
   const msg = e.data;
   if (msg.type === "send") {
+    if (msg.message && msg.message.type === "ViewerCameraMessage" && !cameraAt) cameraAt = performance.now();
     try { inbox.push(encode(msg.message)); } catch (err) { log("warn", "dropped a client message: " + err); }
   } else if (msg.type === "connect") {
     if (!connected) {
