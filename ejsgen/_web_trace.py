@@ -22,8 +22,10 @@ from pathlib import Path
 
 __all__ = ["traced_modules", "HIDDEN", "TraceError"]
 
-#: packages the browser's Python does not have: hidden from the traced run
-HIDDEN = ("msgspec", "websockets", "zstandard", "rich", "cv2", "ssl", "_ssl")
+#: packages the browser's Python does not have, hidden from the traced run; and two it has that
+#: trimesh only uses when present (graphs, image textures): left out of the page to keep its
+#: download small (6 MB), so trimesh runs without them there, as on a machine without them
+HIDDEN = ("msgspec", "websockets", "zstandard", "rich", "cv2", "ssl", "_ssl", "networkx", "PIL")
 
 _SCRIPT = r"""
 import importlib.abc, importlib.util, json, os, sys

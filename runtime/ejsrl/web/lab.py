@@ -130,7 +130,8 @@ def headless_csv(module: ModuleType, duration: float, *, variables: Sequence[str
     from ejsrl.app import App, SimConfig
 
     sim = getattr(module, "SIMULATION", SimConfig())
-    app = App(module.Model, module.VIEW, sim=sim, meta=module.META)
+    base_dir = Path(getattr(module, "__file__", None) or ".").resolve().parent  # the lab's assets, as app.py finds them
+    app = App(module.Model, module.VIEW, sim=sim, meta=module.META, base_dir=base_dir)
     log = io.StringIO()
     with open(path, "w", newline="") as f:
         return app.run_headless(duration, csv_file=f, variables=variables, every=every, log=log)
