@@ -143,8 +143,8 @@ def _lab_files(app_dir: Path) -> dict[str, Path]:
     runtime = Path(__import__("ejsrl").__file__).resolve().parent
     for f in sorted(runtime.rglob("*")):
         rel = f.relative_to(runtime).as_posix()
-        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc"):
-            continue
+        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc") or rel.startswith("robotics/data/"):
+            continue  # robotics/data: the UR5's URDF, which a page cannot read (lxml)
         files[f"ejsrl/{rel}"] = f
     vdir = Path(viser.__file__).resolve().parent
     for f in sorted(vdir.rglob("*.py")):
@@ -157,8 +157,9 @@ def _lab_files(app_dir: Path) -> dict[str, Path]:
     tdir = Path(trimesh.__file__).resolve().parent
     for f in sorted(tdir.rglob("*")):
         rel = f.relative_to(tdir).as_posix()
-        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc"):
-            continue
+        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc") or rel.startswith(("resources/templates/",
+                                                                                          "resources/schema/")):
+            continue  # the templates and schemas of trimesh's exporters: a lab only reads meshes
         files[f"trimesh/{rel}"] = f
     return files
 

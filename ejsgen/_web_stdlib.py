@@ -101,6 +101,11 @@ def _kept_roots(modules: Iterable[str], tops: set[str]) -> set[str]:
     return roots
 
 
+#: NumPy's subpackages that ``import numpy`` does not load (NumPy 2 loads them on first use):
+#: kept only where the lab loads them
+NUMPY_LAZY = ("ma", "polynomial", "random", "fft", "testing", "typing", "ctypeslib", "rec", "char", "strings")
+
+
 def _dropped(name: str) -> bool:
     parts = name.split("/")
     return any(p in _DROP_PARTS for p in parts[1:-1]) or parts[0] in _DROP_PARTS
@@ -112,7 +117,10 @@ def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int
     with zipfile.ZipFile(src) as zin:
         infos = zin.infolist()
         tops = zip_tops(i.filename for i in infos)
+        modules = list(modules)
         roots = _kept_roots(modules, tops)
+        used = {".".join(m.split(".")[:2]) for m in modules}
+        lazy = tuple(f"numpy/{sub}/" for sub in NUMPY_LAZY if f"numpy.{sub}" not in used)
         # every module of the standard library's top level (not its packages): small, and what a
         # newer CPython's own modules import (traceback imports codeop in 3.15) is then there
         stdlib = tops - third_party(zin)
@@ -121,7 +129,7 @@ def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int
         with zipfile.ZipFile(dest, "w", compression=zipfile.ZIP_STORED) as zout:
             for info in infos:
                 name = info.filename
-                if info.is_dir() or _dropped(name) or not any(name.startswith(r) for r in roots):
+                if info.is_dir() or _dropped(name) or name.startswith(lazy) or not any(name.startswith(r) for r in roots):
                     continue
                 if name.endswith((".pyi", ".pxd", ".pyx", ".h", ".c", ".cpp", ".f", ".pc", ".build", ".template")):
                     continue
