@@ -205,8 +205,10 @@ function loop() {
   const period = 1000 / fps;
   next += period;
   let delay = next - performance.now();
-  if (delay < 0) { next = performance.now(); delay = 0; }
-  setTimeout(loop, delay);
+  // a late frame is made up by the next ones (the lab's rate holds on a busy machine); after
+  // more than a few periods behind (the tab was in the background) the schedule starts again
+  if (delay < -4 * period) { next = performance.now(); delay = 0; }
+  setTimeout(loop, Math.max(0, delay));
 }
 
 function call(what, args) {
