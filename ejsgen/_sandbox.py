@@ -78,12 +78,27 @@ def bwrap_hint(what: str = "grading") -> str | None:
     return None
 
 
+def _packages() -> list[Path]:
+    """Where ejsgen and ejsrl are imported from, each its package folder's parent (a checkout or
+    site-packages; the package folder itself if that is ``/tmp``): an editable install finds them
+    through a finder of its own, not ``sys.path``."""
+    import ejsgen
+    import ejsrl
+
+    found: list[Path] = []
+    for module in (ejsgen, ejsrl):
+        folder = Path(module.__file__ or ".").resolve().parent
+        found.append(folder if folder.parent == Path("/tmp").resolve() else folder.parent)
+    return found
+
+
 def _python_under_tmp() -> list[Path]:
-    """This Python's installation and import path where they lie under ``/tmp`` (a venv made
-    there), which the sandbox's empty ``/tmp`` would hide: shown read-only."""
+    """This Python's installation, import path and the ejsgen/ejsrl packages where they lie
+    under ``/tmp`` (a venv or a checkout made there), which the sandbox's empty ``/tmp`` would
+    hide: shown read-only."""
     tmp = Path("/tmp").resolve()
     found: list[Path] = []
-    for entry in (sys.prefix, sys.exec_prefix, sys.base_prefix, *sys.path):
+    for entry in (sys.prefix, sys.exec_prefix, sys.base_prefix, *sys.path, *_packages()):
         if not entry:
             continue
         path = Path(entry).resolve()
@@ -179,4 +194,8 @@ def _reason(status: int, stderr: str, limits: Limits) -> str:
         return f"used more than {limits.memory_mb} MB of memory and was stopped"
     if "No space left on device" in stderr:
         return f"filled its {limits.file_mb} MB /tmp and was stopped"
+    for name in ("ejsgen", "ejsrl"):
+        if f"No module named {name}" in stderr or f"No module named '{name}'" in stderr:
+            return (f"could not import {name} in the sandbox, which shows the file system read-only with an empty /tmp: "
+                    f"install ejsgen where the sandbox sees it (a checkout and venv outside /tmp, then pip install -e .)")
     return ""
