@@ -42,3 +42,19 @@ def did_you_mean(name: str, candidates: Iterable[str], *, cutoff: float = 0.6) -
     """``"did you mean 'x'?"`` or an empty string."""
     c = closest(name, candidates, cutoff=cutoff)
     return f"did you mean '{c}'?" if c else ""
+
+
+#: a key's other spellings (former, or British/American) -> the key to use where a model has it
+#: (the mobile kinds' keys are the drawing panel's in the 3D scene too: issue #27)
+SYNONYMS: dict[str, tuple[str, ...]] = {
+    "centre": ("position",), "center": ("position",), "path": ("points",), "particles": ("points",),
+}
+
+
+def did_you_mean_key(name: str, fields: Iterable[str]) -> str:
+    """``"did you mean 'x'?"`` for an unknown key: a synonym the model has, else the closest field; or ''."""
+    pool = set(fields)
+    for alt in SYNONYMS.get(name, ()):
+        if alt in pool:
+            return f"did you mean '{alt}'?"
+    return did_you_mean(name, pool)

@@ -455,11 +455,12 @@ class ViewCompiler:
                 continue
             props[prop] = _PROP_COMPILERS[decl.type](self, value, ppath, "", what)
         kw["props"] = props
+        placed_by = None if "position" in _OWN_PROPS[kind] else p.position  # an ellipse's position is its centre (an own prop)
         if p.transform is not None:
-            if p.position is not None or p.rotation is not None:
+            if placed_by is not None or p.rotation is not None:
                 c.errors.append(SpecError(c.loc(path + ("transform",)), "give either 'transform' or 'position'/'rotation', not both"))
             kw["transform"] = self.matrix(p.transform, path + ("transform",), "", f"the transform of '{name}'", (4, 4))
-        if p.position is not None:
+        if placed_by is not None:
             kw["position"] = self.vector(p.position, path + ("position",), "", f"the position of '{name}'", 3)
         if p.rotation is not None:
             kw["rotation"] = self.vector(p.rotation, path + ("rotation",), "", f"the rotation of '{name}'", 3)

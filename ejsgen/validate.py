@@ -16,7 +16,7 @@ from pydantic import BaseModel, ValidationError
 
 from ejsrl.sim import names as _names
 
-from ejsgen._suggest import did_you_mean
+from ejsgen._suggest import did_you_mean, did_you_mean_key
 from ejsgen._view_union import SCENE_ELEMENT, VIEW_ELEMENT, gui_models, scene_models, view_adapter
 from ejsgen.errors import SpecError, SpecErrors
 from ejsgen.spec import GUI_ELEMENT_MODELS, SCENE_ELEMENT_MODELS, Spec, Strict, Variable
@@ -241,7 +241,7 @@ def _spec_errors(doc: Document, errors: Iterable[Any], base: Path_, model: type[
             name = key[-1]
             parent_path, parent_val = _data_at(data, key[:-1])
             fields = _fields_at(model, key[:-1], data)
-            hint = did_you_mean(str(name), fields)
+            hint = did_you_mean_key(str(name), fields)
             allowed = "" if hint else (f"allowed: {', '.join(sorted(fields))}" if fields else "")
             out.append(SpecError(doc.key_loc(path), f"unknown key '{name}'", hint or allowed))
             continue

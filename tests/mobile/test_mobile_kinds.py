@@ -195,9 +195,9 @@ view:
       - vehicle: {name: car, pose: x, length: 1.2, height: 0.4, color: steelblue}
       - laser: {name: scan, pose: x, ranges: "sc.scan(x)", color: red}
       - occupancy: {name: map, grid: "BinaryOccupancyGrid(walls, cellsize=0.5)", height: 0.3}
-      - path: {name: route, path: pts, color: green}
-      - ellipse: {name: unc, centre: "x[:2]", covariance: P, scale: 2, confidence: 0.5}
-      - particles: {name: cloud, particles: pts, color: orange}
+      - path: {name: route, points: pts, color: green}
+      - ellipse: {name: unc, position: "x[:2]", covariance: P, scale: 2, confidence: 0.5}
+      - particles: {name: cloud, points: pts, color: orange}
 """
 
 

@@ -1,7 +1,8 @@
 """The 3D scene's mobile-robot kinds (declared in :mod:`ejsrl.world.kinds`): their world
 nodes, which turn a pose ``[x, y, theta]``, a scan, a grid, a path, a covariance or
 particles into what the scene draws (a solid, a polyline, a point cloud) on the plane
-``z = 0`` of the element's frame (its ``position``/``rotation``, if given, place that plane).
+``z = 0`` of the element's frame (its ``position``/``rotation``, if given, place that plane;
+an ellipse's ``position`` is its centre [x, y] on the plane, as in the drawing panel).
 
 Importing this module registers the classes in ``ejsrl.world.scene.NODE_KINDS``.
 """
@@ -135,26 +136,35 @@ class LaserNode(_Derived):
         return _lift(star, float(p["z"]))
 
 
-class PathNode(_Derived):
-    """A path through ``path`` (N x 2 points or N x 3 poses), ``z`` above the plane."""
+class PathNode(Node):
+    """A path through ``points`` (N x 2 points or N x 3 poses), ``z`` above the plane: the
+    node holds them as given lifted to N x 3 at ``z`` (what the scene draws), so an
+    unchanged path is not sent again."""
 
     kind = "path"
-    SOURCES = ("path", "z")
 
-    def _points(self) -> np.ndarray:
-        """The rows of the node's array property (its first source) at ``z``."""
-        rows = self.props.get(self.SOURCES[0])
+    def __init__(self, name: str, **kw: Any) -> None:
+        kw["points"] = self._lifted(kw.get("points", self.DEFAULTS["points"]), kw.get("z", self.DEFAULTS["z"]))
+        super().__init__(name, **kw)
+
+    def set(self, **values: Any) -> bool:
+        if "points" in values or "z" in values:
+            values["points"] = self._lifted(values.get("points", self.props["points"]), values.get("z", self.props["z"]))
+        return super().set(**values)
+
+    def _lifted(self, rows: Any, z: Any) -> np.ndarray:
+        """The rows' x and y (N, 2) with ``z`` as a third column: (N, 3)."""
         if rows is None:
             return np.zeros((0, 3))
-        return _lift(_xy(rows, f"a {self.kind}'s {self.SOURCES[0]}"), float(self.props["z"]))
+        return _lift(_xy(rows, f"a {self.kind}'s points"), float(z))
 
 
 class EllipseNode(_Derived):
-    """The ``confidence`` ellipse of the 2 x 2 (top-left) ``covariance`` about ``centre``,
+    """The ``confidence`` ellipse of the 2 x 2 (top-left) ``covariance`` about ``position`` [x, y],
     drawn ``scale`` times larger, ``z`` above the plane."""
 
     kind = "ellipse"
-    SOURCES = ("centre", "covariance", "confidence", "scale", "z")
+    SOURCES = ("position", "covariance", "confidence", "scale", "z")
 
     def _points(self) -> np.ndarray:
         from .drawing import ellipse_points
@@ -166,15 +176,14 @@ class EllipseNode(_Derived):
         if P.ndim != 2 or P.shape[0] != P.shape[1] or P.shape[0] < 2:
             raise ValueError(f"a covariance must be a square matrix, 2 x 2 or larger, but has shape {P.shape}")
         s = float(p["scale"])
-        c = np.asarray(p["centre"], dtype=float).reshape(-1)[:2]
+        c = np.asarray(p["position"], dtype=float).reshape(-1)[:2]
         return _lift(ellipse_points(s * s * P[:2, :2], c, confidence=float(p["confidence"])), float(p["z"]))
 
 
 class ParticlesNode(PathNode):
-    """A point at each row of ``particles`` (N x 2 or N x 3 poses), ``z`` above the plane."""
+    """A point at each row of ``points`` (N x 2 or N x 3 poses), ``z`` above the plane."""
 
     kind = "particles"
-    SOURCES = ("particles", "z")
 
 
 class OccupancyNode(Node):
