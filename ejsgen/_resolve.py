@@ -22,7 +22,7 @@ from pathlib import Path
 from ejsgen._assets import ASSET_FUNCTION, asset_call, opens_an_asset, unlisted_file
 from ejsgen._code_bounds import MAX_CODE_DEPTH, too_deep
 from ejsgen._power import power_text
-from ejsgen._suggest import did_you_mean
+from ejsgen._suggest import did_you_mean, module_hint
 from ejsgen.errors import CodeSyntaxError, Location, SpecError, UnknownNameError
 from ejsgen.validate import MATH_NAMES
 from ejsgen.yamlload import TextOrigin
@@ -264,6 +264,7 @@ class _Rewriter(ast.NodeTransformer):
         self.scopes: list[set[str]] = [block_locals]
         self.errors: list[SpecError] = []
         self._called: set[int] = set()
+        self._attribute_bases: set[int] = set()  # names written as ``name.attr`` (a module, if unknown)
         self._asset_open: set[int] = set()  # ``open`` names that read an asset, strings already in asset(...)
 
     # scope helpers
@@ -321,7 +322,8 @@ class _Rewriter(ast.NodeTransformer):
             visible, share = self.names.elsewhere[name]
             self._err(node, f"unknown name '{name}' here: {visible}", share, kind=UnknownNameError)
             return node
-        self._err(node, f"unknown name '{name}'", self._suggest(name, called=id(node) in self._called), kind=UnknownNameError)
+        hint = module_hint(name) if id(node) in self._attribute_bases else ""
+        self._err(node, f"unknown name '{name}'", hint or self._suggest(name, called=id(node) in self._called), kind=UnknownNameError)
         return node
 
     def _suggest(self, name: str, *, called: bool) -> str:
@@ -387,6 +389,11 @@ class _Rewriter(ast.NodeTransformer):
                 "'^=' is not a power in Python: it is the bitwise exclusive or",
                 f"did you mean '{target} **= {ast.unparse(node.value)}' (** is the power)? for an exclusive or write {target} = np.bitwise_xor({target}, ...)",
             ))
+        return self.generic_visit(node)
+
+    def visit_Attribute(self, node: ast.Attribute) -> ast.AST:
+        if isinstance(node.value, ast.Name):
+            self._attribute_bases.add(id(node.value))
         return self.generic_visit(node)
 
     def visit_Call(self, node: ast.Call) -> ast.AST:

@@ -136,7 +136,8 @@ def _expression(vc: "ViewCompiler", value: str, path: "Path_", what: str, fits: 
         return None
     shape = infer_shape(res[1], vc.c.var_shapes)
     if shape is not None and not fits(shape):
-        vc.c.errors.append(SpecError(vc.c.loc(path), f"{what} must be {need}, but '{value}' has shape {shape}", hint(shape)))
+        vc.c.errors.append(SpecError(vc.c.loc(path), f"{what} must be {need}, but '{value}' has shape {shape}",
+                                         hint(shape) or vc.c.text_hint(value)))
         return None
     return vc.dynamic(path, "", what, value)
 

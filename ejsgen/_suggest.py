@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import difflib
+import importlib.util
+import sys
 from collections.abc import Iterable
 
 
@@ -58,3 +60,39 @@ def did_you_mean_key(name: str, fields: Iterable[str]) -> str:
         if alt in pool:
             return f"did you mean '{alt}'?"
     return did_you_mean(name, pool)
+
+
+#: modules usually imported under a short name: the import line that binds it
+_MODULE_ALIASES = {"plt": "import matplotlib.pyplot as plt", "pd": "import pandas as pd", "sp": "import scipy as sp"}
+
+
+def module_hint(name: str) -> str:
+    """For an unknown ``name`` used as ``name.attr``: if it is a module (the standard library's,
+    an installed one, or a usual alias such as ``plt``), the import line to add to the spec's
+    ``imports:`` list; else ''."""
+    if name == "numpy":
+        return "NumPy is already 'np' without an import (np.zeros, np.linalg.norm); or add 'import numpy' to the spec's imports: list"
+    if name == "math":
+        return ("'math' is a module: add 'import math' to the spec's imports: list "
+                "(its functions and constants are already names without 'math.': sin(x), sqrt(x), pi)")
+    line = _MODULE_ALIASES.get(name)
+    if line is None and (name in sys.stdlib_module_names or _installed(name)):
+        line = f"import {name}"
+    return f"'{name}' is a module: add '{line}' to the spec's imports: list" if line else ""
+
+
+def _installed(name: str) -> bool:
+    """A top-level module of that name can be imported (found, not imported)."""
+    if not name.isidentifier() or name.startswith("_"):
+        return False
+    try:
+        return importlib.util.find_spec(name) is not None
+    except (ImportError, ValueError):
+        return False
+
+
+def text_value_hint(name: str, value: str) -> str:
+    """Why a variable given a quoted value has shape (): it is that text, not what it computes."""
+    shown = value if len(value) <= 60 else value[:57] + "..."
+    return (f"'{name}' is text: its value \"{shown}\" is in quotes, so it is not computed; "
+            f"for the value of an expression declare {name}: {{expr: \"{shown}\"}}")

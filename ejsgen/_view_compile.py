@@ -197,7 +197,7 @@ class ViewCompiler:
                 return None
             shape = infer_shape(res[1], self.c.var_shapes)
             if length is not None and shape is not None and shape != (length,):
-                self.c.errors.append(SpecError(self.c.loc(path), f"{what} needs {length} numbers, but '{value}' has shape {shape}"))
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} needs {length} numbers, but '{value}' has shape {shape}", self.c.text_hint(value)))
             return self.dynamic(path, base, what, value)
         if not isinstance(value, list):
             self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be a list or an expression"))
@@ -225,9 +225,9 @@ class ViewCompiler:
                 return None
             got = infer_shape(res[1], self.c.var_shapes)
             if shape is not None and got is not None and got != shape:
-                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be {shape[0]}x{shape[1]}, but '{value}' has shape {got}"))
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be {shape[0]}x{shape[1]}, but '{value}' has shape {got}", self.c.text_hint(value)))
             if cols is not None and got is not None and (len(got) != 2 or got[1] != cols):
-                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be N x {cols}, but '{value}' has shape {got}"))
+                self.c.errors.append(SpecError(self.c.loc(path), f"{what} must be N x {cols}, but '{value}' has shape {got}", self.c.text_hint(value)))
             return self.dynamic(path, base, what, value)
         if isinstance(value, list) and value and all(isinstance(r, list) for r in value):
             if any(isinstance(x, str) for r in value for x in r):

@@ -83,7 +83,7 @@ def _point(vc: ViewCompiler, value: Any, path: Path_, what: str, *, sets: bool) 
         if not ok:
             need = "[x, y] or an N x 2 array" if sets else "[x, y]"
             hint = "a 2 x N array: transpose it with .T" if len(shape) == 2 and shape[0] == 2 else ""
-            c.errors.append(SpecError(c.loc(path), f"{what} must be {need}, but '{value}' has shape {shape}", hint))
+            c.errors.append(SpecError(c.loc(path), f"{what} must be {need}, but '{value}' has shape {shape}", hint or c.text_hint(value)))
             return None
         return vc.dynamic(path, "", what, value)
     return vc.vector(value, path, "", what, 2)
@@ -98,7 +98,7 @@ def _points(vc: ViewCompiler, value: Any, path: Path_, what: str) -> Any:
             return None
         shape = infer_shape(res[1], c.var_shapes)
         if shape is not None and not (len(shape) == 2 and shape[1] == 2):
-            hint = "a 2 x N array: transpose it with .T" if len(shape) == 2 and shape[0] == 2 else "np.column_stack([xs, ys]) makes one"
+            hint = "a 2 x N array: transpose it with .T" if len(shape) == 2 and shape[0] == 2 else c.text_hint(value) or "np.column_stack([xs, ys]) makes one"
             c.errors.append(SpecError(c.loc(path), f"{what} must be an N x 2 array of [x, y] rows, but '{value}' has shape {shape}", hint))
             return None
         return vc.dynamic(path, "", what, value)

@@ -15,7 +15,7 @@ from typing import Any
 from ejsgen._assets import ASSET_FUNCTION, asset_names
 from ejsgen._resolve import Names, Snippet, assigned_names, parse_snippet, rewrite, rewrite_source, source_lines
 from ejsgen._shapes import infer_shape, literal_shape
-from ejsgen._suggest import did_you_mean
+from ejsgen._suggest import did_you_mean, text_value_hint
 from ejsgen.errors import Location, SpecError, SpecErrors
 from ejsgen.emit import declare_method, list_lines, page_call
 from ejsgen.plan import AppPlan, Call, EventPlan, Expr, Line, Method, OdePlan, ProgramPlan, Ref, Variable, body_lines, py
@@ -193,6 +193,15 @@ class Compiler:
             return None
         assert isinstance(tree, ast.Expression)
         return rewrite_source(snippet, tree) or ast.unparse(tree.body), tree.body
+
+    def text_hint(self, expr: str) -> str:
+        """For an expression that is only the name of a variable whose value is text (a
+        quoted ``"np.zeros((22, 3))"``: shape ()), how to declare it as an expression; else ''."""
+        name = expr.strip()
+        for v in self.checked.variables:
+            if v.name == name and v.decl.expr is None and isinstance(v.decl.value, str):
+                return text_value_hint(name, v.decl.value)
+        return ""
 
     # -- imports --------------------------------------------------------------------------------------
     def compile_imports(self) -> list[str]:
