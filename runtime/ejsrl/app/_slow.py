@@ -23,6 +23,7 @@ import logging
 import os
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any, TextIO
@@ -70,6 +71,32 @@ def where_now(thread_id: int, model_cls: type) -> str:
     return ""
 
 
+def importing(thread_id: int) -> bool:
+    """Whether the thread ``thread_id`` is importing a module now (its stack is in importlib's)."""
+    frame = sys._current_frames().get(thread_id)
+    while frame is not None:
+        if frame.f_code.co_filename.startswith("<frozen importlib"):
+            return True
+        frame = frame.f_back
+    return False
+
+
+def _waited(done: threading.Event, after: float, thread_id: int, tick: float = 0.1) -> bool:
+    """Wait until the thread ``thread_id`` has run ``after`` seconds of its own code (True) or
+    ``done`` is set (False). Time it spends importing modules does not count: a spec's first
+    ``capture()`` imports trimesh and SciPy, seconds on a busy machine, and that is no
+    endless loop. Sampled every ``tick`` seconds (a tick found importing counts as import)."""
+    own, last = 0.0, time.monotonic()
+    while own < after:
+        if done.wait(tick):
+            return False
+        now = time.monotonic()
+        if not importing(thread_id):
+            own += now - last
+        last = now
+    return True
+
+
 def page_text(what: str, after: float, where: str) -> str:
     """The page's words for a block ``what`` running ``after`` seconds, now at spec place ``where``."""
     place = f" and is at {where} now" if where else ""
@@ -94,7 +121,7 @@ def watch_slow(
     shown_lock = threading.Lock()
 
     def watch() -> None:
-        if done.wait(after):
+        if not _waited(done, after, thread_id):
             return
         where = where_now(thread_id, model_cls)
         text = f"{what} has been running for {after:g} s" + (" and is at this line now" if where else "")
@@ -104,8 +131,8 @@ def watch_slow(
         for t in tells:
             try:
                 handles = list(t(TITLE, body) or ())
-            except Exception:  # a page that went away
-                log.debug("telling a page of a slow block failed", exc_info=True)
+            except Exception:  # a page that went away (``log`` here is the parameter: the module's logger by name)
+                logging.getLogger(__name__).debug("telling a page of a slow block failed", exc_info=True)
                 continue
             with shown_lock:
                 if done.is_set():  # the block ended meanwhile
