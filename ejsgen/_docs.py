@@ -245,8 +245,10 @@ def _kinds_table(models: dict[str, type[BaseModel]], extra: dict[str, str] | Non
 
 def _per_kind(models: dict[str, type[BaseModel]], skip: Sequence[str] = ()) -> str:
     out = []
+    first = next(iter(models.values()), None)
     for kind, cls in models.items():
-        own = [f for f in cls.model_fields if f not in skip]
+        # its own keys, and a common key it gives its own meaning (an ellipse's position: its centre)
+        own = [f for f in cls.model_fields if f not in skip or cls.model_fields[f].description != first.model_fields[f].description]  # type: ignore[union-attr]
         out.append(f"#### `{kind}`\n\n{_doc(cls)}\n")
         if own:
             out.append(field_table(cls, own))
