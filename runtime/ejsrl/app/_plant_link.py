@@ -9,6 +9,11 @@ The link is the only thing that talks to the plant (the browser never does). It
 * sends a command only while connected and holding the lease, tagged with the lease epoch and
   a fresh sequence number; nothing is queued across a disconnect, so no stale command is sent
   after a reconnect;
+* never drops a heartbeat: a heartbeat that meets a command still being written is retried
+  within the period (paho holds one outgoing message; a dropped heartbeat under load let the
+  plant's watchdog stop a holder in the middle of its program);
+* closes itself (releasing the lease) within one heartbeat period once ``alive()`` says its
+  session is gone (a closed tab), so the next in the queue gets the plant at once;
 * reconnects with backoff (0.1 s doubling to 2 s) and says so in :attr:`note` at once;
 * measures the round trip (command sent -> the plant's state echoing it), in s.
 """
@@ -28,7 +33,11 @@ from ejsrl.plant._creds import Credentials
 from ejsrl.plant._mqtt import json_object, make_client, no_delay
 from ejsrl.plant._video import PlantClock, VideoFrame, parse_frame
 
-__all__ = ["PlantLink", "LinkBase", "Limits"]
+__all__ = ["PlantLink", "LinkBase", "Limits", "BUSY"]
+
+#: :meth:`PlantLink.send`'s answer while the command before is still being written to the broker
+#: (paho holds one message at a time: nothing piles up across a disconnect); try again next frame
+BUSY = "the previous command is still being sent"
 
 
 @dataclass(frozen=True)
@@ -223,11 +232,11 @@ class PlantLink(LinkBase):
     def request_lease(self) -> None:
         self.wants_lease = True
         self._asked = time.monotonic()
-        self._publish("lease", {"op": "request"})
+        self._publish_surely("lease", {"op": "request"}, 0.2)
 
     def release_lease(self) -> None:
         self.wants_lease = False
-        self._publish("lease", {"op": "release"})
+        self._publish_surely("lease", {"op": "release"}, 0.5)
 
     def estop(self, on: bool = True) -> None:
         """Emergency stop: any session may press it, holder or spectator."""
@@ -259,7 +268,10 @@ class PlantLink(LinkBase):
         msg: dict[str, Any] = {"epoch": st["epoch"], "seq": seq, "t": self._sent[seq], "q": qa.tolist()}
         if gripper is not None:
             msg["gripper"] = float(gripper)
-        self._publish("cmd", msg)
+        if not self._publish("cmd", msg):
+            with self._lock:
+                self._sent.pop(seq, None)
+            return BUSY
         self._last_q, self._last_t = qa, now
         return None
 
@@ -271,10 +283,24 @@ class PlantLink(LinkBase):
         self.client.loop_stop()
 
     # ---- paho callbacks (the network thread) ------------------------------------------------
-    def _publish(self, kind: str, payload: dict[str, Any]) -> None:
-        if self.connected:
-            payload["session"] = self.session
-            self.client.publish(f"{self.prefix}/{kind}", json.dumps(payload), qos=0)
+    def _publish(self, kind: str, payload: dict[str, Any]) -> bool:
+        """Publish at once; False when not connected or paho still holds the message before."""
+        if not self.connected:
+            return False
+        payload["session"] = self.session
+        info = self.client.publish(f"{self.prefix}/{kind}", json.dumps(payload), qos=0)
+        return info.rc == 0
+
+    def _publish_surely(self, kind: str, payload: dict[str, Any], within: float) -> bool:
+        """Publish, retried every 2 ms for ``within`` s while paho still holds the message before
+        (a heartbeat, a lease request or release must not be lost to a command being written)."""
+        until = time.monotonic() + within
+        in_loop = threading.current_thread() is getattr(self.client, "_thread", None)  # it would wait for itself
+        while not self._publish(kind, dict(payload)):
+            if in_loop or not self.connected or time.monotonic() > until:
+                return False
+            time.sleep(0.002)
+        return True
 
     def _on_connect(self, client: Any, userdata: Any, flags: Any, reason: Any, props: Any) -> None:
         if reason.is_failure:
@@ -330,7 +356,7 @@ class PlantLink(LinkBase):
                 threading.Thread(target=self.close, daemon=True).start()
                 return
             if idle < 1.0:             # a session whose frames stopped stops beating: the watchdog stops the plant
-                self._publish("heartbeat", {})
+                self._publish_surely("heartbeat", {}, self.heartbeat_period)
             st = self.state
             if (self.wants_lease and st and self.connected and st.get("holder") != self.session
                     and self.session not in (st.get("queue") or []) and time.monotonic() - self._asked > 1.0):

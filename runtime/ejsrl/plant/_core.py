@@ -13,6 +13,13 @@ runs in. Message schema (JSON over MQTT, the same fields as OPC UA method argume
 A command is executed only when it comes from the holder, carries the current lease epoch and a
 sequence number above the last one, and passes the plant's own limits: a command that waited in
 a broker or a client across a reconnect carries an old epoch or sequence number and is refused.
+
+The watchdog stops the arm when the holder's heartbeat is older than ``watchdog`` s and starts a
+new epoch (every command in flight is stale), but the holder keeps the lease until its heartbeat
+is ``queue_timeout`` s old: a holder whose heartbeat was late (a loaded machine) goes on with its
+program, a holder that is gone hands the plant to the next in line. A command executed from the
+holder counts as a heartbeat. ``refused`` is the last refusal (with the epoch it happened in); it
+is cleared when the same session's next command is executed and when the lease changes hands.
 """
 
 from __future__ import annotations
@@ -37,7 +44,7 @@ class PlantConfig:
 
     watchdog: float = 0.5          #: the plant stops when the holder's heartbeat is older than this
     slot: float = 120.0            #: how long one session holds the plant while others wait
-    queue_timeout: float = 3.0     #: a queued session without heartbeat this long leaves the queue
+    queue_timeout: float = 3.0     #: a queued session, or the holder, without heartbeat this long loses its place
     latency: float = 0.0           #: injected one-way latency of commands into the plant
     noise: float = 2e-4            #: encoder noise, rad (standard deviation)
     dt: float = 0.001              #: integration step of the arm
@@ -75,6 +82,7 @@ class Plant:
         self.on_tick: Callable[[], None] | None = None
         self.stopped_at: float | None = None       # monotonic time the arm came to rest after a stop
         self._rearm_after_watchdog = False
+        self._watchdog_tripped = False             # the watchdog stopped the current holder's arm
 
     # ---- the plant's clock ------------------------------------------------------------------
     def clock(self) -> float:
@@ -115,11 +123,14 @@ class Plant:
             self.epoch += 1
             self._last_seq = -1
             self.slot_end = now + self.cfg.slot
+            self.refused = None
+            self._watchdog_tripped = False
             self.event = "lease granted"
 
     def _revoke(self, why: str, now: float) -> None:
         self.holder = None
         self.epoch += 1          # every command of the old lease is stale from now on
+        self.refused = None
         self.event = why
         self._grant(now)
 
@@ -158,13 +169,17 @@ class Plant:
         if why:
             return self._refuse(msg, why)
         self._last_seq = seq
+        self._beats[session] = time.monotonic()     # the holder's command says it is alive
+        if self.refused is not None and self.refused.get("session") == session:
+            self.refused = None                     # superseded: this session's commands go through again
         self.arm.q_set = q.copy()
         self.arm.gripper = grip
         self.ack = {"session": session, "seq": seq, "t": msg.get("t")}
         return None
 
     def _refuse(self, msg: dict[str, Any], why: str) -> str:
-        self.refused = {"session": str(msg.get("session", ""))[:64], "seq": msg.get("seq"), "reason": why}
+        self.refused = {"session": str(msg.get("session", ""))[:64], "seq": msg.get("seq"), "reason": why,
+                        "epoch": self.epoch}
         return why
 
     # ---- stops ------------------------------------------------------------------------------
@@ -197,12 +212,20 @@ class Plant:
     def _watchdog(self, now: float) -> None:
         if self.holder is not None:
             age = now - self._beats.get(self.holder, -1e9)
-            if age > self.cfg.watchdog:
+            if age > max(self.cfg.queue_timeout, self.cfg.watchdog):
+                self._revoke(f"the holder was silent for {age:.1f} s: the lease passed on", now)
+            elif age > self.cfg.watchdog and not self._watchdog_tripped:
+                # stop now; the holder keeps the lease (a new epoch) until it is silent queue_timeout s
                 self.arm.braking = True
                 self.stopped_at = None
-                self._revoke(f"watchdog: no heartbeat from the holder for {age:.2f} s; plant stopped", now)
+                self.epoch += 1
+                self._last_seq = -1
+                self.event = f"watchdog: no heartbeat from the holder for {age:.2f} s; plant stopped"
+                self._watchdog_tripped = True
                 self._rearm_after_watchdog = True
-            elif now > self.slot_end and self.queue:
+            elif age <= self.cfg.watchdog and self._watchdog_tripped:
+                self._watchdog_tripped = False          # the heartbeat is back: the holder goes on
+            if self.holder is not None and now > self.slot_end and self.queue:
                 self._revoke("the holder's slot ended", now)
         for s in [s for s in self.queue if now - self._beats.get(s, -1e9) > self.cfg.queue_timeout]:
             self.queue.remove(s)

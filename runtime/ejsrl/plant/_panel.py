@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from ejsrl.app._plant_link import BUSY
 from ejsrl.view.elements import escape_markdown
 
 __all__ = ["PlantPanel", "MODES"]
@@ -30,11 +31,17 @@ class PlantPanel:
         self.app = app
         self.defn = app.model._plant()
         # the link beats from its own thread, paused or not; it closes (giving the plant back)
-        # when this session's panel is gone, and stops beating when the app process dies
-        self.link = self.defn.connect()
+        # within a heartbeat period of this panel's tab closing, and stops when the app process dies
+        me = weakref.ref(self)
+        self._in_view = False                       # seen among the app's views (a closed tab's view leaves them)
+
+        def gone_for() -> float:
+            panel = me()
+            return float("inf") if panel is None else panel._gone_for()
+
+        self.link = self.defn.connect(alive=gone_for)
         weakref.finalize(self, self.link.close)
         self._woken_key: tuple[Any, ...] | None = None
-        me = weakref.ref(self)
         self.link.on_state = lambda: (p := me()) is not None and p._maybe_wake()
         self.real = False
         self._sent: tuple[float, ...] | None = None
@@ -72,6 +79,17 @@ class PlantPanel:
         @self.rearm_button.on_click
         def _(_e: Any) -> None:
             self.link.estop(False)
+
+    def _gone_for(self) -> float:
+        """0 while this panel's tab is open, infinity once its view left the app's views (the tab
+        closed, or its session was freed): the link then releases the lease and closes."""
+        views = list(getattr(self.app, "views", None) or [])
+        mine = any(self in getattr(getattr(v, "panel", None), "drawings", ()) and not getattr(v, "closed", False)
+                   for v in views)
+        if mine:
+            self._in_view = True
+            return 0.0
+        return float("inf") if self._in_view else 0.0
 
     def _wake(self) -> None:
         """Ask for frames (a paused session in a class gets none until something changes)."""
@@ -187,6 +205,8 @@ class PlantPanel:
         if key == self._sent:
             return
         why = self.link.send(q, g)
+        if why == BUSY:
+            return                              # the one before is still on its way: next frame
         self._sent_at = now
         if why is None:
             self._sent, self.refusal = key, None
@@ -219,12 +239,15 @@ class PlantPanel:
             if link.latency is not None:
                 lines.append(f"**Latency:** {link.latency * 1000:.1f} ms round trip")
             event = st.get("event")
+            if event == "lease granted" and not link.holds_lease:
+                event = "the robot went to the next in the queue" if st.get("holder") else ""
             if event:
                 lines.append(f"*{escape_markdown(str(event))}*")
-            if self.refusal:
+            if self.refusal and self.real and link.holds_lease:
                 lines.append(f"Not sent: {escape_markdown(self.refusal)}")
             refused = st.get("refused") or {}
-            if refused.get("session") == link.session and refused.get("reason"):
+            if (refused.get("session") == link.session and refused.get("reason")
+                    and refused.get("epoch", st.get("epoch")) == st.get("epoch")):
                 lines.append(f"Refused by the plant: {escape_markdown(str(refused['reason']))}")
         if self.video is not None and self.real:
             lines.append(self.video_line())
