@@ -31,9 +31,30 @@ _SCRIPT = r"""
 import importlib.abc, importlib.util, json, os, sys
 hidden = set(json.loads(os.environ["EJSWEB_HIDDEN"]))
 there = set(json.loads(os.environ["EJSWEB_THERE"])) | set(sys.stdlib_module_names)
+native = {}
+stdlib = os.path.realpath(os.path.dirname(os.__file__))  # not sysconfig: it imports what is asked about
+def platform_own(top):
+    # a module of this Python's own standard library that the list of its names leaves out
+    # (_sysconfigdata__linux_x86_64-linux-gnu: sysconfig's data for this platform); the
+    # browser's Python has its own under another name, so it loads here and the zip skips it
+    if top not in native:
+        origin = None
+        for finder in sys.meta_path:
+            if isinstance(finder, Hide) or not hasattr(finder, "find_spec"):
+                continue
+            try:
+                spec = finder.find_spec(top, None)
+            except (ImportError, ValueError):
+                spec = None
+            if spec is not None:
+                origin = spec.origin
+                break
+        native[top] = bool(origin) and os.path.realpath(origin).startswith(stdlib + os.sep) and (
+            "site-packages" not in origin and "dist-packages" not in origin)
+    return native[top]
 def absent(name):
     top = name.split(".")[0]
-    return top in hidden or top not in there
+    return top in hidden or (top not in there and not platform_own(top))
 _find = importlib.util.find_spec
 def find_spec(name, package=None):
     if absent(name):

@@ -1,5 +1,7 @@
-"""A robotics trajectory lab built with ``--web`` (examples/paper/path_planning_434): its page
-shows the served panel and its 3D robot, and computes the native app's numbers to 1e-12."""
+"""Robotics labs built with ``--web``: a trajectory lab (examples/paper/path_planning_434), the
+six-axis arm's kinematics (a ``robot`` element: its links' meshes made by trimesh in the page)
+and a SciPy lab (examples/mobile_prm_laser: ``scipy.linalg``, ``scipy.spatial``). Each page
+shows the served panel and computes the native app's numbers to 1e-12."""
 
 from __future__ import annotations
 
@@ -13,10 +15,21 @@ import pytest
 pytestmark = pytest.mark.browser
 
 
-def test_path_planning_page_runs_the_native_numbers(page, web_lab) -> None:
-    _site, url, app_dir = web_lab("paper/path_planning_434")
+@pytest.mark.parametrize("name", ["paper/path_planning_434", "paper/six_axis_kinematics", "mobile_prm_laser"])
+def test_robotics_page_runs_the_native_numbers(page, web_lab, name: str) -> None:
+    _site, url, app_dir = web_lab(name)
+    # every text the loader shows, as the student reads it
+    page.add_init_script("""window.__loaderTexts = [];
+      new MutationObserver(() => { const el = document.getElementById("ejsweb-loading");
+        if (el && window.__loaderTexts.at(-1) !== el.textContent) window.__loaderTexts.push(el.textContent); })
+        .observe(document, {subtree: true, childList: true, characterData: true});""")
     page.goto(url)
     page.get_by_role("button", name="Play").wait_for(state="visible", timeout=120_000)
+    texts = page.evaluate("window.__loaderTexts")
+    # after the bytes, the loader says what it does, not a frozen "28.6 of 28.6 MB"
+    assert any(t.startswith("Loading the lab…") for t in texts), texts
+    for stage in ("Starting Python", "Drawing the lab…"):
+        assert any(stage in t for t in texts), (stage, texts)
     assert page.evaluate("ejsWeb.failed") is None
     state = page.evaluate("ejsWeb.call('state')")
     assert state["error"] is None, state["error"]
@@ -36,3 +49,8 @@ def test_path_planning_page_runs_the_native_numbers(page, web_lab) -> None:
                 assert a == b
                 continue
             assert fa == pytest.approx(fb, rel=1e-12, abs=1e-12)
+    if name == "paper/six_axis_kinematics":
+        # the wrist camera's picture (rendered by the runtime's NumPy rasterizer, 240 x 180) reaches
+        # the panel as an image the browser decodes (PNG: the page has no OpenCV)
+        page.wait_for_function("[...document.images].some((i) => i.complete && i.naturalWidth === 240"
+                               " && i.naturalHeight === 180)", timeout=60_000)

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import math
+import sys
 import threading
 import time
 from collections.abc import Callable
@@ -111,18 +112,21 @@ def has_scene(elements: Any) -> bool:
     return False
 
 
-#: below this measured speed (1.0: as fast as the lab asks) the readout says the server is busy
+#: below this measured speed (1.0: as fast as the lab asks) the readout says the server (or, in a web page, the browser) is busy
 SLOW_SPEED = 0.95
 #: below this many frames a second shown to a tab (classroom serving: ``app.shown_fps``,
 #: set by :mod:`ejsrl.app._sessions`) the readout says so too
 SLOW_SHOWN_FPS = 20.0
+#: who is too busy when the readout says so: a web page (``ejsgen build --web``) runs the lab in
+#: the student's browser, with no server
+BUSY = "the browser is busy" if sys.platform in ("wasi", "emscripten") else "the server is busy"
 
 
 def slow_text(speed: float, realtime: bool) -> str:
     """What the time readout adds when the server cannot keep up (``speed`` < :data:`SLOW_SPEED`)."""
     if realtime:
-        return f" · *running at {speed:.0%} of real time (the server is busy)*"
-    return f" · *running at {speed:.0%} speed (the server is busy)*"
+        return f" · *running at {speed:.0%} of real time ({BUSY})*"
+    return f" · *running at {speed:.0%} speed ({BUSY})*"
 
 
 def shown_digits(*values: float | None) -> int:
@@ -629,7 +633,7 @@ class Panel:
         else:
             shown = getattr(self.app, "shown_fps", None) if self.app.is_playing() else None
             if shown is not None and shown < SLOW_SHOWN_FPS:
-                text += f" · *showing {shown:.0f} frames/s (the server is busy)*"
+                text += f" · *showing {shown:.0f} frames/s ({BUSY})*"
         if text != self._readout_shown:
             set_markdown(self.readout, text)
             self._readout_shown = text

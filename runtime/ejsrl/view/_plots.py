@@ -486,7 +486,10 @@ class ImageBinding:
         self._reveal_lock = threading.Lock()
         timer = threading.Timer(IMAGE_SETTLE, self._reveal)
         timer.daemon = True
-        timer.start()
+        try:
+            timer.start()
+        except RuntimeError:  # no threads (a web page's Python): update() shows it once IMAGE_SETTLE is past
+            pass
 
     def _reveal(self) -> None:
         """Show the element (once)."""

@@ -34,7 +34,9 @@ from viser import _client_autobuild, _viser  # noqa: E402
 from viser.infra import _infra  # noqa: E402
 from viser.infra._messages import Message  # noqa: E402
 
-from ejsrl.web import _msgpack  # noqa: E402
+from ejsrl.web import _msgpack, _png  # noqa: E402
+
+_png.install()  # images as PNG written with zlib: the page has neither OpenCV nor Pillow
 
 __all__ = ["PageChannel", "Immediate", "ImmediateLoop", "web_server", "encode_batch", "run_now"]
 

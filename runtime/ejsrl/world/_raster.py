@@ -254,7 +254,7 @@ def zbuffer(
     # -- one span per (triangle, row): the pixels [lo, hi] of the row inside the triangle.
     # Work arrays are rows of reused buffers and the arithmetic runs in place.
     S = int(nrows.sum())
-    tri_of_span = np.repeat(np.arange(F), nrows)
+    tri_of_span = np.repeat(np.arange(F), nrows.astype(np.intp))  # counts as intp: 32-bit in a browser's Python
     cols = table.take(tri_of_span, axis=1, out=_scratch.get("span_table", 15 * S, np.float64).reshape(15, S), mode="clip")
     ys = cols[0]
     ys += _scratch.arange(S)

@@ -36,6 +36,7 @@
   // -- what the page shows while the lab loads -------------------------------------------------
   let overlay = null;
   const progress = {};
+  let stage = "";
   function show(text, failed) {
     if (overlay === null) {
       overlay = document.createElement("div");
@@ -88,12 +89,15 @@
         let got = 0, size = 0;
         for (const p of Object.values(progress)) { got += p.got; size += p.size; }
         api.bytes = got;
-        show(`Loading the lab… ${mb(got)} of ${mb(Math.max(size, got))} MB`);
+        show(`Loading the lab… ${mb(got)} of ${mb(Math.max(size, got))} MB` + (stage ? "\n" + stage : ""));
+      } else if (msg.type === "stage") {
+        stage = msg.text; // what the lab's Python does now, once the bytes are in
+        show(stage);
       } else if (msg.type === "ready") {
         ready = true;
         api.sim = { fps: msg.fps, steps: msg.steps, realtime: msg.realtime };
         Object.assign(api.timing, msg.timing, { ready: performance.now() - t0 });
-        show("Starting the lab…");
+        show("Drawing the lab…");
         resolveReady();
         connect();
       } else if (msg.type === "reply") {

@@ -7,7 +7,7 @@
 //
 // Messages from the page (bridge.js): {type: "connect"}, {type: "send", message},
 // {type: "call", id, what, args} (headless CSV, state). To the page: {type: "progress", ...},
-// {type: "ready", fps}, {type: "batch", messages}, {type: "reply", id, ok, value},
+// {type: "stage", text} (what the loader does now), {type: "ready", fps}, {type: "batch", messages}, {type: "reply", id, ok, value},
 // {type: "failed", text}, {type: "log", level, text}.
 
 import { WASI, File, OpenFile, ConsoleStdout, PreopenDirectory, Directory } from "./vendor/browser_wasi_shim/index.js";
@@ -16,6 +16,7 @@ import { decode, encode } from "./msgpack.js";
 const site = new URL("../", import.meta.url); // the site's folder: index.html's
 const at = (path) => new URL(path, site).href;
 const log = (level, text) => postMessage({ type: "log", level, text });
+const stage = (text) => postMessage({ type: "stage", text });
 let exports = null;
 let stdout = [];
 let fps = 30;
@@ -102,11 +103,15 @@ async function boot() {
   const t0 = performance.now();
   const manifest = await (await fetch(at("python/manifest.json"))).json();
   const [module, stdlib, lab] = await Promise.all([
-    pick(manifest.wasm).then((url) => fetchBytes(url, "python", manifest.wasm.size)).then((b) => WebAssembly.compile(b)),
+    pick(manifest.wasm).then((url) => fetchBytes(url, "python", manifest.wasm.size)).then((b) => {
+      stage("Compiling Python (WebAssembly)…");
+      return WebAssembly.compile(b);
+    }),
     pick(manifest.stdlib).then((url) => fetchBytes(url, "stdlib", manifest.stdlib.size)),
     pick(manifest.lab).then((url) => fetchBytes(url, "lab", manifest.lab.size)),
   ]);
   const fetched = performance.now() - t0;
+  stage("Starting Python…");
   const fds = [
     new OpenFile(new File([])),
     ConsoleStdout.lineBuffered((line) => stdout.push(line)),
@@ -125,6 +130,7 @@ async function boot() {
   exports = instance.exports;
   wasi.initialize(instance);
   const started = performance.now() - t0;
+  stage("Starting Python: importing the lab (NumPy, SciPy, the runtime, viser)…");
   const info = ask("import sys, time\n_t0 = time.perf_counter()\nsys.path.insert(0, '/lab')\n" +
     "from ejsrl.web.lab import open_lab\n_t1 = time.perf_counter()\nlab = open_lab('app')\n" +
     "_v = {'fps': lab.fps, 'steps': lab.sim.steps_per_display, 'realtime': bool(lab.sim.realtime), " +
