@@ -82,8 +82,9 @@ def _packages() -> list[Path]:
     """Where ejsgen and ejsrl are imported from, each its package folder's parent (a checkout or
     site-packages; the package folder itself if that is ``/tmp``): an editable install finds them
     through a finder of its own, not ``sys.path``."""
-    import ejsgen
     import ejsrl
+
+    import ejsgen
 
     found: list[Path] = []
     for module in (ejsgen, ejsrl):

@@ -50,7 +50,7 @@ sys.meta_path.insert(0, EditableFinder)
 
 
 def _sweep(args: list[str], env: dict[str, str]) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-P", "-m", "ejsgen", *args], capture_output=True, text=True, timeout=600, env=env)
+    return subprocess.run([sys.executable, "-P", "-m", "ejsgen", *args], capture_output=True, text=True, timeout=600, env=env, check=False)
 
 
 def test_a_sandboxed_sweep_runs_with_ejsgen_from_a_checkout_under_tmp(tmp_path: Path) -> None:
@@ -58,7 +58,7 @@ def test_a_sandboxed_sweep_runs_with_ejsgen_from_a_checkout_under_tmp(tmp_path: 
         checkout = Path(tmp)
         # the checkout's layout (pyproject.toml's package-dir), as an editable install maps it
         layout = {"ejsgen": "ejsgen", "ejsgen.templates": "templates", "ejsgen.specs": "specs", "ejsrl": "runtime/ejsrl"}
-        for name, folder in layout.items():
+        for folder in layout.values():
             if not (checkout / folder).exists():
                 shutil.copytree(ROOT / folder, checkout / folder, ignore=shutil.ignore_patterns("__pycache__", "*.pyc"))
         site = checkout / "site"
@@ -67,7 +67,7 @@ def test_a_sandboxed_sweep_runs_with_ejsgen_from_a_checkout_under_tmp(tmp_path: 
         (site / "sitecustomize.py").write_text(FINDER.format(mapping=mapping), encoding="utf-8")
         env = dict(os.environ, PYTHONDONTWRITEBYTECODE="1", PYTHONPATH=str(site))
         where = subprocess.run([sys.executable, "-P", "-c", "import ejsgen, ejsrl; print(ejsgen.__file__); print(ejsrl.__file__)"],
-                               capture_output=True, text=True, env=env, timeout=120)
+                               capture_output=True, text=True, env=env, timeout=120, check=False)
         assert where.stdout.split() == [str(checkout / "ejsgen" / "__init__.py"), str(checkout / "runtime" / "ejsrl" / "__init__.py")], where
         spec = SPECS / "springs.ejs.yaml"
         out = tmp_path / "runs.csv"
