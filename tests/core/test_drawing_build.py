@@ -46,7 +46,7 @@ def test_an_unknown_2d_kind_or_property_is_named_with_a_suggestion(tmp_path, cap
         "18:11: error: unknown 2D element kind 'partcle'; did you mean 'particle'?",
         "19:49: error: unknown key 'colr'; did you mean 'color'?",
         "20:11: error: each 2D element is a one-key mapping 'kind: {properties}'; kinds: point, particle, circle, segment, "
-        "arrow, spring, polygon, polyline, trace, text, image, axes, grid",
+        "arrow, spring, polygon, polyline, trace, text, image, axes, grid, vehicle, laser, occupancy, path, ellipse, particles",
     ]
 
 
@@ -86,7 +86,7 @@ def test_drag_mistakes(tmp_path, capsys) -> None:
         "19:53: error: one variable ('x') is one coordinate: say which with along: x or along: y; or bind both: bind: [x, y_variable]",
         "20:82: error: the curve 'on_circl' is not a function of custom code; did you mean 'on_circle'?",
         "21:68: error: along: region needs region: [xmin, xmax, ymin, ymax]",
-        "22:39: error: a polyline cannot be dragged; draggable: point, particle, circle, segment, arrow, spring, text, image",
+        "22:39: error: a polyline cannot be dragged; draggable: point, particle, circle, segment, arrow, spring, text, image, vehicle",
         "23:69: error: a region is [xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax",
         "24:82: error: a curve is the name of a custom function, or a lambda of the pointer's x and y, got 'x**2'; "
         "e.g. curve: 'lambda px, py: [px, 0.1*px**2]' (the parabola under the pointer)",
