@@ -186,3 +186,68 @@ def test_two_tabs_in_two_worker_processes_share_one_lease_and_a_spectator_stops_
     for f in [*app_dir.rglob("*.py"), server.out, server.err, tmp_path / "broker" / "mosquitto.log"]:
         assert secret not in f.read_text(), f
     assert secret not in plant.logs()
+
+
+def test_a_program_longer_than_the_slot_keeps_the_lease_and_a_closed_tab_frees_it_at_once(
+        broker: Broker, browser_context, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue #26. Tab A runs the pick-and-place program on the plant (4 s slot: the program is
+    longer): its panel never says the plant refused it, and the plant's holder stays A. Tab A is
+    closed; tab B, opened after, gets the robot within a few seconds and never says "lease
+    granted" before it holds the lease."""
+    from ejsgen.cli import build
+    from ejsrl.app._plant_link import PlantLink
+    from testkit.served import Served
+
+    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--watchdog", "0.5", "--slot", "4"])
+    monkeypatch.setenv("EJSRL_PLANT_PORT", str(broker.port))
+    app_dir = build(EXAMPLES / "paper" / "robualab.ejs.yaml", tmp_path / "robualab")
+    server = Served(app_dir, tmp_path, "--max-sessions", "4")
+    watcher = PlantLink("127.0.0.1", broker.port, session="watcher")
+    holders: list[tuple[float, str | None]] = []
+    watcher.on_state = lambda: holders.append((time.monotonic(), (watcher.state or {}).get("holder")))
+    assert watcher.wait_for(lambda l: l.state is not None, 30), watcher.note
+    try:
+        url = f"http://127.0.0.1:{server.port}"
+        a = browser_context.new_page()
+        a.goto(url)
+        a.get_by_role("button", name="EMERGENCY STOP").wait_for(timeout=90_000)
+        close_notifications(a)
+        _real_mode(a)
+        wait_until(lambda: "You control the robot" in _panel_text(a), timeout=60, what="A to get the robot")
+        holder_a = watcher.state["holder"]
+        a.get_by_role("button", name="Run program").click()
+        wait_until(lambda: watcher.state["status"] == "moving", timeout=60, what="the plant to move")
+        start = time.monotonic()
+        texts = []
+        while time.monotonic() - start < 14.0:           # 3.5 slots of the program
+            texts.append(_panel_text(a))
+            a.wait_for_timeout(200)
+        refused = [t for t in texts if "Refused by the plant" in t or "does not hold" in t]
+        assert not refused, refused[0][-600:]
+        assert all("You control the robot" in t for t in texts[-5:])
+        during = {h for at, h in holders if at >= start}
+        assert during == {holder_a}, during
+        # A's tab closes: its session gives the plant back at once
+        a.close()
+        closed = time.monotonic()
+        wait_until(lambda: watcher.state["holder"] != holder_a, timeout=30, what="A's lease to be released")
+        released = time.monotonic() - closed
+        assert released < 3.0, f"A's lease was released {released:.1f} s after its tab closed"
+        b = browser_context.new_page()
+        b.goto(url)
+        b.get_by_role("button", name="EMERGENCY STOP").wait_for(timeout=90_000)
+        close_notifications(b)
+        _real_mode(b)
+        seen = []
+        end = time.monotonic() + 60
+        while "You control the robot" not in (text := _panel_text(b)) and time.monotonic() < end:
+            seen.append(text)
+            b.wait_for_timeout(100)
+        assert "You control the robot" in text, text[-600:]
+        early = [t for t in seen if "lease granted" in t]
+        assert not early, early[0][-600:]
+        assert watcher.state["holder"] not in (None, holder_a)
+    finally:
+        watcher.close()
+        server.stop()
+        plant.stop()
