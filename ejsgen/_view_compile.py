@@ -453,6 +453,11 @@ class ViewCompiler:
             what = f"the {prop} of {kind} '{name}'"
             if value is None:
                 continue
+            if kind in MOBILE_MODELS:  # a mobile kind's keys are checked as the drawing panel's (one body serves both)
+                handled, compiled = compile_mobile_prop(self, kind, prop, value, ppath, what)
+                if handled:
+                    props[prop] = compiled
+                    continue
             props[prop] = _PROP_COMPILERS[decl.type](self, value, ppath, "", what)
         kw["props"] = props
         placed_by = None if "position" in _OWN_PROPS[kind] else p.position  # an ellipse's position is its centre (an own prop)
@@ -520,6 +525,7 @@ _ELEMENT_COMPILERS["console"] = compile_console
 
 from ejsgen._view_compile2d import compile_drawing, compile_keyboard  # noqa: E402 - it uses ViewCompiler's helpers
 from ejsgen._view_compile_source import compile_source  # noqa: E402 - a camera's real source
+from ejsgen._spec2d_mobile import MOBILE_MODELS, compile_prop as compile_mobile_prop  # noqa: E402 - the mobile kinds' own keys
 
 _ELEMENT_COMPILERS["drawing"] = compile_drawing
 _ELEMENT_COMPILERS["keyboard"] = compile_keyboard

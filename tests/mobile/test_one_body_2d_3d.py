@@ -115,3 +115,43 @@ def test_the_former_3d_spellings_are_refused_with_the_key_to_use(tmp_path: Path,
     errors = [str(e).replace(f"{tmp_path}/", "") for e in info.value.errors]
     line = SPEC.count("\n", 0, SPEC.index("  - scene:")) + BODIES.count("\n") + 2
     assert any(e.startswith(f"lab.ejs.yaml:{line}:{col}") and f"unknown key '{key}'" in e and hint in e for e in errors), errors
+
+
+def test_a_literal_body_draws_the_same_in_both(tmp_path: Path) -> None:
+    """Lists written out (not expressions) are accepted by the scene as by the panel."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+
+    body = ("        - path: {points: [[0, 0], [1, 2], [3, 1]]}\n"
+            "        - ellipse: {position: [1, -1], covariance: [[0.5, 0.2], [0.2, 0.3]], confidence: 0.9, scale: 2}\n")
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(SPEC % (body, body.replace("        - ", "      - ")))
+    app = load_app(build(spec, tmp_path / "app"))
+    app.play()
+    app.frame()
+    assert app.error is None
+    nodes = app.scene.world.nodes
+    np.testing.assert_allclose(nodes["path1"].props["points"], [[0, 0, 0.02], [1, 2, 0.02], [3, 1, 0.02]], atol=1e-12)
+    np.testing.assert_allclose(_chi2(nodes["ellipse1"].props["points"][:, :2]), -2.0 * math.log(0.1), rtol=1e-9)
+
+
+@pytest.mark.parametrize(("body", "key", "words"), [
+    ("particles: {points: c}", "points", "must be an N x 2 (positions) or N x 3 (poses) array, but 'c' has shape (2,)"),
+    ("ellipse: {position: c, covariance: c}", "covariance", "must be a square covariance matrix, 2 x 2 or larger, but 'c' has shape (2,)"),
+    ("ellipse: {position: c, covariance: P, confidence: 95}", "confidence", "is a probability between 0 and 1 (not included), got 95"),
+])
+def test_a_bad_body_is_the_same_build_error_in_both(tmp_path: Path, body: str, key: str, words: str) -> None:
+    """The scene checks a mobile kind's keys by the panel's rules: the same words at the same key."""
+    from ejsgen.cli import build
+
+    text = SPEC % (f"        - {body}\n", f"      - {body}\n")
+    spec = tmp_path / "lab.ejs.yaml"
+    spec.write_text(text)
+    with pytest.raises(SpecErrors) as info:
+        build(spec, tmp_path / "app")
+    errors = [str(e).replace(f"{tmp_path}/", "") for e in info.value.errors]
+    lines = text.split("\n")
+    panel = lines.index(f"        - {body}") + 1
+    col = 8 + 2 + body.index(f"{key}: ") + len(key) + 2 + 1  # the value after '- ' and 'key: ', 1-based
+    for line, c in ((panel, col), (panel + 2, col - 2)):
+        assert any(e.startswith(f"lab.ejs.yaml:{line}:{c}: error:") and words in e for e in errors), (line, c, errors)

@@ -260,7 +260,7 @@ _KINDS: tuple[Kind, ...] = (
 )
 
 #: mobile robots (issue #27): drawn on the plane z = 0 of their frame; nodes in ejsrl.mobile._nodes.
-#: Their keys are the drawing panel's (ejsgen._spec2d_mobile): one element body serves both
+#: Their keys are the drawing panel's (ejsgen._spec2d_mobile, whose rules compile them in both): one element body serves both
 _MOBILE = "ejsrl.mobile._nodes"
 _MOBILE_KINDS: tuple[Kind, ...] = (
     Kind("vehicle", "A mobile robot at a pose [x, y, theta] on the plane: a prism over its footprint (a triangle pointing along its heading by default).", (
@@ -268,7 +268,7 @@ _MOBILE_KINDS: tuple[Kind, ...] = (
         Prop("length", "num", 1.0, "Length of the triangle from tail to nose, metres."),
         Prop("breadth", "num", None, "Width of the triangle, metres (default half the length)."),
         Prop("height", "num", 0.3, "Height of the prism, metres."),
-        Prop("footprint", "expr", None, "A convex outline N x 2 in the vehicle's frame (x forward), metres, instead of the triangle."),
+        Prop("footprint", "mat", None, "A convex outline N x 2 in the vehicle's frame (x forward), metres, instead of the triangle."),
     ), flat=True, node_module=_MOBILE),
     Kind("laser", "A laser (range) scan: a ray from the sensor's pose to the end of each beam.", (
         Prop("pose", "vec", REQUIRED, "The sensor's pose [x, y, theta] (m, m, rad).", node_default=(0.0, 0.0, 0.0)),
@@ -285,21 +285,21 @@ _MOBILE_KINDS: tuple[Kind, ...] = (
         Prop("height", "num", 0.5, "Height of the blocks, metres."),
     ), flat=True, node_module=_MOBILE),
     Kind("path", "A planned path on the plane: a line through N x 2 points or N x 3 poses.", (
-        Prop("points", "expr", REQUIRED, "The way points, N x 2 (or N x 3 poses: x and y drawn), metres.", node_default=_no_points()),
+        Prop("points", "mat", REQUIRED, "The way points, N x 2 (or N x 3 poses: x and y drawn), metres.", node_default=_no_points()),
         Prop("z", "num", 0.02, "Height above the plane, metres."),
         Prop("width", "num", 3.0, "Line width in pixels."),
     ), draw="polyline", node_module=_MOBILE),
     Kind("ellipse", "A covariance ellipse on the plane: where a 2-D Gaussian about position holds confidence of its probability.", (
         Prop("position", "vec", REQUIRED, "Its centre [x, y], metres (the estimate): as in the drawing panel, not a placement "
              "of the element (`transform` or a group places its plane).", node_default=(0.0, 0.0)),
-        Prop("covariance", "expr", REQUIRED, "The covariance, 2 x 2 (m²) or larger (its top-left 2 x 2).", node_default=None),
+        Prop("covariance", "mat", REQUIRED, "The covariance, 2 x 2 (m²) or larger (its top-left 2 x 2).", node_default=None),
         Prop("confidence", "num", 0.95, "The probability it holds, between 0 and 1."),
         Prop("scale", "num", 1.0, "Drawn this many times larger."),
         Prop("z", "num", 0.02, "Height above the plane, metres."),
         Prop("width", "num", 2.0, "Line width in pixels."),
     ), draw="polyline", node_extra={"points": _no_points()}, node_module=_MOBILE),
     Kind("particles", "A particle filter's particles: a point at each row of an N x 2 (positions) or N x 3 (poses) array.", (
-        Prop("points", "expr", REQUIRED, "The particles, N x 2 or N x 3 (x and y drawn), metres.", node_default=_no_points()),
+        Prop("points", "mat", REQUIRED, "The particles, N x 2 or N x 3 (x and y drawn), metres.", node_default=_no_points()),
         Prop("z", "num", 0.02, "Height above the plane, metres."),
         Prop("size", "num", 0.05, "Point size in metres."),
     ), draw="points", node_module=_MOBILE),
