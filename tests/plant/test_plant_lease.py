@@ -136,3 +136,35 @@ def test_a_session_gone_releases_the_lease_within_a_heartbeat(plant: PlantProc, 
     took = time.monotonic() - t0
     assert took < 1.0, took
     assert waiting.state["event"] == "lease granted"
+
+
+def test_over_opcua_a_session_gone_releases_the_lease_at_once(tmp_path: Path) -> None:
+    """The same over OPC UA: the holder's session gone, the next in the queue holds the plant
+    well before the queue timeout (3 s) would have passed it on."""
+    from ejsrl.app._plant_opcua import OpcUaLink
+    from testkit.plant import free_port
+
+    port = free_port()
+    plant = PlantProc(tmp_path, ["--opcua", f"127.0.0.1:{port}", "--camera", "off"])
+    links = []
+    try:
+        gone = threading.Event()
+        holder = OpcUaLink("127.0.0.1", port, session="holder", alive=lambda: math.inf if gone.is_set() else 0.0)
+        waiting = OpcUaLink("127.0.0.1", port, session="waiting")
+        links += [holder, waiting]
+        for link in links:
+            assert link.wait_for(lambda l: l.connected and l.state is not None, 30), link.note
+        holder.request_lease()
+        assert holder.wait_for(lambda l: l.holds_lease, 20)
+        waiting.request_lease()
+        assert waiting.wait_for(lambda l: l.queue_position == 1, 20)
+        gone.set()
+        t0 = time.monotonic()
+        assert waiting.wait_for(lambda l: l.holds_lease, 10)
+        took = time.monotonic() - t0
+        assert took < 1.5, took
+        assert waiting.state["event"] == "lease granted"
+    finally:
+        for link in links:
+            link.close()
+        plant.stop()

@@ -429,6 +429,6 @@ class PlantDef:
             from ejsrl.app._plant_opcua import OpcUaLink
 
             return OpcUaLink(host, port, limits=self.limits(), heartbeat=self.heartbeat,
-                             username=creds.username, password=creds.password)  # type: ignore[return-value]
+                             username=creds.username, password=creds.password, alive=alive)  # type: ignore[return-value]
         return PlantLink(host, port, prefix=self.topic, limits=self.limits(), creds=creds,
                          heartbeat=self.heartbeat, alive=alive)

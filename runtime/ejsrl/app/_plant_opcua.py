@@ -26,7 +26,8 @@ class OpcUaLink(LinkBase):
     """One session's OPC UA link to the plant at ``opc.tcp://host:port/ejsrl/plant/``."""
 
     def __init__(self, host: str, port: int, *, limits: Limits | None = None, heartbeat: float = 0.1,
-                 session: str | None = None, rate: float = 50.0, username: str | None = None, password: str | None = None) -> None:
+                 session: str | None = None, rate: float = 50.0, username: str | None = None, password: str | None = None,
+                 alive: Any = None) -> None:
         try:
             from asyncua.sync import Client  # noqa: F401
         except ImportError as e:  # pragma: no cover
@@ -34,6 +35,9 @@ class OpcUaLink(LinkBase):
         self._init_link(session, limits, heartbeat)
         self.url = f"opc.tcp://{host}:{port}/ejsrl/plant/"
         self.rate = rate
+        #: ``alive()`` -> seconds since the session was last seen alive (None: always), as for
+        #: :class:`PlantLink`: no heartbeat after 1 s of it, the lease released after 10 s
+        self.alive = alive
         self._user, self._password = username, password
         self._client: Any = None
         self._obj: Any = None
@@ -128,7 +132,11 @@ class OpcUaLink(LinkBase):
                 next_beat = 0.0
                 while not self._stop.is_set():
                     now = time.monotonic()
-                    if now >= next_beat:
+                    idle = self.alive() if self.alive is not None else 0.0
+                    if idle > 10.0:           # the session is gone (its tab closed): give the plant back
+                        self.close()
+                        break
+                    if now >= next_beat and idle < 1.0:
                         self._obj.call_method(f"{self._idx}:Heartbeat", self.session)
                         next_beat = now + self.heartbeat_period
                     st = json.loads(state.read_value())
