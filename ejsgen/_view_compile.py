@@ -460,7 +460,7 @@ class ViewCompiler:
                     continue
             props[prop] = _PROP_COMPILERS[decl.type](self, value, ppath, "", what)
         kw["props"] = props
-        placed_by = None if "position" in _OWN_PROPS[kind] else p.position  # an ellipse's position is its centre (an own prop)
+        placed_by = None if any(d.name == "position" for d in KINDS[kind].props) else p.position  # an ellipse's position is its centre
         if p.transform is not None:
             if placed_by is not None or p.rotation is not None:
                 c.errors.append(SpecError(c.loc(path + ("transform",)), "give either 'transform' or 'position'/'rotation', not both"))
