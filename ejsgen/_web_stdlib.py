@@ -106,9 +106,10 @@ def _kept_roots(modules: Iterable[str], tops: set[str]) -> set[str]:
 NUMPY_LAZY = ("ma", "polynomial", "random", "fft", "testing", "typing", "ctypeslib", "rec", "char", "strings")
 
 
-def _dropped(name: str) -> bool:
+def _dropped(name: str, keep: frozenset[str] = frozenset()) -> bool:
+    """Whether the zip entry ``name`` is one of :data:`_DROP_PARTS` (less the folders ``keep``)."""
     parts = name.split("/")
-    return any(p in _DROP_PARTS for p in parts[1:-1]) or parts[0] in _DROP_PARTS
+    return any(p in _DROP_PARTS and p not in keep for p in parts[1:-1]) or (parts[0] in _DROP_PARTS and parts[0] not in keep)
 
 
 def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int]:
@@ -121,6 +122,10 @@ def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int
         roots = _kept_roots(modules, tops)
         used = {".".join(m.split(".")[:2]) for m in modules}
         lazy = tuple(f"numpy/{sub}/" for sub in NUMPY_LAZY if f"numpy.{sub}" not in used)
+        # what the lab was seen loading is kept although it is in _DROP_PARTS: the browser's SciPy
+        # loads numpy.f2py (`from numpy import *`) and pydoc (its docstring scraper)
+        loaded_tops = {m.split(".")[0] for m in modules}
+        keep = frozenset(p for p in _DROP_PARTS if f"numpy.{p}" in used or p.removesuffix(".pyc") in loaded_tops)
         # every module of the standard library's top level (not its packages): small, and what a
         # newer CPython's own modules import (traceback imports codeop in 3.15) is then there
         stdlib = tops - third_party(zin)
@@ -129,7 +134,7 @@ def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int
         with zipfile.ZipFile(dest, "w", compression=zipfile.ZIP_STORED) as zout:
             for info in infos:
                 name = info.filename
-                if info.is_dir() or _dropped(name) or name.startswith(lazy) or not any(name.startswith(r) for r in roots):
+                if info.is_dir() or _dropped(name, keep) or name.startswith(lazy) or not any(name.startswith(r) for r in roots):
                     continue
                 if name.endswith((".pyi", ".pxd", ".pyx", ".h", ".c", ".cpp", ".f", ".pc", ".build", ".template")):
                     continue

@@ -91,6 +91,11 @@ lab.app.play()
 for _ in range(10):
     lab.frame()
 L.headless_csv(lab.module, 0.2, path=os.path.join(io_dir, "run.csv"))
+if "scipy" in sys.modules:
+    # the browser's SciPy (1.18) clones NumPy's namespace with `from numpy import *`, which loads
+    # every subpackage NumPy names in __all__ (f2py, testing, ma, ...): load them here as well
+    exec("from numpy import *", {})
+    import pydoc  # noqa: F401 - and its docstring scraper imports pydoc
 print("\x1e" + json.dumps(sorted(sys.modules)))
 """
 

@@ -96,18 +96,15 @@ def _xy(value: Any, what: str) -> np.ndarray:
 
 
 def _png_data_url(img: Any) -> str:
-    """An (H, W) or (H, W, 3|4) image as a PNG data URL."""
-    import cv2
-
+    """An (H, W) or (H, W, 3|4) image as a PNG data URL (written with zlib, not OpenCV: the
+    same in a web page, whose Python has no OpenCV)."""
     from ejsrl.view._plots import prepare_image
+    from ejsrl.web._png import encode_png
 
     rgb = prepare_image(img)
     if rgb is None:
         raise ValueError(f"an image must be an H x W or H x W x 3 array, got shape {np.shape(img)}")
-    ok, buf = cv2.imencode(".png", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-    if not ok:
-        raise ValueError("the image could not be encoded")
-    return "data:image/png;base64," + base64.b64encode(buf.tobytes()).decode("ascii")
+    return "data:image/png;base64," + base64.b64encode(encode_png(rgb)).decode("ascii")
 
 
 class _ShapeState:
