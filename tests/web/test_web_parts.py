@@ -112,3 +112,20 @@ def test_trace_of_a_scipy_lab_finds_scipy_not_a_traceback(tmp_path) -> None:
     assert "_sysconfigdata__wasi_wasm32-wasi.pyc" in names
     run = (tmp_path / "io" / "run.csv").read_text().splitlines()
     assert run[0].split(",")[:2] == ["t", "x"] and abs(float(run[-1].split(",")[1]) - 0.5403023058681398) < 1e-12
+
+
+def test_a_slow_page_says_the_browser_is_busy_not_a_server() -> None:
+    """The time readout's note when the lab cannot keep up names what is busy: the server when
+    served, the student's browser in a web page (whose Python reports ``sys.platform`` "wasi")."""
+    import subprocess
+    import sys
+
+    code = ("import sys; sys.platform = {!r}\nfrom ejsrl.view._gui import slow_text\n"
+            "print(slow_text(0.82, False)); print(slow_text(0.5, True))")
+    page = subprocess.run([sys.executable, "-c", code.format("wasi")], capture_output=True, text=True, check=True).stdout
+    served = subprocess.run([sys.executable, "-c", code.format(sys.platform)], capture_output=True, text=True,
+                            check=True).stdout
+    assert page.splitlines() == [" · *running at 82% speed (the browser is busy)*",
+                                 " · *running at 50% of real time (the browser is busy)*"]
+    assert "server is busy" not in page
+    assert served.splitlines()[0] == " · *running at 82% speed (the server is busy)*"
