@@ -178,7 +178,9 @@ def test_images_are_sent_only_when_they_change(served):
     assert tuple(im.handle.image[6, 5 + 2]) != (60, 60, 60)  # the marker is drawn over it
     # (hidden until the client has laid its panel out, IMAGE_SETTLE on a wall-clock timer: the
     # browser test of console errors checks that; here the fixture may take longer than that)
-    served.clock.advance(0.6)  # past that, and the rate limit (20 a second)
+    from ejsrl.view._plots import IMAGE_SETTLE
+
+    served.clock.advance(IMAGE_SETTLE + 0.1)  # past that, and the rate limit (20 a second)
     served.app.frame()
     assert im.pushes == 0 and im.handle.visible
     served.app.model.n = 5

@@ -11,7 +11,9 @@ def test_an_image_source_is_read_only_when_its_picture_may_be_sent(served):
     reads = []
     source = image.image.source
     image.image.source = Dynamic(lambda m: reads.append(1) or source(m), "counted")
-    served.clock.advance(0.5)  # the element is shown (and sent pictures) IMAGE_SETTLE after it is made
+    from ejsrl.view._plots import IMAGE_SETTLE
+
+    served.clock.advance(IMAGE_SETTLE)  # the element is shown (and sent pictures) IMAGE_SETTLE after it is made
     served.app.play()
     for _ in range(30):  # one second at 30 frames/s; pictures go at most 20 times a second
         served.clock.advance(1.0 / 30.0)

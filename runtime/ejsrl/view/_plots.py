@@ -442,8 +442,9 @@ IMAGE_RATE = 20.0
 
 #: seconds an image element stays hidden after it is made: viser's client mounts a new panel's
 #: elements twice while it lays the panel out, and an image shown then has its picture's blob:
-#: URL revoked while it loads (the console logs "net::ERR_FILE_NOT_FOUND"); a hidden one makes none
-IMAGE_SETTLE = 0.5
+#: URL revoked while it loads (the console logs "net::ERR_FILE_NOT_FOUND"); a hidden one makes none.
+#: 0.5 s was outlasted by a browser on a machine busy with two CPU-bound processes
+IMAGE_SETTLE = 1.5
 
 
 class ImageBinding:
