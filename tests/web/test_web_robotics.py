@@ -1,7 +1,8 @@
 """Robotics labs built with ``--web``: a trajectory lab (examples/paper/path_planning_434), the
-six-axis arm's kinematics (a ``robot`` element: its links' meshes made by trimesh in the page)
-and a SciPy lab (examples/mobile_prm_laser: ``scipy.linalg``, ``scipy.spatial``). Each page
-shows the served panel and computes the native app's numbers to 1e-12."""
+six-axis arm's kinematics (a ``robot`` element: its links' meshes made by trimesh in the page,
+a wrist camera rendered by NumPy on 32-bit WebAssembly), the six-axis arm example and a SciPy
+lab (examples/mobile_prm_laser: ``scipy.linalg``, ``scipy.spatial``). Each page shows the
+served panel and computes the native app's numbers to 1e-12."""
 
 from __future__ import annotations
 
@@ -15,7 +16,8 @@ import pytest
 pytestmark = pytest.mark.browser
 
 
-@pytest.mark.parametrize("name", ["paper/path_planning_434", "paper/six_axis_kinematics", "mobile_prm_laser"])
+@pytest.mark.parametrize("name", ["paper/path_planning_434", "paper/six_axis_kinematics", "six_axis_arm",
+                                  "mobile_prm_laser"])
 def test_robotics_page_runs_the_native_numbers(page, web_lab, name: str) -> None:
     _site, url, app_dir = web_lab(name)
     # every text the loader shows, as the student reads it
