@@ -61,8 +61,20 @@ def find_spec(name, package=None):
         return None
     return _find(name, package)
 importlib.util.find_spec = find_spec
+def optional_scipy(name):
+    # trimesh imports SciPy when it can, for a few functions; a lab that does not use SciPy
+    # itself gets a trimesh without it in the page (as on a machine without SciPy), which keeps
+    # SciPy out of its download and its start
+    if name.split(".")[0] != "scipy" or "scipy" in sys.modules:
+        return False
+    frame = sys._getframe(2)
+    while frame is not None and frame.f_code.co_filename.startswith("<frozen"):
+        frame = frame.f_back
+    return frame is not None and f"{os.sep}trimesh{os.sep}" in frame.f_code.co_filename
 class Hide(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path=None, target=None):
+        if optional_scipy(name):
+            raise ModuleNotFoundError(f"No module named {name!r}", name=name)
         if absent(name):
             for finder in sys.meta_path:
                 if type(finder).__name__ == "_Absent":

@@ -62,3 +62,22 @@ def web_lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator:
             return made[name]
 
         yield make
+
+
+@pytest.fixture
+def until():
+    """``until(page, js, arg=None, timeout=30.0)``: evaluate ``js`` (a function of ``arg`` that may
+    return a promise, e.g. ``ejsWeb.call('state')...``) until it gives a truthy value; that value.
+    Not ``page.wait_for_function``: it takes a returned promise as truthy at once."""
+
+    def wait(page, js: str, arg=None, timeout: float = 30.0):
+        deadline = time.monotonic() + timeout
+        while True:
+            value = page.evaluate(js, arg)
+            if value:
+                return value
+            if time.monotonic() > deadline:
+                raise AssertionError(f"still false after {timeout} s: {js}")
+            page.wait_for_timeout(50)  # the page's next frames
+
+    return wait

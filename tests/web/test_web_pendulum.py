@@ -81,7 +81,7 @@ def test_pendulum_page_loads_within_the_download_limit_cold_and_warm(browser_con
     assert cold <= USABLE_S and warm <= USABLE_S, f"cold {cold:.1f} s, warm {warm:.1f} s"
 
 
-def test_play_runs_at_the_lab_rate_and_the_readout_follows(page, pendulum) -> None:
+def test_play_runs_at_the_lab_rate_and_the_readout_follows(page, pendulum, until) -> None:
     _site, url, _app = pendulum
     page.goto(url)
     play = page.get_by_role("button", name="Play")
@@ -91,7 +91,7 @@ def test_play_runs_at_the_lab_rate_and_the_readout_follows(page, pendulum) -> No
     asked = dt * sim["steps"] * sim["fps"]  # model time per wall second the lab asks for
     play.click()
     page.get_by_role("button", name="Pause").wait_for(state="visible")
-    page.wait_for_function("ejsWeb.call('state').then(s => s.t > 0.2)")  # playing, settled
+    until(page, "() => ejsWeb.call('state').then(s => s.t > 0.2)")  # playing, settled
     first, t0 = state(page), time.monotonic()
     time.sleep(3.0)
     last, t1 = state(page), time.monotonic()
@@ -103,7 +103,7 @@ def test_play_runs_at_the_lab_rate_and_the_readout_follows(page, pendulum) -> No
     assert shown >= first["t"]  # the panel's time readout moves with the model
 
 
-def test_a_slider_changes_the_model_as_served(page, pendulum) -> None:
+def test_a_slider_changes_the_model_as_served(page, pendulum, until) -> None:
     from ejsrl.view._validate import validate_control
 
     _site, url, app_dir = pendulum
@@ -118,17 +118,19 @@ def test_a_slider_changes_the_model_as_served(page, pendulum) -> None:
         sys.path.remove(str(app_dir))
     damping = next(e for e in app.VIEW if getattr(e, "bind", None) == "b")
     box = page.get_by_role("textbox").nth(1)  # the Damping slider's number box (Length's is the first)
-    for typed in ("0.537", "5"):
-        expected = validate_control(damping, float(typed))  # the served app's check: typing, clamping, step
+    # viser's client rounds a typed value to the slider's step (0.01) before sending it, served
+    # as in the page: "0.537" reaches the lab as 0.53, "5" as 5, which the lab clamps to 1
+    for typed, sent in (("0.537", 0.53), ("5", 5.0)):
+        expected = validate_control(damping, sent)  # the served app's check: typing, clamping, step
         assert expected.ok
         box.fill(typed)
         box.press("Enter")
         box.blur()
-        page.wait_for_function("(v) => ejsWeb.call('state', {vars: ['b']}).then(s => Math.abs(s.values.b - v) < 1e-12)",
-                               arg=expected.value, timeout=30_000)
+        until(page, "(v) => ejsWeb.call('state', {vars: ['b']}).then(s => Math.abs(s.values.b - v) < 1e-12)",
+              expected.value)
     energy_before = state(page, "E")["values"]["E"]
     page.get_by_role("button", name="Play").click()
-    page.wait_for_function("ejsWeb.call('state').then(s => s.t > 1.0)", timeout=30_000)
+    until(page, "() => ejsWeb.call('state').then(s => s.t > 1.0)")
     assert state(page, "E")["values"]["E"] < energy_before  # damped at the new rate
 
 
