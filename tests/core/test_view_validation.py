@@ -52,7 +52,8 @@ def test_each_kind_of_misplaced_item_keeps_its_words(tmp_path: Path, capsys: pyt
         "8:9: error: 'slider' is a GUI element and cannot stand in a scene",
         "9:13: error: expected a mapping of properties, got nothing (null)",
         "10:9: error: each 3D element is a one-key mapping 'kind: {properties}'; kinds: "
-        "box, sphere, cylinder, arrow, line, trail, points, frame, grid, text3d, mesh, group, robot, camera, gizmo, view",
+        "box, sphere, cylinder, arrow, line, trail, points, frame, grid, text3d, mesh, group, robot, camera, gizmo, view, "
+        "vehicle, laser, occupancy, path, ellipse, particles",
         "11:12: error: expected a list of 3D elements, got 3",
         "12:5: error: 'sphere' is a 3D element and cannot stand outside a scene",
         "15:11: error: unknown view element kind 'lable'; did you mean 'label'?",

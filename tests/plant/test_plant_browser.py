@@ -198,7 +198,10 @@ def test_a_program_longer_than_the_slot_keeps_the_lease_and_a_closed_tab_frees_i
     from ejsrl.app._plant_link import PlantLink
     from testkit.served import Served
 
-    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--watchdog", "0.5", "--slot", "4"])
+    # a 2 s watchdog: this test is about the slot and the lease; a heartbeat late by more than the
+    # default 0.5 s (a test machine running a browser and another worker) brakes the arm and makes
+    # the command in flight stale, by design, which test_plant_lease.py checks with 0.5 s
+    plant = PlantProc(tmp_path, ["--mqtt", f"127.0.0.1:{broker.port}", "--watchdog", "2.0", "--slot", "4"])
     monkeypatch.setenv("EJSRL_PLANT_PORT", str(broker.port))
     app_dir = build(EXAMPLES / "paper" / "robualab.ejs.yaml", tmp_path / "robualab")
     server = Served(app_dir, tmp_path, "--max-sessions", "4")

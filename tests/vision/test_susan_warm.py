@@ -37,7 +37,8 @@ def test_building_a_lab_that_uses_susan_compiles_its_kernels_in_the_background(t
 
     def build(spec: Path, out: Path) -> float:
         t0 = time.perf_counter()
-        r = subprocess.run([sys.executable, "-m", "ejsgen", "build", str(spec), "-o", str(out)], capture_output=True, text=True, env=env, timeout=300)
+        r = subprocess.run([sys.executable, "-m", "ejsgen", "build", str(spec), "-o", str(out)], capture_output=True, text=True, env=env, timeout=300,
+                           cwd=tmp_path)  # the installed ejsgen and ejsrl, as the -c below (from the checkout's root, -m ejsgen runs the checkout's)
         assert r.returncode == 0, r.stderr
         return time.perf_counter() - t0
 
@@ -54,7 +55,7 @@ def test_building_a_lab_that_uses_susan_compiles_its_kernels_in_the_background(t
         assert time.monotonic() < deadline, "the child never took the cache's lock"
         time.sleep(0.05)
     ask = "from ejsrl.vision.warm import start_in_background; print(start_in_background())"
-    r = subprocess.run([sys.executable, "-c", ask], capture_output=True, text=True, env=env, timeout=300)
+    r = subprocess.run([sys.executable, "-c", ask], capture_output=True, text=True, env=env, timeout=300, cwd=tmp_path)
     assert "being compiled into numba's cache already" in r.stdout, r.stdout + r.stderr
     deadline = time.monotonic() + 600
     while not list(tmp.glob("ejsrl-susan-numba-*.done")):

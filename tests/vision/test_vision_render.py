@@ -400,8 +400,9 @@ def test_backend_choice_env_override_and_errors(monkeypatch):
 
 def test_gl_unavailable_falls_back_silently_for_auto_and_explains_for_gl(monkeypatch):
     # as on a machine without moderngl: the cached outcome of the first attempt says why
-    monkeypatch.setattr(_gl, "_renderer", None)
-    monkeypatch.setattr(_gl, "_failure", "moderngl is not installed (No module named 'moderngl')")
+    pool = _gl._Pool(1)  # this process's contexts: none could be made, and the first attempt said why
+    pool.failure = "moderngl is not installed (No module named 'moderngl')"
+    monkeypatch.setattr(_gl, "_the_pool", pool)
     monkeypatch.delenv("EJSRL_RENDER_BACKEND", raising=False)
     w, cam, T = _golden_scene()
     assert _pick_backend("auto") == "numpy"
