@@ -58,6 +58,10 @@ def test_a_program_longer_than_the_slot_keeps_the_lease_with_a_class_watching(br
         holder = link_factory(session="holder", alive=lambda: 1.5 if starved.is_set() else 0.0)
         holder.request_lease()
         assert holder.wait_for(lambda l: l.holds_lease, 20)
+        deadline = time.monotonic() + 20  # the spectator's view of the plant lags the holder's own by a message or two
+        while not (seen and seen[-1][1] == "holder"):
+            assert time.monotonic() < deadline, "the spectator never saw the holder"
+            time.sleep(0.02)
         start = len(seen)
         threading.Timer(4.0, starved.set).start()
         threading.Timer(8.0, starved.clear).start()
