@@ -3,11 +3,16 @@
 viser's client mounts a new panel's elements twice while it lays the panel out; an image shown
 then had its picture's ``blob:`` URL revoked while it loaded, and every such lab logged
 ``Failed to load resource: net::ERR_FILE_NOT_FOUND`` (six_axis_arm, six_axis_kinematics,
-marker_servoing). The image element is now shown once the panel is laid out.
+marker_servoing). The image element is now shown when the page says its panel is laid out (its
+probe's message), not on a timer: it must hold on a machine busy with two CPU-bound processes
+(``EJSGEN_TEST_HOGS=2`` starts them here).
 """
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import tempfile
 from pathlib import Path
 
@@ -37,9 +42,15 @@ simulation:
 """
 
 
+def _hogs(n: int) -> list[subprocess.Popen]:
+    """``n`` CPU-bound processes (the busy machine the reveal must withstand)."""
+    return [subprocess.Popen([sys.executable, "-c", "while True: pass"]) for _ in range(n)]
+
+
 def _console_errors(browser_context, spec: Path, frames: int) -> list[str]:
     """Serve ``spec`` (a simulation per tab), open it, wait until its picture is loaded and the lab
-    ran ``frames`` more frames; the console's errors and the failed requests meanwhile."""
+    ran ``frames`` more frames; the console's errors and the failed requests meanwhile. The
+    picture must have been shown by its page's message (its panel laid out), not by the fallback."""
     from ejsgen.cli import build
     from ejsrl.app import load_app
 
@@ -47,6 +58,7 @@ def _console_errors(browser_context, spec: Path, frames: int) -> list[str]:
         app = load_app(build(spec, Path(tmp) / "app"))
         server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=5.0)
         errors: list[str] = []
+        hogs = _hogs(int(os.environ.get("EJSGEN_TEST_HOGS", "0")))
         page = browser_context.new_page()
         try:
             page.set_default_timeout(SLOW)
@@ -58,6 +70,8 @@ def _console_errors(browser_context, spec: Path, frames: int) -> list[str]:
                 timeout=SLOW)
             wait_until(lambda: app.classroom is not None and len(app.classroom.sessions) == 1, what="the tab's session")
             lab = next(iter(app.classroom.sessions.values())).app
+            images = [im for view in lab.views for im in view.panel.images]
+            assert images and all(im.shown_by == "page" for im in images), [im.shown_by for im in images]
             if not lab.is_playing():
                 page.get_by_role("button", name="Play").click()
                 wait_until(lab.is_playing, what="Play")
@@ -65,6 +79,9 @@ def _console_errors(browser_context, spec: Path, frames: int) -> list[str]:
             wait_until(lambda: lab.frame_count >= start + frames, timeout=60, what=f"{frames} more frames")
             page.evaluate("() => new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
         finally:
+            for hog in hogs:
+                hog.kill()
+                hog.wait()
             page.close()
             app.stop()
             server.stop()

@@ -19,24 +19,25 @@ paused) the binding builds the panel's frame (:func:`ejsrl.view._plot_frame.plot
 ranges, ticks and their labels, legend) and sends it if it changed. Below the plot a line
 shows each history series' colour, label and latest value.
 
-:class:`ImageBinding` sends an image only when its pixels or its overlay points changed.
+:class:`ImageBinding` (in :mod:`ejsrl.view._image`, re-exported here) sends an image only when its
+pixels or its overlay points changed, once the page has laid its panel out.
 """
 
 from __future__ import annotations
 
 import math
-import threading
 import time
 from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
+from ejsrl.view._image import IMAGE_RATE, IMAGE_SETTLE, ImageBinding, prepare_image  # noqa: F401 - re-exported: images have their own module
 from ejsrl.view._plot_buffers import PlotBuffer, TraceBuffer
 from ejsrl.view._plot_frame import PLOT_AREA_PX, AxisConf, Layer, flat_range, min_span, plot_frame, x_range
 from ejsrl.view._ticks import readout_text
 from ejsrl.view._wire import set_markdown
-from ejsrl.view.elements import Image, Plot, escape_markdown
+from ejsrl.view.elements import Plot, escape_markdown
 from ejsrl.world.colors import to_rgb
 
 __all__ = [
@@ -396,153 +397,3 @@ class PlotBinding:
     def reshow(self) -> None:
         """Send the frame again with the next :meth:`push` (its data was handed over)."""
         self._sent_rev = -1
-
-
-def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
-    """An (H, W, 3) uint8 image ready for viser, with ``points`` (N, 2) (x, y) drawn over it.
-
-    Returns None if ``img`` is not an image.
-    """
-    if img is None:
-        return None
-    a = np.asarray(img)
-    if a.ndim == 2:
-        a = np.repeat(a[:, :, None], 3, axis=2)
-    elif a.ndim == 3 and a.shape[2] == 1:
-        a = np.repeat(a, 3, axis=2)
-    elif a.ndim == 3 and a.shape[2] == 4:
-        a = a[:, :, :3]
-    if a.ndim != 3 or a.shape[2] != 3 or a.shape[0] == 0 or a.shape[1] == 0:
-        return None
-    if a.dtype != np.uint8:
-        if np.issubdtype(a.dtype, np.floating) and a.size and float(np.nanmax(a)) <= 1.0:
-            a = np.clip(np.nan_to_num(a) * 255.0, 0, 255).astype(np.uint8)
-        else:
-            a = np.clip(np.nan_to_num(a.astype(np.float64)), 0, 255).astype(np.uint8)
-    a = np.ascontiguousarray(a)
-    if points is not None:
-        pts = np.asarray(points, dtype=float).reshape(-1, 2)
-        if len(pts):
-            import cv2
-
-            a = a.copy()
-            h, w = a.shape[:2]
-            r = max(2, int(round(min(h, w) / 80)))
-            for x, y in pts:
-                if np.isfinite(x) and np.isfinite(y) and -w < x < 2 * w and -h < y < 2 * h:
-                    c = (int(round(x)), int(round(y)))
-                    cv2.circle(a, c, r + 1, (0, 0, 0), 2, lineType=cv2.LINE_AA)
-                    cv2.circle(a, c, r, (255, 40, 40), 2, lineType=cv2.LINE_AA)
-    return a
-
-
-#: the most pictures a second an image element reads and sends
-IMAGE_RATE = 20.0
-
-
-#: seconds an image element stays hidden after it is made: viser's client mounts a new panel's
-#: elements twice while it lays the panel out, and an image shown then has its picture's blob:
-#: URL revoked while it loads (the console logs "net::ERR_FILE_NOT_FOUND"); a hidden one makes none.
-#: 0.5 s was outlasted by a browser on a machine busy with two CPU-bound processes
-IMAGE_SETTLE = 1.5
-
-
-class ImageBinding:
-    """One ``Image`` element: sends the picture only when the source or the points changed.
-
-    ``first()``: the source and points now, ``(src, pts)``, read once to make the element
-    with the lab's first picture (a grey placeholder if it gives none). The element is shown
-    :data:`IMAGE_SETTLE` seconds after it is made (by a timer, or the first :meth:`update`
-    then, whichever comes first: a paused lab is not refreshed); pictures are sent from then
-    on, at most ``max_rate`` a second.
-    """
-
-    def __init__(
-        self, gui: Any, image: Image, *, label: str | None = None, max_rate: float = IMAGE_RATE, clock: Callable[[], float] = time.monotonic,
-        first: Callable[[], tuple[Any, Any]] | None = None,
-    ) -> None:
-        self.image = image
-        self.max_rate = max_rate
-        self.clock = clock
-        self._last_src: np.ndarray | None = None
-        self._last_pts: np.ndarray | None = None
-        #: shown (and sent pictures) from this time on
-        self._show_at = clock() + IMAGE_SETTLE
-        self._shown = False
-        self._last_push = self._show_at - 1.0 / max_rate
-        #: when a source was last looked at (sent or not): read again at most max_rate a second
-        self._last_read = -math.inf
-        self.pushes = 0
-        shown = None
-        if first is not None:
-            src, pts = first()
-            if src is not None:
-                a, p = np.asarray(src), None if pts is None else np.asarray(pts, dtype=float)
-                shown = prepare_image(a, p)
-                if shown is not None:
-                    self._last_src, self._last_pts = a.copy(), None if p is None else p.copy()
-        placeholder = np.full((2, 2, 3), 40, dtype=np.uint8) if shown is None else shown
-        label = str(image.label or "") if label is None else label
-        self.handle = gui.add_image(placeholder, label=label or None, format="jpeg", jpeg_quality=85, visible=False)
-        self._reveal_lock = threading.Lock()
-        timer = threading.Timer(IMAGE_SETTLE, self._reveal)
-        timer.daemon = True
-        try:
-            timer.start()
-        except RuntimeError:  # no threads (a web page's Python): update() shows it once IMAGE_SETTLE is past
-            pass
-
-    def _reveal(self) -> None:
-        """Show the element (once)."""
-        with self._reveal_lock:
-            if self._shown:
-                return
-            self._shown = True
-        import warnings
-
-        with warnings.catch_warnings():  # the tab may be gone (viser warns of a closed connection)
-            warnings.simplefilter("ignore")
-            try:
-                self.handle.visible = True
-            except Exception:  # noqa: BLE001 - the tab is gone
-                pass
-
-    def due(self) -> bool:
-        """Whether the rate allows a new picture now: if not, the source need not be read
-        (a virtual camera's picture is the costliest thing a frame computes)."""
-        return self.clock() - max(self._last_push, self._last_read) >= 1.0 / self.max_rate
-
-    def update(self, src: Any, pts: Any) -> bool:
-        """Send the image if it changed (at most ``max_rate`` a second); True if sent."""
-        now = self.clock()
-        if not self._shown and now >= self._show_at:
-            self._reveal()
-        if src is None:
-            return False
-        if now - self._last_push < 1.0 / self.max_rate:
-            return False
-        self._last_read = now
-        a = np.asarray(src)
-        p = None if pts is None else np.asarray(pts, dtype=float)
-        same_src = self._last_src is not None and self._last_src.shape == a.shape and np.array_equal(self._last_src, a)
-        same_pts = (p is None and self._last_pts is None) or (
-            p is not None and self._last_pts is not None and p.shape == self._last_pts.shape and np.array_equal(p, self._last_pts)
-        )
-        if same_src and same_pts:
-            return False
-        out = prepare_image(a, p)
-        if out is None:
-            return False
-        self.handle.image = out
-        self._last_src = a.copy()
-        self._last_pts = None if p is None else p.copy()
-        self._last_push = now
-        self.pushes += 1
-        return True
-
-    def clear(self) -> None:
-        """Forget what was sent, so the next frame sends the image again."""
-        self._last_src = None
-        self._last_pts = None
-        self._last_push = 0.0
-        self._last_read = -math.inf
