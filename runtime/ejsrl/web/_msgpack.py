@@ -50,36 +50,18 @@ def _encode(obj: Any, out: bytearray) -> None:  # noqa: C901 - one branch per Me
         out += _F64.pack(obj)
     elif isinstance(obj, str):
         data = obj.encode("utf-8")
-        n = len(data)
-        if n < 32:
-            out.append(0xA0 | n)
-        elif n < 0x100:
-            out += bytes((0xD9, n))
-        elif n < 0x10000:
-            out.append(0xDA)
-            out += n.to_bytes(2, "big")
-        else:
-            out.append(0xDB)
-            out += n.to_bytes(4, "big")
+        _header(len(data), 0xA0, 32, _STR, out)
         out += data
     elif isinstance(obj, (bytes, bytearray, memoryview)):
         data = obj.cast("B") if isinstance(obj, memoryview) else obj
-        n = len(data)
-        if n < 0x100:
-            out += bytes((0xC4, n))
-        elif n < 0x10000:
-            out.append(0xC5)
-            out += n.to_bytes(2, "big")
-        else:
-            out.append(0xC6)
-            out += n.to_bytes(4, "big")
+        _sized(len(data), _BIN, out, what="bytes")
         out += data
     elif isinstance(obj, (list, tuple)):
-        _header(len(obj), 0x90, 0xDC, out)
+        _header(len(obj), 0x90, 16, _ARRAY, out)
         for item in obj:
             _encode(item, out)
     elif isinstance(obj, dict):
-        _header(len(obj), 0x80, 0xDE, out)
+        _header(len(obj), 0x80, 16, _MAP, out)
         for key, value in obj.items():
             _encode(key, out)
             _encode(value, out)
@@ -87,37 +69,45 @@ def _encode(obj: Any, out: bytearray) -> None:  # noqa: C901 - one branch per Me
         raise EncodeError(f"cannot encode a {type(obj).__name__} as MessagePack")
 
 
-def _header(n: int, fix: int, wide: int, out: bytearray) -> None:
-    """An array's or a map's header: fix form below 16, else 16 or 32 bits."""
-    if n < 16:
+# the wider forms of each kind, narrowest first: (type byte, bytes of the number that follows)
+_UINT = ((0xCC, 1), (0xCD, 2), (0xCE, 4), (0xCF, 8))
+_INT = ((0xD0, 1), (0xD1, 2), (0xD2, 4), (0xD3, 8))
+_STR = ((0xD9, 1), (0xDA, 2), (0xDB, 4))
+_BIN = ((0xC4, 1), (0xC5, 2), (0xC6, 4))
+_ARRAY = ((0xDC, 2), (0xDD, 4))
+_MAP = ((0xDE, 2), (0xDF, 4))
+
+
+def _sized(n: int, forms: tuple[tuple[int, int], ...], out: bytearray, *, signed: bool = False, what: str = "length") -> None:
+    """``n`` in the narrowest of ``forms`` that holds it: its type byte, then ``n`` big-endian
+    in its size (two's complement if ``signed``), as msgspec writes it."""
+    for code, size in forms:
+        bits = 8 * size - 1 if signed else 8 * size
+        if (-(1 << bits) if signed else 0) <= n < 1 << bits:
+            out.append(code)
+            out += n.to_bytes(size, "big", signed=signed)
+            return
+    raise EncodeError(f"{what} {n} is out of MessagePack's range")
+
+
+def _header(n: int, fix: int, fix_limit: int, forms: tuple[tuple[int, int], ...], out: bytearray) -> None:
+    """A string's, an array's or a map's header: the fix form (``fix | n``) below ``fix_limit``,
+    else the narrowest of ``forms``."""
+    if n < fix_limit:
         out.append(fix | n)
-    elif n < 0x10000:
-        out.append(wide)
-        out += n.to_bytes(2, "big")
     else:
-        out.append(wide + 1)
-        out += n.to_bytes(4, "big")
+        _sized(n, forms, out)
 
 
 def _encode_int(n: int, out: bytearray) -> None:
     if 0 <= n < 0x80:
-        out.append(n)
+        out.append(n)  # positive fixint
     elif -32 <= n < 0:
-        out.append(n & 0xFF)
+        out.append(n & 0xFF)  # negative fixint
     elif n >= 0:
-        for code, size in ((0xCC, 1), (0xCD, 2), (0xCE, 4), (0xCF, 8)):
-            if n < 1 << (8 * size):
-                out.append(code)
-                out += n.to_bytes(size, "big")
-                return
-        raise EncodeError(f"integer {n} is too large for MessagePack")
+        _sized(n, _UINT, out, what="integer")
     else:
-        for code, size in ((0xD0, 1), (0xD1, 2), (0xD2, 4), (0xD3, 8)):
-            if n >= -(1 << (8 * size - 1)):
-                out.append(code)
-                out += n.to_bytes(size, "big", signed=True)
-                return
-        raise EncodeError(f"integer {n} is too small for MessagePack")
+        _sized(n, _INT, out, signed=True, what="integer")
 
 
 def decode(data: bytes | bytearray | memoryview) -> Any:
