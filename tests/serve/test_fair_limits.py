@@ -122,7 +122,7 @@ def test_a_session_resumes_only_in_the_browser_that_created_it(classroom):
         # a projector (another browser) opening the address within the grace period: a lab of its own
         other = await tab(server, f"/s/{token}", cookie="b" * 24)
         assert token_of(other) != token
-        assert any("another browser" in n for n in other.notifications())
+        await Client.until(lambda: any("another browser" in n for n in other.notifications()), "the note", timeout=10)
         assert app.classroom.sessions[token_of(other)].app.model.L == 1.0
         # ... and so does a script with no cookie
         script = await tab(server, f"/s/{token}")
@@ -148,11 +148,12 @@ def test_a_tab_whose_session_is_gone_is_told_why(classroom):
         await Client.until(lambda: token not in app.classroom.sessions, "the session to be freed", timeout=10)
         late = await tab(server, f"/s/{token}", cookie="c" * 24)
         assert token_of(late) != token
-        assert any("Your earlier simulation ended" in n and "closed for more than" in n
-                   for n in late.notifications())
+        # the note follows the panel (a window of viser's later): waited for, not raced
+        await Client.until(lambda: any("Your earlier simulation ended" in n and "closed for more than" in n
+                                       for n in late.notifications()), "the note", timeout=10)
         # an address this server never gave (its process was restarted since): told the lab was restarted
         restarted = await tab(server, "/s/NeverGivenToken1234/", cookie="d" * 24)
-        assert any("This lab was restarted" in n for n in restarted.notifications())
+        await Client.until(lambda: any("This lab was restarted" in n for n in restarted.notifications()), "the note", timeout=10)
         for c in (late, restarted):
             await c.close()
 

@@ -125,3 +125,22 @@ def test_no_more_contexts_than_the_limit(monkeypatch):
     assert result, "the second thread never got the context back"
     _assert_same_picture(*result[0], 2.0)
     assert _gl._pool().size() == 1
+
+
+def test_each_render_starts_from_its_own_background_and_an_empty_depth():
+    """The clears (through ctypes, without the GIL): a render after another, with the triangle
+    moved and another background, shows nothing of the one before: its own background where
+    nothing is seen, depth inf there, and the NumPy back end's picture where the triangle is."""
+    cam = CameraModel(96, 72, fov_deg=50)
+    kw = dict(camera=cam, T_world_camera=np.eye(4), cull_backfaces=False)
+    near = render_triangles(_triangle(0.7), [[0, 1, 0]], backend="gl", background=(0.9, 0.1, 0.1), **kw)
+    assert np.isfinite(near[1]).sum() > 0.25 * near[1].size, "the near triangle covers much of the picture"
+    for bg in ((0.1, 0.2, 0.8), (1.0, 1.0, 1.0)):
+        gl = render_triangles(_triangle(5.0), [[1, 0, 0]], backend="gl", background=bg, **kw)
+        ref = render_triangles(_triangle(5.0), [[1, 0, 0]], backend="numpy", background=bg, **kw)
+        _assert_same_picture(gl, ref, 5.0)
+        empty = ~np.isfinite(gl[1])
+        assert empty.sum() > 0.5 * empty.size
+        assert np.array_equal(gl[0][empty], ref[0][empty]), "the background is this render's"
+        assert np.array_equal(np.unique(gl[0][empty], axis=0), np.round(np.array([bg]) * 255).astype(np.uint8))
+        assert not np.any((gl[0] == (0, 255, 0)).all(axis=-1)), "nothing of the earlier picture is left"

@@ -45,6 +45,7 @@ from ejsrl.app._capacity import (  # noqa: F401 - how many sessions fit; re-expo
     CPU_SHARE, MAX_DEFAULT_SESSIONS, SEND_SECONDS, VIEW_FACTOR, default_max_sessions, measure_frame_cost,
 )
 from ejsrl.app._scheduler import Scheduler, default_workers
+from ejsrl.app._wake import BatchedWake
 from ejsrl.view._fair import QuietLog
 
 __all__ = ["Classroom", "Session", "default_max_sessions", "measure_frame_cost", "GRACE_SECONDS"]
@@ -233,6 +234,8 @@ class Classroom:
         self._freed_tokens: collections.OrderedDict[str, None] = collections.OrderedDict()
         #: how many tabs were given a new lab for another browser's address (for tests and logs)
         self.other_browser = 0
+        #: one wake of viser's event loop for the frames of many sessions (made with the first tab)
+        self.wake: BatchedWake | None = None
         server.on_client_connect(self._connect)
         server.on_client_disconnect(self._disconnect)
         self._reaper = threading.Thread(target=self._reap_loop, name="ejsrl-sessions", daemon=True)
@@ -367,6 +370,7 @@ class Classroom:
             old_view = session.view
             if old_view is not None and not old_view.closed:  # the old tab's leaving is not handled yet
                 self._close_view(session, old_view)
+            self._batch_wakes(client.client_id)
             view = ViserView(app, self.server, client=client)
             client.gui.add_html(_token_script(session.token))
             with app.lock:
@@ -385,6 +389,19 @@ class Classroom:
         log.info("ejsrl: %s session %s… (%d connected)", "new" if fresh else "reconnected",
                  session.token[:6], len(self.connected()))
         session.wake()
+
+    def _batch_wakes(self, client_id: int) -> None:
+        """Send the client's frames through the class's one batched wake of viser's event loop
+        (:mod:`ejsrl.app._wake`); nothing when viser's internals are not the expected ones."""
+        state = getattr(self.server._websock_server, "_client_state_from_id", {}).get(client_id)  # viser 1.1's internals
+        buffer = getattr(state, "message_buffer", None)
+        loop = getattr(buffer, "event_loop", None)
+        if buffer is None or loop is None:
+            return
+        with self._lock:
+            if self.wake is None:
+                self.wake = BatchedWake(loop)
+        self.wake.install(buffer)
 
     def _disconnect(self, client: Any) -> None:
         with self._lock:

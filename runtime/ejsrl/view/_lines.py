@@ -96,20 +96,6 @@ def rigid_fit(ref: np.ndarray, pts: np.ndarray) -> np.ndarray | None:
     return T
 
 
-def _turn(u: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """The smallest rotation (3, 3) that takes the unit vector ``u`` onto the unit vector ``d``."""
-    v = np.cross(u, d)
-    c = float(np.dot(u, d))
-    if c < -1.0 + 1e-12:  # opposite: half a turn about any axis across u
-        axis = np.cross(u, [1.0, 0.0, 0.0])
-        if np.linalg.norm(axis) < 1e-6:
-            axis = np.cross(u, [0.0, 1.0, 0.0])
-        axis /= np.linalg.norm(axis)
-        return 2.0 * np.outer(axis, axis) - np.eye(3)
-    vx = np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
-    return np.eye(3) + vx + vx @ vx / (1.0 + c)
-
-
 def _eligible(node: Any, pts: np.ndarray) -> bool:
     """Whether a ``line`` whose shape changes is drawn as pieces: 2 to ``MAX_PIECE_SEGMENTS + 1`` finite points."""
     return bool(RIGID_LINES and node.kind == "line" and 2 <= len(pts) <= MAX_PIECE_SEGMENTS + 1 and np.all(np.isfinite(pts)))
@@ -122,27 +108,89 @@ def _two_points(node: Any, pts: np.ndarray) -> bool:
 
 class _Handle:
     """One segment set: its viser handle, the points (N, 3) it was last sent in its own frame,
-    and its pose (4, 4) in the node frame."""
+    and its pose in the node frame: ``pos`` (3,) and ``q`` (wxyz) as sent, ``T`` (4, 4) the same
+    pose as a matrix (made when asked for)."""
 
-    __slots__ = ("h", "local", "T")
+    __slots__ = ("h", "local", "_T", "pos", "q")
 
     def __init__(self, h: Any, local: np.ndarray) -> None:
         self.h = h
         self.local = local
-        self.T = np.eye(4)
+        self._T: np.ndarray | None = np.eye(4)
+        self.pos: tuple[float, ...] = (0.0, 0.0, 0.0)
+        self.q: tuple[float, ...] = (1.0, 0.0, 0.0, 0.0)
+
+    @property
+    def T(self) -> np.ndarray:
+        if self._T is None:
+            self._T = _matrix(self.pos, self.q)
+        return self._T
 
     def pose(self, T: np.ndarray) -> None:
-        if not np.array_equal(T[:3, 3], self.T[:3, 3]):
+        """Pose the set by ``T`` (4, 4), sending what changed."""
+        current = self.T
+        if not np.array_equal(T[:3, 3], current[:3, 3]):
             set_position(self.h, T[:3, 3])
-        if not np.array_equal(T[:3, :3], self.T[:3, :3]):
+        if not np.array_equal(T[:3, :3], current[:3, :3]):
             set_wxyz(self.h, r2q(T))
-        self.T = T
+        self._T = T
+        self.pos = tuple(T[:3, 3].tolist())
+        self.q = tuple(r2q(T).tolist())
+
+    def pose_q(self, pos: tuple[float, ...], q: tuple[float, ...]) -> None:
+        """Pose the set at ``pos`` (3,) turned by the unit quaternion ``q`` (wxyz), sending what
+        changed: the pieces' path, in plain floats (a pendulum's rod is two of these a frame)."""
+        if pos != self.pos:
+            set_position(self.h, pos)
+            self.pos = pos
+            self._T = None
+        if q != self.q:
+            set_wxyz(self.h, q)
+            self.q = q
+            self._T = None
 
     def points(self, pts: np.ndarray) -> None:
         """Send ``pts`` (N, 3, node frame) as new points, in the frame the handle is posed in."""
+        T = self.T
         with np.errstate(invalid="ignore", over="ignore"):  # a point may be nan or inf (then so is its local one)
-            self.local = (pts - self.T[:3, 3]) @ self.T[:3, :3]
+            self.local = (pts - T[:3, 3]) @ T[:3, :3]
         set_prop(self.h, "points", polyline_segments(self.local))
+
+
+def _matrix(pos: tuple[float, ...], q: tuple[float, ...]) -> np.ndarray:
+    """The pose (4, 4) at ``pos`` (3,) turned by the unit quaternion ``q`` (wxyz)."""
+    w, x, y, z = q
+    T = np.eye(4)
+    T[:3, :3] = [
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ]
+    T[:3, 3] = pos
+    return T
+
+
+def _turn_q(u: tuple[float, float, float], d: tuple[float, float, float]) -> tuple[float, float, float, float]:
+    """The smallest rotation that takes the unit vector ``u`` onto the unit vector ``d``, as a unit
+    quaternion (wxyz, w >= 0), in plain floats (Rodrigues' rotation about ``u x d``)."""
+    c = u[0] * d[0] + u[1] * d[1] + u[2] * d[2]
+    if c < -1.0 + 1e-12:  # opposite: half a turn about an axis across u (u x x, or u x y when u is along x)
+        ax, ay, az = 0.0, u[2], -u[1]  # u x (1, 0, 0)
+        if math.sqrt(ay * ay + az * az) < 1e-6:
+            ax, ay, az = -u[2], 0.0, u[0]  # u x (0, 1, 0)
+        n = math.sqrt(ax * ax + ay * ay + az * az)
+        return (0.0, ax / n, ay / n, az / n)
+    w = 1.0 + c
+    x, y, z = u[1] * d[2] - u[2] * d[1], u[2] * d[0] - u[0] * d[2], u[0] * d[1] - u[1] * d[0]
+    n = math.sqrt(w * w + x * x + y * y + z * z)
+    return (w / n, x / n, y / n, z / n)
+
+
+def _rotate(q: tuple[float, ...], v: list[float]) -> tuple[float, float, float]:
+    """The vector ``v`` (3,) turned by the unit quaternion ``q`` (wxyz)."""
+    w, x, y, z = q
+    tx, ty, tz = 2.0 * (y * v[2] - z * v[1]), 2.0 * (z * v[0] - x * v[2]), 2.0 * (x * v[1] - y * v[0])
+    return (v[0] + w * tx + (y * tz - z * ty), v[1] + w * ty + (z * tx - x * tz), v[2] + w * tz + (x * ty - y * tx))
 
 
 class _Pieces:
@@ -176,26 +224,28 @@ class _Pieces:
     def handles(self) -> tuple[_Handle, _Handle]:
         return self.a, self.b
 
-    def place(self, p0: np.ndarray, p1: np.ndarray) -> bool:
-        """Cover the segment ``p0``-``p1`` (3,); whether it is shown (finite, of a length)."""
+    def place(self, p0: list[float], p1: list[float]) -> bool:
+        """Cover the segment ``p0``-``p1`` (3,) with the pieces; whether it is shown (finite, of a
+        length). Plain float arithmetic: every frame of a swinging rod comes here."""
         a, b = self.a, self.b
-        length = float(np.linalg.norm(p1 - p0))
+        dx, dy, dz = p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
         if not (math.isfinite(length) and length > 1e-12):
             return False
-        d = (p1 - p0) / length
-        piece = float(np.linalg.norm(a.local[1] - a.local[0]))
+        d = (dx / length, dy / length, dz / length)
+        la = a.local.tolist()
+        piece = math.dist(la[1], la[0])
         new, self.seen = refit_piece(piece, length, self.seen)
         if new is not None:  # out of the pieces' band: new pieces, sent in their current frames (shown a frame later)
-            piece = new
-            a.points(np.array([p0, p0 + piece * d]))
-            b.points(np.array([p1, p1 - piece * d]))
+            s0, s1, dv = np.array(p0, dtype=float), np.array(p1, dtype=float), np.array(d)
+            a.points(np.array([s0, s0 + new * dv]))
+            b.points(np.array([s1, s1 - new * dv]))
             return True
-        for x, start, direction in ((a, p0, d), (b, p1, -d)):
-            u = (x.local[1] - x.local[0]) / piece
-            T = np.eye(4)
-            T[:3, :3] = _turn(u, direction)
-            T[:3, 3] = start - T[:3, :3] @ x.local[0]
-            x.pose(T)
+        for x, local, start, direction in ((a, la, p0, d), (b, b.local.tolist(), p1, (-d[0], -d[1], -d[2]))):
+            u = ((local[1][0] - local[0][0]) / piece, (local[1][1] - local[0][1]) / piece, (local[1][2] - local[0][2]) / piece)
+            q = _turn_q(u, direction)
+            r = _rotate(q, local[0])
+            x.pose_q((float(start[0]) - r[0], float(start[1]) - r[1], float(start[2]) - r[2]), q)
         return True
 
     def show(self, shown: bool, style_shown: bool) -> None:
@@ -301,9 +351,10 @@ class LineDraw(_Draw):
         if not self.pieces:
             return
         first = 0 if not self.handles else len(pts) - 1 - len(self.pieces)
+        rows = pts[max(first, 0) : first + len(self.pieces) + 1].tolist()  # plain floats: see _Pieces.place
         for i, p in enumerate(self.pieces):
             k = first + i
-            ok = 0 <= k and k + 1 < len(pts) and p.place(pts[k], pts[k + 1])
+            ok = 0 <= k and k + 1 < len(pts) and p.place(rows[k - max(first, 0)], rows[k + 1 - max(first, 0)])
             p.show(ok, style_shown)
 
 

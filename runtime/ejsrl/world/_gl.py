@@ -150,6 +150,7 @@ class _Renderer:
                 self.vaos[mode] = self.ctx.vertex_array(prog, attrs)
         self.targets: dict[tuple[int, int], tuple[Any, Any, Any]] = {}
         self.finish = _gil_free_finish()
+        self.clear = _gil_free_clear()
         info = self.ctx.info
         self.renderer = f"{info.get('GL_RENDERER', '?')} ({info.get('GL_VERSION', '?')})"
 
@@ -200,8 +201,8 @@ class _Renderer:
             prog["inv_far"].value = 1.0 / camera.far if np.isfinite(camera.far) else 0.0
             if tex is not None:
                 prog["dark"].value = float(dark)
-            colour_only.clear(*(bg / 255.0), 1.0)
-            inv_z_depth.clear(0.0, 0.0, 0.0, 0.0, depth=1.0)
+            self.clear(colour_only, (*(float(c) / 255.0 for c in bg[:3]), 1.0))
+            self.clear(inv_z_depth, (0.0, 0.0, 0.0, 0.0), depth=1.0)
             draw.use()
             self.ctx.enable_only(self.mgl.DEPTH_TEST)
             self.ctx.depth_func = "<"
@@ -238,6 +239,50 @@ def _gil_free_finish() -> Callable[[], None]:
         fn.argtypes = []
         return fn
     return lambda: None
+
+
+def _gil_free_clear() -> Callable[..., None]:
+    """``clear(framebuffer, rgba, depth=None)``: what moderngl's ``framebuffer.clear`` does, with
+    ``glClearColor``/``glClearDepth``/``glClear`` called through ctypes, which lets go of the GIL.
+
+    With Mesa's llvmpipe a clear writes every pixel while the call runs: through moderngl
+    (which keeps the GIL) the two clears of a capture held it 0.73-1.13 ms for 0.03-0.06 ms of
+    this thread's CPU, and a served class's other sessions waited (bench/classroom.py, six-axis
+    and servoing labs). ``framebuffer.use()`` (moderngl) binds the framebuffer with its viewport,
+    draw buffers and write masks first, as its ``clear`` does. Without the GL library the
+    framebuffer's own ``clear`` runs.
+    """
+    import ctypes
+    import ctypes.util
+
+    lib = None
+    for name in ("libGL.so.1", "libOpenGL.so.0", ctypes.util.find_library("GL")):
+        if not name:
+            continue
+        try:
+            lib = ctypes.CDLL(name)
+            gl_clear, clear_color, clear_depth = lib.glClear, lib.glClearColor, lib.glClearDepth
+            break
+        except (OSError, AttributeError):
+            lib = None
+    if lib is None:
+        def fallback(fb: Any, rgba: tuple[float, float, float, float], depth: float | None = None) -> None:
+            fb.clear(*rgba, depth=1.0 if depth is None else depth)
+        return fallback
+    gl_clear.argtypes, gl_clear.restype = [ctypes.c_uint], None
+    clear_color.argtypes, clear_color.restype = [ctypes.c_float] * 4, None
+    clear_depth.argtypes, clear_depth.restype = [ctypes.c_double], None
+    colour_bit, depth_bit = 0x4000, 0x100  # GL_COLOR_BUFFER_BIT, GL_DEPTH_BUFFER_BIT
+
+    def clear(fb: Any, rgba: tuple[float, float, float, float], depth: float | None = None) -> None:
+        fb.use()
+        clear_color(*rgba)
+        if depth is None:
+            gl_clear(colour_bit)
+        else:
+            clear_depth(depth)
+            gl_clear(colour_bit | depth_bit)
+    return clear
 
 
 def _release_current() -> None:
