@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import os
 import sys
 import threading
 import time
@@ -481,9 +482,14 @@ class App(Controller):
         self, server: Any, *, max_sessions: int | None, grace: float | None, workers: int | None, role: WorkerRole | None
     ) -> None:
         from ejsrl.app._sessions import GRACE_SECONDS, SWITCH_INTERVAL, Classroom, default_max_sessions, measure_frame_cost
-        from ejsrl.vision._susan import set_threads as set_susan_threads
 
-        set_susan_threads(1)  # the sessions already share the cores, in threads: SUSAN keeps to the calling one
+        # the sessions already share the cores, in threads: SUSAN keeps to the calling one. Set where
+        # SUSAN is loaded, else for when it is (importing it here loaded OpenCV into every lab: 0.16 s)
+        susan = sys.modules.get("ejsrl.vision._susan")
+        if susan is not None:
+            susan.set_threads(1)
+        else:
+            os.environ["EJSRL_SUSAN_THREADS"] = "1"
 
         if sys.getswitchinterval() > SWITCH_INTERVAL:
             sys.setswitchinterval(SWITCH_INTERVAL)
