@@ -300,6 +300,9 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
     with tempfile.TemporaryDirectory(prefix="ejsweb-") as tmp_name:
         tmp = Path(tmp_name)
         app_dir = build(spec_path, tmp / "app")
+        from ejsgen._web_images import decode_images
+
+        decode_images(spec_path, app_dir)  # 2D image files: their pictures decoded for a page without OpenCV
         files = _lab_files(app_dir)
         lab_dir = tmp / "lab"
         for rel, f in files.items():

@@ -8,10 +8,12 @@ as a :class:`~ejsgen.errors.SpecError` at the spec's line and column that asks f
 naming the feature, saying why, and what to do (serve the lab instead):
 
 - OpenCV: a camera's real image ``source:``, its ``blur`` and lens ``distortion``, marker
-  textures, an image element's ``points``, the 2D ``image``, the OpenCV functions of
-  ``ejsrl.vision`` (and ``cv2``) in ``imports:`` or code, ``ImageSource``, and an
-  ``OccupancyGrid.from_image`` of a file. Virtual cameras themselves render with NumPy, and
-  their images are shown by ``image`` elements as served;
+  textures, an image element's ``points``, the OpenCV functions of ``ejsrl.vision`` (and
+  ``cv2``) in ``imports:`` or code, ``ImageSource``, and an ``OccupancyGrid.from_image`` of a
+  file. Virtual cameras themselves render with NumPy, and their images are shown by ``image``
+  elements as served; a 2D ``image`` runs too: an array is drawn as served, and a ``file:``
+  (PNG, JPEG, ...) is decoded by the build (:func:`web_image_files`), so only a file OpenCV
+  cannot read is refused;
 - native code: every FMU under ``fmus:`` (FMPy loads the FMU's binary; an FMU kept as C
   sources is compiled to one), URDF files (yourdfpy needs lxml), COLLADA and 3MF meshes
   (lxml), and third-party packages other than NumPy and SciPy in ``imports:`` or code;
@@ -41,7 +43,7 @@ if TYPE_CHECKING:
     from ejsgen.validate import Checked
     from ejsgen.yamlload import Document
 
-__all__ = ["web_refusals", "DATA_LIMIT_BYTES", "BROWSER_PACKAGES", "NO_BROWSER_STDLIB", "opencv_names"]
+__all__ = ["web_refusals", "web_image_files", "DATA_LIMIT_BYTES", "BROWSER_PACKAGES", "NO_BROWSER_STDLIB", "opencv_names"]
 
 #: the most data (bytes, on disk) a web build ships: the files the spec names, in all
 DATA_LIMIT_BYTES = 20 * 1024 * 1024
@@ -92,6 +94,7 @@ def web_refusals(checked: Checked, spec_path: Path) -> list[SpecError]:
     if data.get("plant") is not None:
         out.append(_refusal(doc, ("plant",), "a remote plant (`plant:`)",
                             "the lab drives it over the network (MQTT or OPC UA), and a page's Python has no sockets", key=True))
+    out += _image_refusals(doc, data, spec_dir)
     out += _data_refusals(doc, data, spec_dir)
     unique = {(str(e.where), e.message): e for e in out}
     return sorted(unique.values(), key=lambda e: (e.where.line, e.where.col))
@@ -288,7 +291,8 @@ def _value_at(data: Any, path: Path_) -> Any:
 
 # -- the view ------------------------------------------------------------------------------------
 
-_IMAGE_WHY = f"its pictures are drawn and encoded for the page by {_WHY_OPENCV}"
+_UNREADABLE_WHY = ("the build decodes it for the page with OpenCV, which cannot read this file (not an image, or a "
+                   "format this OpenCV has no decoder for)")
 _POINTS_WHY = f"the points are drawn over the picture by {_WHY_OPENCV}"
 _SOURCE_WHY = ("cameras, streams and video files are read by OpenCV and the devices of the machine that runs "
                "the lab; a page's Python has neither")
@@ -335,8 +339,8 @@ def _items(doc: Document, items: Any, path: Path_, where: str) -> Iterator[tuple
 
 def _view_refusals(doc: Document, view: Any) -> list[SpecError]:
     """The panel's ``image`` ``points``, a camera's real ``source``, ``blur`` and ``distortion``,
-    marker textures, the 2D ``image``, and meshes read through lxml. Virtual cameras
-    themselves render with NumPy, and image elements are shown as served."""
+    marker textures, and meshes read through lxml. Virtual cameras themselves render with
+    NumPy, and image elements are shown as served (a 2D image's file: :func:`_image_refusals`)."""
     out = []
     for kind, props, path, where in _items(doc, view, ("view",), "panel"):
         at = (*path, kind)
@@ -344,8 +348,6 @@ def _view_refusals(doc: Document, view: Any) -> list[SpecError]:
         if where == "panel" and kind == "image" and props.get("points") is not None:
             out.append(_refusal(doc, (*at, "points"), "an image's `points`", _POINTS_WHY, key=True,
                                 hint="leave `points` out (or draw them into the array with NumPy), or " + _SERVE))
-        elif where == "2d" and kind == "image":
-            out.append(_refusal(doc, at, "the 2D `image` element", _IMAGE_WHY, key=True))
         if where != "3d":
             continue
         if kind == "camera" and props.get("source") is not None:
@@ -372,6 +374,37 @@ def _mesh_files(kind: str, props: dict[str, Any]) -> Iterator[tuple[tuple[Any, .
         for i, f in enumerate(props["meshes"]):
             if isinstance(f, str):
                 yield ("meshes", i), f
+
+
+def _image_files(doc: Document, view: Any) -> Iterator[tuple[Path_, str]]:
+    """(path of the ``file`` key in the spec, file) of every 2D ``image`` element's file."""
+    for kind, props, path, where in _items(doc, view, ("view",), "panel"):
+        if where == "2d" and kind == "image" and isinstance(props, dict) and isinstance(props.get("file"), str):
+            yield (*path, kind, "file"), props["file"]
+
+
+def web_image_files(checked: Checked) -> list[str]:
+    """The files (relative to the spec, as written) of the spec's 2D ``image`` elements: the
+    web build writes each one's decoded copy for the page (:mod:`ejsrl.view._image_file`)."""
+    data = checked.doc.data if isinstance(checked.doc.data, dict) else {}
+    return sorted({rel for _path, rel in _image_files(checked.doc, data.get("view") or [])})
+
+
+def _image_refusals(doc: Document, data: dict[str, Any], spec_dir: Path) -> list[SpecError]:
+    """A 2D image's file that OpenCV cannot read, so the build could not decode it for the page
+    (a missing file is the normal build's error)."""
+    files = list(_image_files(doc, data.get("view") or []))
+    if not files:
+        return []
+    import cv2
+
+    out = []
+    for path, rel in files:
+        file = spec_dir / rel
+        if file.is_file() and not cv2.haveImageReader(str(file)):
+            out.append(_refusal(doc, path, f"the image file '{rel}'", _UNREADABLE_WHY, key=True,
+                                hint="convert it to PNG (or JPEG), or " + _SERVE))
+    return out
 
 
 # -- FMUs and data -------------------------------------------------------------------------------

@@ -172,7 +172,15 @@ def test_a_marker_texture(tmp_path: Path) -> None:
     one(errors, text, "texture:", "marker texture 'aruco_4x4_50:7'", "ArUco")
 
 
-def test_a_2d_image(tmp_path: Path) -> None:
+def test_a_2d_image_runs_but_a_file_opencv_cannot_read_is_refused(tmp_path: Path) -> None:
+    """An array and a picture file are shown in the page (the build decodes the file); a file
+    that OpenCV cannot read is refused at its `file` key, which says to convert it to PNG."""
+    import cv2
+    import numpy as np
+
+    cv2.imwrite(str(tmp_path / "good.png"), np.full((4, 4, 3), 200, np.uint8))
+    cv2.imwrite(str(tmp_path / "good.jpg"), np.full((4, 4, 3), 200, np.uint8))
+    (tmp_path / "bad.png").write_bytes(b"not a picture at all" * 10)
     text = HEAD + """\
 view:
   - drawing:
@@ -181,9 +189,14 @@ view:
       children:
         - point: {position: [x, 0.5]}
         - image: {source: img, position: [0.5, 0.5], size: [1, 1]}
+        - image: {file: good.png, position: [0.5, 0.5], size: [1, 1]}
+        - image: {file: good.jpg, position: [0.5, 0.5], size: [1, 1]}
 """
-    errors, text = refusals(tmp_path, text)
-    one(errors, text, "image:", "the 2D `image` element", "OpenCV")
+    errors, _ = refusals(tmp_path, text)
+    assert errors == [], [e.format() for e in errors]
+    errors, text = refusals(tmp_path, text + "        - image: {file: bad.png, position: [0.5, 0.5], size: [1, 1]}\n")
+    err = one(errors, text, "file: bad.png", "the image file 'bad.png'", "OpenCV", "cannot read")
+    assert "convert it to PNG" in err.hint
 
 
 def test_a_collada_mesh(tmp_path: Path) -> None:
@@ -244,8 +257,7 @@ def test_every_refusal_of_a_lab_is_reported_in_file_order(tmp_path: Path) -> Non
 def test_the_examples_that_need_opencv_or_a_plant_are_refused() -> None:
     """Every example is checked; those that cannot run in a browser say why."""
     expect = {"camera_calibration": "OpenCV", "marker_servoing": "OpenCV", "paper/visual_servoing_eih": "OpenCV",
-              "paper/fmu_motor_control": "native library", "paper/robualab": "remote plant", "urdf_arm": "lxml",
-              "mobile_dstar_replanning": "2D `image`"}
+              "paper/fmu_motor_control": "native library", "paper/robualab": "remote plant", "urdf_arm": "lxml"}
     for lab, word in expect.items():
         spec = EXAMPLES / f"{lab}.ejs.yaml"
         errors = web_refusals(validate(load_yaml(spec, display_name=spec.name)), spec)

@@ -42,19 +42,20 @@ def static_server(folder: Path) -> Iterator[str]:
         proc.wait(timeout=10)
 
 
-@pytest.fixture(scope="module")
+@pytest.fixture(scope="session")
 def web_lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator:
     """``web_lab(name)`` -> ``(site, url, app_dir)``: the example built with ``--web`` (once per
-    module), served, and its normal build (for native runs)."""
+    test session: the page tests and the download-size test share the builds), served, and its
+    normal build (for native runs); ``name`` may also be a spec's path."""
     from ejsgen._web_build import build_web
     from ejsgen.cli import build
 
-    made: dict[str, tuple] = {}
+    made: dict[str | Path, tuple] = {}
     with contextlib.ExitStack() as stack:
 
-        def make(name: str) -> tuple:
+        def make(name: str | Path) -> tuple:
             if name not in made:
-                spec = EXAMPLES / f"{name}.ejs.yaml"
+                spec = name if isinstance(name, Path) else EXAMPLES / f"{name}.ejs.yaml"
                 base = tmp_path_factory.mktemp("web")
                 site = build_web(spec, base / "site")
                 app_dir = build(spec, base / "app")

@@ -383,15 +383,12 @@ class DrawingBinding:
         if p.get("file"):
             key = ("file", p["file"])
             if st.image_key != key:
-                import cv2
-
                 from pathlib import Path
 
+                from ejsrl.view._image_file import read_image_file  # OpenCV served, its decoded copy in a page
+
                 path = Path(self.base_dir or ".") / str(p["file"])
-                bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
-                if bgr is None:
-                    raise ValueError(f"the image file {p['file']!r} could not be read")
-                st.image_key, st.image_url = key, _png_data_url(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB))
+                st.image_key, st.image_url = key, _png_data_url(read_image_file(path, str(p["file"])))
             return st.image_url  # type: ignore[return-value]
         a = np.asarray(p.get("source"))
         key = (a.shape, a.dtype.str, hash(a.tobytes()))
