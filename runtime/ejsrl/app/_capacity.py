@@ -31,66 +31,72 @@ VIEW_FACTOR = 1.0
 MAX_DEFAULT_SESSIONS = 100
 
 
-def measure_frame_cost(app: Any, frames: int = 12) -> float:
-    """CPU seconds one display frame of ``app`` takes while playing: the steps, the world,
-    and every value its view shows (plots, images, labels, controls), images counted at
-    the rate the view reads them (``IMAGE_RATE`` of ``ejsrl.view._plots``). ``app`` is
-    played for ``frames`` frames at its frame rate, then reset, its spec code's prints and
-    alerts silenced (``quiet_prints``: a throw-away run, not a student's)."""
+def measure_frame_cost(app: Any, frames: int = 60) -> float:
+    """CPU seconds one display frame of ``app`` takes while playing, as a served tab's frame
+    takes them: the steps, the world, and the view's own per-frame work (reading every value
+    it shows, diffing the panel, plots, images and 3D scene, and queueing viser's messages),
+    each part at the rate the view runs it (plots ``max_rate`` a second, images ``IMAGE_RATE``).
+
+    The view is a real one (:class:`ejsrl.view.viser_view.ViserView`) on a private viser server
+    on loopback that no tab connects to (so nothing is serialised or sent: :data:`SEND_SECONDS`
+    counts that), stopped after. ``app`` is played for ``frames`` frames after a few unmeasured
+    ones, back to back as a busy server runs frames, on a clock that moves one frame period a
+    frame (so the rates above, and a real-time lab's steps, are those of the lab's frame rate),
+    then reset, its spec code's prints and alerts silenced (``quiet_prints``: a throw-away run,
+    not a student's). Returns the mean over the frames: the plots' and images' pictures
+    come every few frames."""
     from ejsrl.sim._console import quiet_prints
 
     with quiet_prints():
         return _frame_cost(app, frames)
 
 
+#: frames played before the measured ones (the first builds the plots' and images' pictures)
+WARM_FRAMES = 4
+
+
+class _Beat:
+    """A clock (seconds) that moves only when told: one frame period a measured frame."""
+
+    def __init__(self, start: float) -> None:
+        self.now = start
+
+    def __call__(self) -> float:
+        return self.now
+
+
 def _frame_cost(app: Any, frames: int) -> float:
-    from ejsrl.view._plots import IMAGE_RATE
-    from ejsrl.view.elements import Control, Dynamic, Folder, Image, Label, Plot, Tabs
+    import contextlib
+    import io
 
-    props: list[tuple[Any, str]] = []
-    pictures: list[tuple[Any, str]] = []
+    from ejsrl.view._plots import IMAGE_SETTLE
+    from ejsrl.view.viser_view import ViserView, make_server
 
-    def walk(elements: list[Any]) -> None:
-        for el in elements:
-            if isinstance(el, Folder):
-                walk(el.children)
-            elif isinstance(el, Tabs):
-                for _label, children in el.tabs:
-                    walk(children)
-            elif isinstance(el, Plot):
-                props.append((el.x, el.where))
-                props.extend((s.y, s.where or el.where) for s in el.series)
-            elif isinstance(el, Image):
-                pictures.append((el.source, el.where))
-                if el.points is not None:
-                    pictures.append((el.points, el.where))
-            elif isinstance(el, Label):
-                props.append((el.text, el.where))
-            elif isinstance(el, Control):
-                props.append((Dynamic(el.get, el.bind), el.where))
-
-    walk(list(app.view or []))
+    server, _url = make_server("127.0.0.1", 0, banner=False)
+    views, clock = list(app.views), app.clock
     period = 1.0 / max(float(app.sim.fps), 1.0)
-    picture_share = min(1.0, IMAGE_RATE * period)
+    beat = _Beat(clock())
     costs: list[float] = []
-    app.play()
     try:
-        for _ in range(frames):
+        app.clock = beat
+        view = ViserView(app, server)  # its panel, plots and images read the beat too
+        app.views = [view]
+        beat.now += IMAGE_SETTLE  # images are shown (and read) from then on when no page says it is laid out
+        app.play()
+        for k in range(WARM_FRAMES + frames):
             start = time.thread_time()
             app.frame()
-            with app.lock:
-                for prop, where in props:
-                    app.safe_value(prop, where)
-                middle = time.thread_time()
-                for prop, where in pictures:
-                    app.safe_value(prop, where)
-            end = time.thread_time()
-            costs.append(middle - start + (end - middle) * picture_share)
-            time.sleep(period)
+            if k >= WARM_FRAMES:
+                costs.append(time.thread_time() - start)
+            beat.now += period
+        view.close()
     finally:
+        app.views = views
+        app.clock = clock
         app.reset()
-    costs.sort()
-    return costs[len(costs) // 2] if costs else 0.0
+        with contextlib.redirect_stdout(io.StringIO()):  # viser's "Server stopped"
+            server.stop()
+    return sum(costs) / len(costs) if costs else 0.0
 
 
 def default_max_sessions(frame_cost: float, fps: float, cpus: float | None = None) -> int:
