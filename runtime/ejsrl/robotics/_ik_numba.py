@@ -277,6 +277,27 @@ def _solve_lsq(J, w, e, mu, dq, A, b):  # pragma: no cover - compiled
 
 
 @_jit
+def _normal_equations(J, w, e, H, g):  # pragma: no cover - compiled
+    """The weighted normal equations of an LM step: g (n,) <- J^T W e and H (n, n) <- J^T W J
+    (J (6, n), W = diag(w), e (6,)); returns H's trace (before any damping)."""
+    n = g.shape[0]
+    trace = 0.0
+    for i in range(n):
+        gi = 0.0
+        for r in range(6):
+            gi += J[r, i] * w[r] * e[r]
+        g[i] = gi
+        for k in range(i + 1):
+            h = 0.0
+            for r in range(6):
+                h += J[r, i] * w[r] * J[r, k]
+            H[i, k] = h
+            H[k, i] = h
+        trace += H[i, i]
+    return trace
+
+
+@_jit
 def _stop_at_limits(J, w, e, mu, q, dq, qmin, qmax, H, g, fixed, act, e2):  # pragma: no cover - compiled
     """The joints the step dq (n,) takes past a limit stop on it, and the other joints'
     step is solved again for what is left of the error (H, g overwritten; fixed, act, e2
@@ -300,18 +321,12 @@ def _stop_at_limits(J, w, e, mu, q, dq, qmin, qmax, H, g, fixed, act, e2):  # pr
         for i in range(n):
             t -= J[r, i] * fixed[i]
         e2[r] = t
-    for i in range(n):
-        gi = 0.0
-        for r in range(6):
-            gi += J[r, i] * w[r] * e2[r]
-        g[i] = gi * act[i]
-        for k in range(i + 1):
-            h = 0.0
-            if act[i] * act[k] > 0.0:
-                for r in range(6):
-                    h += J[r, i] * w[r] * J[r, k]
-            H[i, k] = h
-            H[k, i] = h
+    _normal_equations(J, w, e2, H, g)
+    for i in range(n):  # the stopped joints' rows and columns: 0, and 1 on the diagonal
+        g[i] *= act[i]
+        for k in range(n):
+            if act[i] * act[k] == 0.0:
+                H[i, k] = 0.0
         H[i, i] += mu if act[i] > 0.0 else 1.0
     if not _solve_spd(H, g, dq):
         return False
@@ -404,21 +419,10 @@ def search(C, prism, offset, G, q0, lo, hi, qmin, qmax, w, tol, lam, ilimit, sli
             elif it == 3 * ilimit - ilimit:
                 mark = pe + re
             it += 1
-            trace = 0.0
-            for i in range(n):
-                gi = 0.0
-                for r in range(6):
-                    gi += J[r, i] * w[r] * e[r]
-                g[i] = gi
-                for k in range(i + 1):
-                    h = 0.0
-                    for r in range(6):
-                        h += J[r, i] * w[r] * J[r, k]
-                    H[i, k] = h
-                    H[k, i] = h
-                trace += H[i, i]
-                H[i, i] += E + damp
+            trace = _normal_equations(J, w, e, H, g)
             mu = E + damp
+            for i in range(n):
+                H[i, i] += mu
             poor = mu < 1e-10 * trace  # the normal equations' condition may be above 1e10
             if poor and use_qr:
                 solved = _solve_lsq(J, w, e, mu, dq, A, b)
