@@ -39,7 +39,8 @@ def measure_frame_cost(app: Any, frames: int = 60) -> float:
 
     The view is a real one (:class:`ejsrl.view.viser_view.ViserView`) on a private viser server
     on loopback that no tab connects to (so nothing is serialised or sent: :data:`SEND_SECONDS`
-    counts that), stopped after. ``app`` is played for ``frames`` frames after a few unmeasured
+    counts that), stopped after; the process's CPU time (a camera's picture is drawn partly in Mesa's
+    rasteriser threads). ``app`` is played for ``frames`` frames after a few unmeasured
     ones, back to back as a busy server runs frames, on a clock that moves one frame period a
     frame (so the rates above, and a real-time lab's steps, are those of the lab's frame rate),
     then reset, its spec code's prints and alerts silenced (``quiet_prints``: a throw-away run,
@@ -84,10 +85,10 @@ def _frame_cost(app: Any, frames: int) -> float:
         beat.now += IMAGE_SETTLE  # images are shown (and read) from then on when no page says it is laid out
         app.play()
         for k in range(WARM_FRAMES + frames):
-            start = time.thread_time()
+            start = time.process_time()  # the process's: Mesa's rasteriser threads draw a camera's picture
             app.frame()
             if k >= WARM_FRAMES:
-                costs.append(time.thread_time() - start)
+                costs.append(time.process_time() - start)
             beat.now += period
         view.close()
     finally:
