@@ -107,68 +107,36 @@ def test_a_late_heartbeat_stops_the_arm_but_the_holder_goes_on_and_the_refusal_c
     assert holder.holds_lease
 
 
-def test_a_silent_holder_loses_the_lease_after_the_queue_timeout(plant: PlantProc, link_factory) -> None:
+def test_a_silent_holder_loses_the_lease_after_the_queue_timeout(plant: PlantProc, link_factory, lease_queue) -> None:
     """A holder silent past the queue timeout (3 s) hands the plant to the next in line."""
-    silent = threading.Event()
-    holder = link_factory(session="holder", alive=lambda: 5.0 if silent.is_set() else 0.0)
-    holder.request_lease()
-    assert holder.wait_for(lambda l: l.holds_lease, 20)
-    waiting = link_factory(session="waiting")
-    waiting.request_lease()
-    assert waiting.wait_for(lambda l: l.queue_position == 1, 20)
-    silent.set()
-    t0 = time.monotonic()
-    assert waiting.wait_for(lambda l: l.holds_lease, 20)
-    took = time.monotonic() - t0
+    queue = lease_queue(link_factory, 5.0)
+    took = queue.hand_over(20)
     assert 2.5 < took < 6.0, took
-    assert "refused" not in waiting.state["event"]
+    assert "refused" not in queue.waiting.state["event"]
 
 
-def test_a_session_gone_releases_the_lease_within_a_heartbeat(plant: PlantProc, link_factory) -> None:
+def test_a_session_gone_releases_the_lease_within_a_heartbeat(plant: PlantProc, link_factory, lease_queue) -> None:
     """``alive()`` says the session is gone (its tab closed): the link releases the lease itself,
     and the next in the queue holds the plant well before any timeout would have passed it on."""
-    gone = threading.Event()
-    holder = link_factory(session="holder", alive=lambda: math.inf if gone.is_set() else 0.0)
-    holder.request_lease()
-    assert holder.wait_for(lambda l: l.holds_lease, 20)
-    waiting = link_factory(session="waiting")
-    waiting.request_lease()
-    assert waiting.wait_for(lambda l: l.queue_position == 1, 20)
-    gone.set()
-    t0 = time.monotonic()
-    assert waiting.wait_for(lambda l: l.holds_lease, 10)
-    took = time.monotonic() - t0
+    queue = lease_queue(link_factory, math.inf)
+    took = queue.hand_over(10)
     assert took < 1.0, took
-    assert waiting.state["event"] == "lease granted"
+    assert queue.waiting.state["event"] == "lease granted"
 
 
-def test_over_opcua_a_session_gone_releases_the_lease_at_once(tmp_path: Path) -> None:
+def test_over_opcua_a_session_gone_releases_the_lease_at_once(tmp_path: Path, lease_queue) -> None:
     """The same over OPC UA: the holder's session gone, the next in the queue holds the plant
     well before the queue timeout (3 s) would have passed it on."""
     from ejsrl.app._plant_opcua import OpcUaLink
-    from testkit.plant import free_port
+    from testkit.plant import ConnectedLinks, free_port
 
     port = free_port()
     plant = PlantProc(tmp_path, ["--opcua", f"127.0.0.1:{port}", "--camera", "off"])
-    links = []
     try:
-        gone = threading.Event()
-        holder = OpcUaLink("127.0.0.1", port, session="holder", alive=lambda: math.inf if gone.is_set() else 0.0)
-        waiting = OpcUaLink("127.0.0.1", port, session="waiting")
-        links += [holder, waiting]
-        for link in links:
-            assert link.wait_for(lambda l: l.connected and l.state is not None, 30), link.note
-        holder.request_lease()
-        assert holder.wait_for(lambda l: l.holds_lease, 20)
-        waiting.request_lease()
-        assert waiting.wait_for(lambda l: l.queue_position == 1, 20)
-        gone.set()
-        t0 = time.monotonic()
-        assert waiting.wait_for(lambda l: l.holds_lease, 10)
-        took = time.monotonic() - t0
-        assert took < 1.5, took
-        assert waiting.state["event"] == "lease granted"
+        with ConnectedLinks(lambda **kw: OpcUaLink("127.0.0.1", port, **kw)) as make:
+            queue = lease_queue(make, math.inf)
+            took = queue.hand_over(10)
+            assert took < 1.5, took
+            assert queue.waiting.state["event"] == "lease granted"
     finally:
-        for link in links:
-            link.close()
         plant.stop()

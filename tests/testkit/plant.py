@@ -13,8 +13,10 @@ import socket
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 MOSQUITTO = shutil.which("mosquitto") or "/usr/sbin/mosquitto"
 
@@ -101,3 +103,26 @@ class PlantProc:
             except subprocess.TimeoutExpired:
                 self.proc.kill()
                 self.proc.wait()
+
+
+class ConnectedLinks:
+    """``with ConnectedLinks(new) as make``: ``make(**kw)`` calls ``new(**kw)`` (a plant link over
+    MQTT or OPC UA) and waits until it is connected with the plant's state; every link made is
+    closed on leaving."""
+
+    def __init__(self, new: Callable[..., Any]) -> None:
+        self.new = new
+        self.links: list[Any] = []
+
+    def __enter__(self) -> Callable[..., Any]:
+        return self.make
+
+    def make(self, **kw: Any) -> Any:
+        link = self.new(**kw)
+        self.links.append(link)
+        assert link.wait_for(lambda l: l.connected and l.state is not None, 30), link.note
+        return link
+
+    def __exit__(self, *exc: object) -> None:
+        for link in self.links:
+            link.close()
