@@ -8,71 +8,23 @@ from __future__ import annotations
 import base64
 import json
 import math
-import re
-import tempfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from testkit.browser import wait_until
-
-SLOW = 120_000
-
-
-def _serve(name: str):  # type: ignore[no-untyped-def]
-    from ejsgen.cli import build
-    from ejsrl.app import load_app
-    from testkit import EXAMPLES
-
-    tmp = tempfile.TemporaryDirectory()
-    app = load_app(build(EXAMPLES / f"{name}.ejs.yaml", Path(tmp.name) / "app"))
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
-    return tmp, app, server
+from testkit.browser import open_lab_tab, panel_point, serving_example, tab_lab, wait_until
 
 
 @pytest.fixture(scope="module")
 def car_lab():
-    tmp, app, server = _serve("mobile_car_to_pose")
-    try:
-        yield app, f"http://127.0.0.1:{server.get_port()}"
-    finally:
-        app.stop()
-        server.stop()
-        tmp.cleanup()
+    with serving_example("mobile_car_to_pose") as served:
+        yield served
 
 
 @pytest.fixture(scope="module")
 def ekf_lab():
-    tmp, app, server = _serve("mobile_ekf_localisation")
-    try:
-        yield app, f"http://127.0.0.1:{server.get_port()}"
-    finally:
-        app.stop()
-        server.stop()
-        tmp.cleanup()
-
-
-def open_tab(context, url: str):  # type: ignore[no-untyped-def]
-    page = context.new_page()
-    page.bring_to_front()
-    page.set_default_timeout(SLOW)
-    page.goto(url)
-    page.wait_for_selector("canvas.ejs2d-c[data-drawn]", timeout=SLOW)
-    wait_until(lambda: "/s/" in page.evaluate("location.href"), what="the tab's session address")
-    return page
-
-
-def session_model(app, page):  # type: ignore[no-untyped-def]
-    token = re.search(r"/s/([A-Za-z0-9_-]+)/", page.evaluate("location.href")).group(1)
-    return app.classroom.sessions[token].app
-
-
-def css(page, x: float, y: float) -> tuple[float, float]:  # type: ignore[no-untyped-def]
-    """Where the world point (x, y) is on the page (the panel's own mapping)."""
-    box = page.locator("canvas.ejs2d-c").first.bounding_box()
-    px, py = page.evaluate(f"window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], {x}, {y})")
-    return box["x"] + px, box["y"] + py
+    with serving_example("mobile_ekf_localisation") as served:
+        yield served
 
 
 def polylines(page) -> list[np.ndarray]:  # type: ignore[no-untyped-def]
@@ -105,14 +57,14 @@ def test_the_car_drives_to_the_pose_dragged_and_turned_by_the_student(car_lab, b
     from testkit.browser import save_shot
 
     app, url = car_lab
-    page = open_tab(browser_context, url)
+    page = open_lab_tab(browser_context, url)
     try:
-        lab = session_model(app, page)
+        lab = tab_lab(app, page)
         m = lab.model
         # drag the goal (green disc) from (5, 3) to (3, -4)
-        page.mouse.move(*css(page, m.gx, m.gy))
+        page.mouse.move(*panel_point(page, m.gx, m.gy))
         page.mouse.down()
-        page.mouse.move(*css(page, 3.0, -4.0), steps=6)
+        page.mouse.move(*panel_point(page, 3.0, -4.0), steps=6)
         page.mouse.up()
         wait_until(lambda: abs(m.gx - 3.0) < 0.1 and abs(m.gy + 4.0) < 0.1, what="the goal dragged to (3, -4)")
         gx, gy = m.gx, m.gy
@@ -142,11 +94,11 @@ def test_ekf_lab_draws_its_covariance_ellipse_and_takes_the_keyboard(ekf_lab, br
     from testkit.browser import save_shot
 
     app, url = ekf_lab
-    page = open_tab(browser_context, url)
+    page = open_lab_tab(browser_context, url)
     try:
-        lab = session_model(app, page)
+        lab = tab_lab(app, page)
         m = lab.model
-        page.mouse.click(*css(page, 10.5, -10.5))  # an empty corner: the panel takes the keyboard
+        page.mouse.click(*panel_point(page, 10.5, -10.5))  # an empty corner: the panel takes the keyboard
         page.keyboard.press("ArrowUp")
         wait_until(lambda: m.speed == 1.25, what="ArrowUp: faster")
         page.keyboard.press("ArrowLeft")
@@ -172,13 +124,8 @@ def test_ekf_lab_draws_its_covariance_ellipse_and_takes_the_keyboard(ekf_lab, br
 
 @pytest.fixture(scope="module")
 def dstar_lab():
-    tmp, app, server = _serve("mobile_dstar_replanning")
-    try:
-        yield app, f"http://127.0.0.1:{server.get_port()}"
-    finally:
-        app.stop()
-        server.stop()
-        tmp.cleanup()
+    with serving_example("mobile_dstar_replanning") as served:
+        yield served
 
 
 @pytest.mark.browser
@@ -192,15 +139,15 @@ def test_dstar_lab_repairs_the_path_when_an_obstacle_is_dragged_into_it(dstar_la
     from test_planners import grid_dijkstra
 
     app, url = dstar_lab
-    page = open_tab(browser_context, url)
+    page = open_lab_tab(browser_context, url)
     try:
-        lab = session_model(app, page)
+        lab = tab_lab(app, page)
         m = lab.model
         before = m.path.copy()
         # drag the right-hand block from (24, 14) to (23, 10), across the path
-        page.mouse.move(*css(page, 24.0, 14.0))
+        page.mouse.move(*panel_point(page, 24.0, 14.0))
         page.mouse.down()
-        page.mouse.move(*css(page, 23.0, 10.0), steps=8)
+        page.mouse.move(*panel_point(page, 23.0, 10.0), steps=8)
         page.mouse.up()
         wait_until(lambda: abs(m.blocks[2][0] - 23.0) < 0.3 and abs(m.blocks[2][1] - 10.0) < 0.3,
                    what="the block dragged to (23, 10)")
@@ -232,13 +179,8 @@ def test_dstar_lab_repairs_the_path_when_an_obstacle_is_dragged_into_it(dstar_la
 
 @pytest.fixture(scope="module")
 def slam_lab():
-    tmp, app, server = _serve("mobile_ekf_slam")
-    try:
-        yield app, f"http://127.0.0.1:{server.get_port()}"
-    finally:
-        app.stop()
-        server.stop()
-        tmp.cleanup()
+    with serving_example("mobile_ekf_slam") as served:
+        yield served
 
 
 @pytest.mark.browser
@@ -247,11 +189,11 @@ def test_slam_lab_draws_the_map_it_builds_with_its_ellipses(slam_lab, browser_co
     from testkit.browser import save_shot
 
     app, url = slam_lab
-    page = open_tab(browser_context, url)
+    page = open_lab_tab(browser_context, url)
     try:
-        lab = session_model(app, page)
+        lab = tab_lab(app, page)
         m = lab.model
-        page.mouse.click(*css(page, 10.5, 10.5))  # an empty corner: the panel takes the keyboard
+        page.mouse.click(*panel_point(page, 10.5, 10.5))  # an empty corner: the panel takes the keyboard
         page.keyboard.press("Space")
         wait_until(lambda: m.nmapped >= 12, timeout=120, what="a dozen landmarks mapped")
         page.keyboard.press("Space")
@@ -267,13 +209,8 @@ def test_slam_lab_draws_the_map_it_builds_with_its_ellipses(slam_lab, browser_co
 
 @pytest.fixture(scope="module")
 def pf_lab():
-    tmp, app, server = _serve("mobile_particle_filter")
-    try:
-        yield app, f"http://127.0.0.1:{server.get_port()}"
-    finally:
-        app.stop()
-        server.stop()
-        tmp.cleanup()
+    with serving_example("mobile_particle_filter") as served:
+        yield served
 
 
 def marker_sets(page) -> list[np.ndarray]:  # type: ignore[no-untyped-def]
@@ -300,9 +237,9 @@ def test_particle_lab_particles_gather_on_the_car_and_scatter_on_the_button(pf_l
     from testkit.browser import save_shot
 
     app, url = pf_lab
-    page = open_tab(browser_context, url)
+    page = open_lab_tab(browser_context, url)
     try:
-        lab = session_model(app, page)
+        lab = tab_lab(app, page)
         m = lab.model
 
         def particles_drawn() -> bool:
@@ -311,7 +248,7 @@ def test_particle_lab_particles_gather_on_the_car_and_scatter_on_the_button(pf_l
             return any(s.shape == mine.shape and np.abs(s - mine).max() < 1e-4 for s in marker_sets(page))
 
         assert m.spread > 4.0
-        page.mouse.click(*css(page, 10.5, 10.5))
+        page.mouse.click(*panel_point(page, 10.5, 10.5))
         page.keyboard.press("Space")
         wait_until(lambda: m.t > 0.6, timeout=120, what="0.6 s of driving")
         save_shot(page, "mobile_particle_filter")  # the particles gathering (the gallery's picture)

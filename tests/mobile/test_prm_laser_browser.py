@@ -8,38 +8,17 @@ from __future__ import annotations
 
 import io
 import math
-import re
-import tempfile
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-from testkit.browser import hide_notifications, save_shot, wait_until
-
-SLOW = 120_000
-
-
-def _served(name: str):  # type: ignore[no-untyped-def]
-    """The example ``name`` built and served, one simulation per tab: (app, url), then stopped."""
-    from ejsgen.cli import build
-    from ejsrl.app import load_app
-    from testkit import EXAMPLES
-
-    tmp = tempfile.TemporaryDirectory()
-    app = load_app(build(EXAMPLES / f"{name}.ejs.yaml", Path(tmp.name) / "app"))
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=30.0)
-    try:
-        yield app, f"http://127.0.0.1:{server.get_port()}"
-    finally:
-        app.stop()
-        server.stop()
-        tmp.cleanup()
+from testkit.browser import hide_notifications, open_lab_tab, panel_point, save_shot, serving_example, tab_lab, wait_until
 
 
 @pytest.fixture(scope="module")
 def prm_lab():
-    yield from _served("mobile_prm_laser")
+    with serving_example("mobile_prm_laser") as served:
+        yield served
 
 
 def _far_from_segments(p: np.ndarray, A: np.ndarray, B: np.ndarray, d: float) -> bool:
@@ -60,22 +39,15 @@ def test_prm_laser_lab_draws_the_robot_its_scan_and_the_map_where_the_model_says
     from ejsrl.mobile import BinaryOccupancyGrid, LaserScanner
 
     app, url = prm_lab
-    page = browser_context.new_page()
-    page.bring_to_front()
-    page.set_default_timeout(SLOW)
+    page = open_lab_tab(browser_context, url)
     try:
-        page.goto(url)
-        page.wait_for_selector("canvas.ejs2d-c[data-drawn]", timeout=SLOW)
         hide_notifications(page)
-        wait_until(lambda: "/s/" in page.evaluate("location.href"), what="the tab's session address")
-        token = re.search(r"/s/([A-Za-z0-9_-]+)/", page.evaluate("location.href")).group(1)
-        lab = app.classroom.sessions[token].app
+        lab = tab_lab(app, page)
         m = lab.model
         box = page.locator("canvas.ejs2d-c").first.bounding_box()
 
         def css(x: float, y: float) -> tuple[float, float]:
-            px, py = page.evaluate(f"window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], {x}, {y})")
-            return box["x"] + px, box["y"] + py
+            return panel_point(page, x, y, box)
 
         # drag the goal to the middle room's top: a new path ends there
         page.mouse.move(*css(m.gx, m.gy))
@@ -130,7 +102,8 @@ def test_prm_laser_lab_draws_the_robot_its_scan_and_the_map_where_the_model_says
 
 @pytest.fixture(scope="module")
 def lattice_lab():
-    yield from _served("mobile_lattice_3d")
+    with serving_example("mobile_lattice_3d") as served:
+        yield served
 
 
 @pytest.mark.browser
@@ -140,17 +113,11 @@ def test_the_3d_lattice_lab_shows_the_car_driving_its_plan_with_its_laser(lattic
     from PIL import Image
 
     app, url = lattice_lab
-    page = browser_context.new_page()
-    page.bring_to_front()
-    page.set_default_timeout(SLOW)
+    page = open_lab_tab(browser_context, url, ready="canvas", state="attached")
     try:
-        page.goto(url)
-        page.wait_for_selector("canvas", state="attached", timeout=SLOW)
-        page.get_by_role("button", name="Restore view").first.wait_for(timeout=SLOW)
+        page.get_by_role("button", name="Restore view").first.wait_for()
         hide_notifications(page)
-        wait_until(lambda: "/s/" in page.evaluate("location.href"), what="the tab's session address")
-        token = re.search(r"/s/([A-Za-z0-9_-]+)/", page.evaluate("location.href")).group(1)
-        lab = app.classroom.sessions[token].app
+        lab = tab_lab(app, page)
         m = lab.model
 
         def blue_and_red() -> tuple[np.ndarray | None, int]:

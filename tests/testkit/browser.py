@@ -62,17 +62,65 @@ def _same(a: Any, b: Any) -> bool:
 
 
 @contextmanager
-def serving(app_dir: Path) -> Iterator[tuple[Any, str]]:
-    """Load a built app folder and serve it on a free port: yields ``(app, url)``."""
+def serving(app_dir: Path, **serve: Any) -> Iterator[tuple[Any, str]]:
+    """Load a built app folder and serve it on a free port: yields ``(app, url)``; ``serve``:
+    ``App.serve``'s options (``per_client``, ``max_sessions``, ``grace``, ...)."""
     from ejsrl.app import load_app
 
     app = load_app(app_dir)
-    server = app.serve("127.0.0.1", 0, block=False)
+    server = app.serve("127.0.0.1", 0, block=False, **serve)
     try:
         yield app, f"http://127.0.0.1:{server.get_port()}"
     finally:
         app.stop()
         server.stop()
+
+
+#: milliseconds a lab's page may take to show its first drawn panel (a busy machine's first load)
+LAB_LOAD_MS = 120_000
+
+
+@contextmanager
+def serving_example(name: str) -> Iterator[tuple[Any, str]]:
+    """The example ``examples/<name>.ejs.yaml`` built into a temporary folder and served with a
+    simulation per tab (two at most): yields ``(app, url)``; stopped and removed after."""
+    import tempfile
+
+    from ejsgen.cli import build
+    from testkit import EXAMPLES
+
+    with tempfile.TemporaryDirectory() as tmp:
+        app_dir = build(EXAMPLES / f"{name}.ejs.yaml", Path(tmp) / "app")
+        with serving(app_dir, per_client=True, max_sessions=2, grace=30.0) as served:
+            yield served
+
+
+def open_lab_tab(context: Any, url: str, *, ready: str = "canvas.ejs2d-c[data-drawn]", state: str = "visible") -> Any:
+    """A new tab in front on ``url`` (waits of :data:`LAB_LOAD_MS`), once ``ready`` (a selector,
+    in ``state``; by default a drawn 2D panel) is on the page and the tab has its session address."""
+    page = context.new_page()
+    page.bring_to_front()
+    page.set_default_timeout(LAB_LOAD_MS)
+    page.goto(url)
+    page.wait_for_selector(ready, state=state, timeout=LAB_LOAD_MS)
+    wait_until(lambda: "/s/" in page.evaluate("location.href"), what="the tab's session address")
+    return page
+
+
+def tab_lab(app: Any, page: Any) -> Any:
+    """The simulation (an app) of the tab ``page``: the one its ``/s/<token>/`` address names."""
+    import re
+
+    token = re.search(r"/s/([A-Za-z0-9_-]+)/", page.evaluate("location.href")).group(1)
+    return app.classroom.sessions[token].app
+
+
+def panel_point(page: Any, x: float, y: float, box: dict[str, float] | None = None) -> tuple[float, float]:
+    """Where the world point (x, y) of the page's first 2D panel is on the page (CSS px), by the
+    panel's own mapping; ``box``: the panel canvas's bounding box, if already read."""
+    box = box or page.locator("canvas.ejs2d-c").first.bounding_box()
+    px, py = page.evaluate(f"window.__ejs2d.toPx(Object.keys(window.__ejs2d.panels)[0], {x}, {y})")
+    return box["x"] + px, box["y"] + py
 
 
 def canvas_pixels(page: Any) -> np.ndarray:
