@@ -19,27 +19,10 @@ from pathlib import Path
 import pytest
 
 from testkit.browser import wait_until
+from testkit.image_lab import CHANGING
 
 SLOW = 120_000
 
-CHANGING = """
-ejs: 1
-title: A picture that changes
-model:
-  variables:
-    t: 0.0
-    dt: 0.05
-    u: 0.0
-  evolution:
-    - ode:
-        equations: {u: 1}
-view:
-  - image: {source: "np.full((48, 64, 3), [0, int(u*50) % 255, 0], dtype=np.uint8)", label: Picture}
-  - scene:
-      - sphere: {position: [0, 0, 0], radius: 0.3, color: gray}
-simulation:
-  autoplay: true
-"""
 
 
 def _hogs(n: int) -> list[subprocess.Popen]:
@@ -51,8 +34,9 @@ def _console_errors(browser_context, spec: Path, frames: int) -> list[str]:
     """Serve ``spec`` (a simulation per tab), open it, wait until its picture is loaded and the lab
     ran ``frames`` more frames; the console's errors and the failed requests meanwhile. The
     picture must have been shown by its page's message (its panel laid out), not by the fallback."""
-    from ejsgen.cli import build
     from ejsrl.app import load_app
+
+    from ejsgen.cli import build
 
     with tempfile.TemporaryDirectory() as tmp:
         app = load_app(build(spec, Path(tmp) / "app"))

@@ -2,7 +2,7 @@
 through a hidden text input), checked like any client message; a timer only as a fallback.
 
 Through a raw websocket client speaking viser's wire format (what a hostile script could send),
-against a served lab with an image element; the browser test of console errors
+against a served lab with an image element (testkit.image_lab); the browser test of console errors
 (tests/browser/test_image_console.py) checks that a real page sends the message in time.
 """
 
@@ -12,40 +12,21 @@ from pathlib import Path
 
 import pytest
 
+from testkit.browser import serving
 from testkit.classroom import join
 from testkit.guard_client import gui_update, run_async
-
-SPEC = """
-ejs: 1
-title: A picture
-model:
-  variables:
-    t: 0.0
-    dt: 0.05
-    u: 0.0
-  evolution:
-    - ode:
-        equations: {u: 1}
-view:
-  - image: {source: "np.full((48, 64, 3), [0, int(u*50) % 255, 0], dtype=np.uint8)", label: Picture}
-"""
+from testkit.image_lab import CHANGING
 
 
 @pytest.fixture
 def served_image(tmp_path: Path):
-    """``(app, server)``: the lab above served with a simulation per tab; stopped after."""
+    """``(app, port)``: testkit.image_lab's lab served with a simulation per tab; stopped after."""
     from ejsgen.cli import build
-    from ejsrl.app import load_app
 
     spec = tmp_path / "picture.ejs.yaml"
-    spec.write_text(SPEC)
-    app = load_app(build(spec, tmp_path / "app"))
-    server = app.serve("127.0.0.1", 0, block=False, per_client=True, max_sessions=2, grace=5.0)
-    try:
-        yield app, server
-    finally:
-        app.stop()
-        server.stop()
+    spec.write_text(CHANGING)
+    with serving(build(spec, tmp_path / "app"), per_client=True, max_sessions=2, grace=5.0) as (app, url):
+        yield app, int(url.rsplit(":", 1)[1])
 
 
 def _binding(app):
@@ -57,10 +38,10 @@ def _binding(app):
 def test_the_picture_is_shown_only_for_the_probes_exact_message(served_image) -> None:
     from ejsrl.view._image import IMAGE_SETTLE, LAID_OUT
 
-    app, server = served_image
+    app, port = served_image
 
     async def scenario() -> None:
-        client = await join(server.get_port(), server=server)
+        client = await join(port)
         image = _binding(app)
         uuid = client.uuid_of("GuiTextMessage", "ejs image laid out")
         probe = next(m["uuid"] for m in client.seen("GuiHtmlMessage") if uuid in m["props"]["content"])
@@ -83,11 +64,10 @@ def test_the_picture_is_shown_only_for_the_probes_exact_message(served_image) ->
     assert IMAGE_SETTLE >= 20.0  # the timer is only a fallback: a busy page reports within ~10 s
 
 
-def test_a_page_that_never_reports_gets_its_picture_after_the_fallback(monkeypatch) -> None:
+def test_a_page_that_never_reports_gets_its_picture_after_the_fallback() -> None:
     """With no message, :meth:`ImageBinding.update` shows the element once IMAGE_SETTLE is past
     (a page's Python has no timer thread); no picture is read before that."""
     import numpy as np
-
     from ejsrl.view import _image
     from ejsrl.view.elements import Image
     from ejsrl.view.viser_view import make_server
