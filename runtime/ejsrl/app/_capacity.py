@@ -1,7 +1,8 @@
 """How many sessions of a lab fit on this machine: the default ``--max-sessions``.
 
 :func:`measure_frame_cost` plays the lab for a few frames and takes the CPU time of one
-display frame (the steps, the world, every value its view shows); :func:`default_max_sessions`
+display frame as a served tab's frame takes it (the steps, the world, and its view's own
+work: reading, diffing and queueing what it shows); :func:`default_max_sessions`
 turns it into places, calibrated by ``bench/classroom.py`` (the constants below say what it
 measured). :mod:`ejsrl.app._sessions` re-exports both.
 """
