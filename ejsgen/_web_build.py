@@ -109,21 +109,32 @@ def _compressed(data: bytes, dest: Path, *, level_br: int = 9) -> int:
 
 def _wasm(out: Path) -> tuple[int, int]:
     """python.wasm (debug sections stripped) and its compressed copies, from the cache."""
+    from ejsgen._web_gzip import gzip_tag, smallest_gzip
     from ejsgen._web_wasm import strip_debug
 
     src = _wasi_artifacts().plain
     digest = hashlib.sha256(src.read_bytes()).hexdigest()[:16]
-    cached = cache_dir() / digest
+    cached = cache_dir() / f"{digest}{gzip_tag()}"
     names = ["python.wasm", "python.wasm.gz"] + (["python.wasm.br"] if _brotli() is not None else [])
     if not all((cached / n).exists() for n in names):
         tmp = Path(tempfile.mkdtemp(prefix="wasm-", dir=_mkdir(cache_dir())))
         _compressed(strip_debug(src.read_bytes()), tmp / "python.wasm")
+        smallest_gzip(tmp / "python.wasm")  # zopfli: what a student downloads from a plain static host
         if cached.exists():
             shutil.rmtree(cached, ignore_errors=True)
         tmp.rename(cached)
     for n in names:
         shutil.copyfile(cached / n, out / n)
     return (out / "python.wasm").stat().st_size, (out / "python.wasm.gz").stat().st_size
+
+
+def _digest(path: Path) -> str:
+    """The first 16 hex digits of the SHA-256 of ``path``'s bytes (what names its version)."""
+    h = hashlib.sha256()
+    with path.open("rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()[:16]
 
 
 def _mkdir(p: Path) -> Path:
@@ -332,11 +343,14 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
                    "size": result.sizes[zip_name][1]},
         "lab": {"url": "python/lab.bin.gz", "plain": "python/lab.bin", "size": result.sizes["lab.bin"][1]},
     }
+    for entry in manifest.values():  # the page keeps each file in its Cache Storage under this digest
+        entry["sha"] = _digest(out / entry["plain"])
     (py / "manifest.json").write_text(json.dumps(manifest, indent=1), encoding="utf-8")
     web = out / "ejsweb"
     if web.exists():
         shutil.rmtree(web)
     shutil.copytree(TEMPLATES / "ejsweb", web)
+    shutil.copyfile(TEMPLATES / "sw.js", out / "sw.js")  # at the root: its scope is the whole site
     (out / "index.html").write_text(_index_html(title), encoding="utf-8")
     _licences(out)
     (out / "README.txt").write_text(

@@ -22,6 +22,7 @@
   const api = {
     ready: new Promise((res, rej) => { resolveReady = res; rejectReady = rej; }),
     timing: {},
+    marks: {}, // the start's phases: ms since the page's navigation began (see mark)
     failed: null,
     call(what, args) {
       return api.ready.then(() => new Promise((res, rej) => {
@@ -32,6 +33,14 @@
     },
   };
   window.ejsWeb = api;
+  /** Note the moment ``name`` of the start (the first time only), at ``at`` ms since the epoch
+   * (a worker's clock) or now; also a performance.mark for DevTools. */
+  function mark(name, at) {
+    if (name in api.marks) return;
+    api.marks[name] = at === undefined ? performance.now() : at - performance.timeOrigin;
+    performance.mark(`ejsweb:${name}`);
+  }
+  mark("bridge");
 
   // -- what the page shows while the lab loads -------------------------------------------------
   let overlay = null;
@@ -72,18 +81,21 @@
     }
   }
 
-  function startPython() {
-    python = new RealWorker(new URL("worker.js", base), { type: "module" });
+  function startPython(served) {
+    python = new RealWorker(new URL(served ? "worker.js?sw=1" : "worker.js", base), { type: "module" });
     const t0 = performance.now();
     python.onmessage = (e) => {
       const msg = e.data;
       if (msg.type === "batch") {
         if (!api.timing.firstBatch) api.timing.firstBatch = performance.now() - t0;
+        mark("firstBatch");
         if (!api.timing.panel && msg.messages.some((m) => m.type === "GuiButtonMessage")) {
           api.timing.panel = performance.now() - t0; // the panel's controls reach the client
         }
         if (socket !== null) socket.emit({ type: "message_batch", messages: msg.messages });
         hide();
+      } else if (msg.type === "mark") {
+        mark(msg.name, msg.at);
       } else if (msg.type === "progress") {
         progress[msg.what] = msg;
         let got = 0, size = 0;
@@ -136,6 +148,7 @@
         else if (early.length < 1000) early.push(data.message);
       } else if (data.type === "set_server" || data.type === "retry") {
         if (!api.timing.clientAsked) api.timing.clientAsked = performance.now() - started;
+        mark("clientAsked");
         wanted = true;
         connect();
       }
@@ -167,5 +180,37 @@
   };
   window.Worker.prototype = RealWorker.prototype;
 
-  startPython();
+  // sw.js serves the lab's Python from the page's Cache Storage (see sw.js): the worker starts
+  // once it controls the page (at once from the second visit on; a first visit waits for it to
+  // install, which viser's client takes longer to start anyway), or without it where a browser
+  // has none (a page that is not a secure context) or it does not come within 3 s.
+  (async () => {
+    let served = false;
+    try {
+      const sw = navigator.serviceWorker;
+      if (sw && window.isSecureContext) {
+        sw.register(new URL("sw.js", document.baseURI)).catch((e) => console.warn("[lab] no service worker:", e));
+        served = sw.controller !== null || await new Promise((resolve) => {
+          sw.addEventListener("controllerchange", () => resolve(true), { once: true });
+          setTimeout(() => resolve(false), 3000);
+        });
+      }
+    } catch (e) {
+      served = false;
+    }
+    mark(served ? "serviceWorker" : "noServiceWorker");
+    startPython(served);
+  })();
+  document.addEventListener("DOMContentLoaded", () => mark("domContentLoaded"));
+  // the panel drawn: viser's Play button in the page (what a student waits for)
+  const drawn = new MutationObserver(() => {
+    for (const b of document.querySelectorAll("button")) {
+      if (b.textContent.trim() === "Play") {
+        mark("panelDrawn");
+        drawn.disconnect();
+        return;
+      }
+    }
+  });
+  drawn.observe(document.documentElement, { childList: true, subtree: true });
 })();

@@ -17,11 +17,19 @@ const site = new URL("../", import.meta.url); // the site's folder: index.html's
 const at = (path) => new URL(path, site).href;
 const log = (level, text) => postMessage({ type: "log", level, text });
 const stage = (text) => postMessage({ type: "stage", text });
+/** A named moment of the start (ms since the epoch, as performance.timeOrigin + now: the page
+ * turns it into its own clock), also a performance.mark for DevTools. */
+const mark = (name) => {
+  performance.mark(`ejsweb:${name}`);
+  postMessage({ type: "mark", name, at: performance.timeOrigin + performance.now() });
+};
+mark("workerStarted");
 let exports = null;
 let stdout = [];
 let fps = 30;
 let connected = false;
 let inbox = [];
+let batches = 0; // batches sent to the page
 let cameraAt = 0; // when the client's first camera message came (it makes the lab build its panel)
 const io = { inbox: new File([]), outbox: new File([]), "run.csv": new File([]) };
 
@@ -99,16 +107,101 @@ async function pick(entry) {
   return entry.url;
 }
 
+/** The page's Cache Storage (null where the browser gives none: a page that is not a secure
+ * context, a private window out of room). It keeps each file inflated under its plain URL and
+ * the build's digest (`python/python.wasm?v=...`), so a later visit neither downloads nor
+ * inflates it, and Chromium keeps the compiled WebAssembly beside the entry it was compiled
+ * from by streaming (its code cache), so a later visit does not compile it either. */
+async function openStore() {
+  try {
+    return self.caches ? await caches.open("ejsweb") : null;
+  } catch (e) {
+    return null;
+  }
+}
+
+const TYPES = { wasm: "application/wasm" };
+
+/** Whether sw.js serves this worker's requests (bridge.js says so in the worker's URL). */
+const served = new URL(self.location.href).searchParams.get("sw") === "1";
+
+/** A manifest entry's file as a Response: from the store, else downloaded (and stored). The
+ * WebAssembly comes through sw.js when it serves this worker: a response it took from the
+ * store is one whose compiled code Chromium caches. */
+async function load(store, entry, what) {
+  const key = `${at(entry.plain)}?v=${entry.sha}`;
+  const headers = { "Content-Type": TYPES[what] || "application/octet-stream" };
+  let hit;
+  if (store !== null) {
+    try {
+      hit = await store.match(key);
+    } catch (e) {
+      hit = undefined; // a store that fails to read: download
+    }
+  }
+  if (hit) {
+    postMessage({ type: "progress", what, got: entry.size, size: entry.size, cached: true });
+  } else {
+    const bytes = await fetchBytes(await pick(entry), what, entry.size);
+    mark(`${what}Fetched`);
+    if (store !== null) hit = await keep(store, key, new Response(bytes, { headers }));
+    if (!hit) return new Response(bytes, { headers });
+  }
+  if (served && what === "wasm") {
+    try {
+      const response = await fetch(key);
+      if (response.ok) return response;
+    } catch (e) {
+      // sw.js gone: the store's response
+    }
+  }
+  return hit;
+}
+
+/** Put `response` in `store` under `key` (dropping this file of earlier builds); the stored
+ * response, or undefined when the browser keeps nothing (out of room). */
+async function keep(store, key, response) {
+  try {
+    const path = new URL(key).pathname;
+    for (const old of await store.keys()) {
+      if (new URL(old.url).pathname === path && old.url !== key) await store.delete(old);
+    }
+    await store.put(key, response);
+    return await store.match(key);
+  } catch (e) {
+    log("warn", `the browser did not keep ${new URL(key).pathname} (${e}); the next visit downloads it again`);
+    return undefined;
+  }
+}
+
+/** The manifest: asked of the host each visit (a rebuilt site is seen at once), else, offline,
+ * the browser's copy. */
+async function manifestOf() {
+  const url = at("python/manifest.json");
+  let response;
+  try {
+    response = await fetch(url, { cache: "no-cache" });
+  } catch (e) {
+    response = await fetch(url, { cache: "force-cache" });
+  }
+  if (!response.ok) throw new Error(`python/manifest.json: HTTP ${response.status}`);
+  return response.json();
+}
+
 async function boot() {
   const t0 = performance.now();
-  const manifest = await (await fetch(at("python/manifest.json"))).json();
+  const [manifest, store] = await Promise.all([manifestOf(), openStore()]);
+  mark("manifest");
   const [module, stdlib, lab] = await Promise.all([
-    pick(manifest.wasm).then((url) => fetchBytes(url, "python", manifest.wasm.size)).then((b) => {
+    load(store, manifest.wasm, "wasm").then((r) => {
+      mark("wasmLoaded");
       stage("Compiling Python (WebAssembly)…");
-      return WebAssembly.compile(b);
-    }),
-    pick(manifest.stdlib).then((url) => fetchBytes(url, "stdlib", manifest.stdlib.size)),
-    pick(manifest.lab).then((url) => fetchBytes(url, "lab", manifest.lab.size)),
+      return WebAssembly.compileStreaming(r);
+    }).then((m) => { mark("wasmCompiled"); return m; }),
+    load(store, manifest.stdlib, "stdlib").then((r) => r.arrayBuffer())
+      .then((b) => { mark("stdlibLoaded"); return new Uint8Array(b); }),
+    load(store, manifest.lab, "lab").then((r) => r.arrayBuffer())
+      .then((b) => { mark("labLoaded"); return new Uint8Array(b); }),
   ]);
   const fetched = performance.now() - t0;
   stage("Starting Python…");
@@ -127,16 +220,24 @@ async function boot() {
     wasi_snapshot_preview1: wasi.wasiImport,
     host: { call: () => -1 }, // no host functions: the lab asks the page nothing synchronously
   });
+  mark("instantiated");
   exports = instance.exports;
   wasi.initialize(instance);
+  mark("pythonStarted");
   const started = performance.now() - t0;
   stage("Starting Python: importing the lab (NumPy, SciPy, the runtime, viser)…");
-  const info = ask("import sys, time\n_t0 = time.perf_counter()\nsys.path.insert(0, '/lab')\n" +
-    "from ejsrl.web.lab import open_lab\n_t1 = time.perf_counter()\nlab = open_lab('app')\n" +
+  ask("import sys\nsys.path.insert(0, '/lab')\nimport numpy\n_v = 0");
+  mark("numpyImported");
+  ask("from ejsrl.web.lab import open_lab\n_v = 0");
+  mark("runtimeImported");
+  ask("import app\n_v = 0");
+  mark("appImported");
+  const info = ask("lab = open_lab('app')\n" +
     "_v = {'fps': lab.fps, 'steps': lab.sim.steps_per_display, 'realtime': bool(lab.sim.realtime), " +
-    "'title': lab.app.meta.title, 'runtime': _t1 - _t0, 'open': time.perf_counter() - _t1}");
+    "'title': lab.app.meta.title}");
+  mark("labOpened");
   fps = info.fps;
-  const timing = { fetched, started, importRuntime: info.runtime * 1000, openLab: info.open * 1000, lab: performance.now() - t0 };
+  const timing = { fetched, started, lab: performance.now() - t0 };
   postMessage({ type: "ready", fps, steps: info.steps, realtime: info.realtime, title: info.title, timing });
 }
 
@@ -192,6 +293,7 @@ function frame(step) {
   if (out) log("info", out);
   const data = io.outbox.data;
   if (data.length) {
+    if (!batches++) mark("firstBatchOut");
     const { messages, buffer } = decodeBatch(data);
     postMessage({ type: "batch", messages }, [buffer]);
   }
