@@ -991,17 +991,17 @@ _FULL = float(_SCALE * len(SUSAN_MASK))  # the mask's area, x100
 
 
 @functools.lru_cache(maxsize=1)
-def _share_table() -> NDArray[np.float64]:
-    """(2, 256, 256) int64: ``[dark, span, x]``, the coverage test's share (x100) of a pixel ``x``
+def _share_table() -> NDArray[np.uint32]:
+    """(2, 256, 256) uint32: ``[dark, span, x]``, the coverage test's share (x100) of a pixel ``x``
     grey levels above the low one (clipped to ``span``), for the bright side and the dark one
     (the float32 operations of ``_coverage_test``'s ``side``), times 2^25: exact integers, as
-    the shares are 0 or in [0.25, 100], multiples of 2^-25."""
+    the shares are 0 or in [0.25, 100], multiples of 2^-25 (at most 100 * 2^25 < 2^32)."""
     span = np.maximum(np.arange(256), 1).astype(np.uint8)[:, None]
     x = np.minimum(np.arange(256)[None, :], span).astype(np.uint8)
     share = np.divide(x, span.astype(np.float32), dtype=np.float32)
     dark = np.subtract(np.float32(1.0), share)
     table = (np.stack([share, dark]) * np.float32(_SCALE)).astype(np.float64) * 2.0**25
-    fixed = table.astype(np.int64)
+    fixed = table.astype(np.uint32)
     assert (fixed == table).all()
     return fixed
 
