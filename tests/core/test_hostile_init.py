@@ -16,6 +16,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -88,5 +89,51 @@ def test_an_endless_init_is_named_with_its_spec_line_then_stops_on_ctrl_c(slow_a
         assert b"Traceback" not in err, err.decode()
     finally:
         if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
+def _read_until(stream: Any, words: str, seconds: float) -> str:
+    """A pipe read until ``words`` appear (or ``seconds`` pass)."""
+    seen = b""
+    deadline = time.monotonic() + seconds
+    while words.encode() not in seen and time.monotonic() < deadline:
+        if select.select([stream], [], [], 0.5)[0]:
+            chunk = os.read(stream.fileno(), 65536)
+            if not chunk:
+                break
+            seen += chunk
+    return seen.decode(errors="replace")
+
+
+@pytest.mark.parametrize("args", [("--processes", "1"), ("--processes", "2"), ("--shared",)],
+                         ids=["served", "front", "shared"])
+def test_a_served_lab_whose_init_never_ends_still_opens_its_page(slow_app: Path, args: tuple[str, ...]) -> None:
+    """The server starts anyway once ``init:`` overran its wait (it used to keep its port closed
+    for good): the page is served, and the terminal says where ``init:`` was stopped."""
+    import re
+    import urllib.request
+
+    env = dict(os.environ, EJSRL_SLOW_SECONDS="60", EJSRL_INIT_WAIT="3", EJSRL_SHARED_INIT_WAIT="3")
+    proc = subprocess.Popen([sys.executable, str(slow_app / "app.py"), "--port", "0", *args], stderr=subprocess.PIPE,
+                            stdout=subprocess.PIPE, env=env)
+    try:
+        assert proc.stdout is not None and proc.stderr is not None
+        out = _read_until(proc.stdout, "(Ctrl+C to stop)", 90)
+        found = re.search(r"serving on (http://127\.0\.0\.1:\d+)", out)
+        assert found, out + _read_until(proc.stderr, "\n\n", 1)
+        with urllib.request.urlopen(found.group(1) + "/", timeout=30) as reply:
+            assert reply.status == 200
+            assert b"<html" in reply.read().lower()
+        err = _read_until(proc.stderr, "was stopped", 30)
+        line = next(x for x in err.splitlines() if "did not end within 3 s" in x)
+        assert line.split(":")[0].endswith("slow.ejs.yaml"), line
+        assert SPEC.splitlines()[int(line.split(":")[1]) - 1].strip() in ("while x > 0:", "n = n + 1"), line
+        assert ("Reset runs init: again" in line) == ("--shared" in args), line
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.communicate(timeout=30)
+        except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()

@@ -14,7 +14,7 @@ import os
 import time
 from typing import Any
 
-__all__ = ["CPU_SHARE", "MAX_DEFAULT_SESSIONS", "SEND_SECONDS", "VIEW_FACTOR", "default_max_sessions", "measure_frame_cost"]
+__all__ = ["CPU_SHARE", "MAX_DEFAULT_SESSIONS", "SEND_SECONDS", "UNMEASURED_SESSIONS", "VIEW_FACTOR", "default_max_sessions", "measure_frame_cost"]
 
 #: the share of the machine's cores that sessions may use when the default limit is derived
 CPU_SHARE = 0.8
@@ -30,6 +30,9 @@ SEND_SECONDS = 0.0004
 #: 24 held.
 VIEW_FACTOR = 1.0
 MAX_DEFAULT_SESSIONS = 100
+#: the places a process offers when its lab could not be measured (the template's ``init:``
+#: did not end in time: see ``ejsrl.app.cli``); ``--max-sessions`` sets them
+UNMEASURED_SESSIONS = 8
 
 
 def measure_frame_cost(app: Any, frames: int = 60) -> float:

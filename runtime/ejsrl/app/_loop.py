@@ -62,6 +62,7 @@ class App(Controller):
     where the app's assets are; ``overrides``: initial values replaced before ``init``;
     ``clock()``: monotonic seconds (default ``time.perf_counter``), the time of realtime
     pacing, of the loop's frame rate and of the view's timers (tests pass a fake one).
+    ``run_init=False`` makes it without running ``init:`` (see :attr:`initialised`).
     """
 
     def __init__(
@@ -74,6 +75,7 @@ class App(Controller):
         base_dir: Path | str = ".",
         overrides: dict[str, Any] | None = None,
         clock: Callable[[], float] = time.perf_counter,
+        run_init: bool = True,
     ) -> None:
         super().__init__()
         self.clock = clock
@@ -108,6 +110,12 @@ class App(Controller):
         """A signal's number once SIGINT/SIGTERM asked a headless run to stop (set by ``main``)."""
         self.scene = SceneSync(scene_elements(view), base_dir=self.base_dir)
         self.model = model_cls(self, overrides, start=False)
+        #: whether ``init:`` ran (``run_init=False``: a served class's template whose ``init:``
+        #: did not end in time; its sessions run their own)
+        self.initialised = run_init
+        self.playing = False
+        if not run_init:
+            return
         try:
             with watch_slow(model_cls, "init:"):  # an endless init: is named with its spec line
                 self.model._ejs_reset()
@@ -481,6 +489,7 @@ class App(Controller):
     def _start_classroom(
         self, server: Any, *, max_sessions: int | None, grace: float | None, workers: int | None, role: WorkerRole | None
     ) -> None:
+        from ejsrl.app._capacity import UNMEASURED_SESSIONS
         from ejsrl.app._sessions import GRACE_SECONDS, SWITCH_INTERVAL, Classroom, default_max_sessions, measure_frame_cost
 
         # the sessions already share the cores, in threads: SUSAN keeps to the calling one. Set where
@@ -499,6 +508,8 @@ class App(Controller):
 
         if role is not None:
             max_sessions = role.max_sessions
+        if max_sessions is None and not self.initialised:  # nothing to measure: its init: did not end
+            max_sessions = UNMEASURED_SESSIONS
         if max_sessions is None:
             # a process runs Python on one core at a time (the GIL), however many the machine has
             cpus = role.cpus if role is not None else 1.0

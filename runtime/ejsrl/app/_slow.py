@@ -28,7 +28,7 @@ from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any, TextIO
 
-__all__ = ["SLOW_SECONDS", "TITLE", "Tell", "telling", "watch_slow", "where_now"]
+__all__ = ["SLOW_SECONDS", "TITLE", "Overran", "Tell", "run_within", "telling", "watch_slow", "where_now"]
 
 log = logging.getLogger(__name__)
 
@@ -54,6 +54,50 @@ def telling(tell: Tell) -> Iterator[None]:
 
 SLOW_SECONDS = float(os.environ.get("EJSRL_SLOW_SECONDS", "3"))
 """Seconds of running before ``watch_slow`` speaks (``EJSRL_SLOW_SECONDS`` overrides)."""
+
+
+class Overran(BaseException):
+    """Raised inside a block that :func:`run_within` gave up waiting for. A BaseException, so
+    spec code's ``except Exception`` (and the app's error guard) lets it through; its
+    traceback passes through the spec code it stopped, so it names that spec line."""
+
+
+def run_within(fn: Callable[[], Any], seconds: float, *, name: str = "ejsrl-bounded") -> tuple[bool, Any]:
+    """``(True, fn())`` if ``fn`` returns within ``seconds`` of wall time, run in a thread of
+    its own (its exception is raised here); else ``(False, exc)``: :class:`Overran` was raised
+    inside ``fn`` (a Python loop stops at once; a long call into C when it returns, waited
+    for a further second at most) and ``exc`` is that exception if it came out in time, else
+    None. For an ``init:`` that must not hold a server's start: a thread cannot be killed, so
+    the endless one is stopped by an exception in its own code."""
+    out: dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            try:
+                out["value"] = fn()
+            except BaseException as exc:  # noqa: BLE001 - handed to the caller
+                out["error"] = exc
+        except Overran:  # it came just as fn returned
+            pass
+
+    thread = threading.Thread(target=run, name=name, daemon=True)
+    thread.start()
+    thread.join(seconds)
+    if not thread.is_alive():
+        if "error" in out and not isinstance(out["error"], Overran):
+            raise out["error"]
+        return "value" in out, out.get("value", out.get("error"))
+    import ctypes
+
+    assert thread.ident is not None
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(thread.ident), ctypes.py_object(Overran))
+    thread.join(1.0)
+    if "value" in out:  # it returned just then
+        return True, out["value"]
+    error = out.get("error")
+    if error is not None and not isinstance(error, Overran):
+        raise error
+    return False, error
 
 
 def where_now(thread_id: int, model_cls: type) -> str:

@@ -23,8 +23,16 @@ from typing import Any
 import numpy as np
 
 from ejsrl._signals import SignalScope
-from ejsrl.app._front import WORKER_ENV, WorkerRole, default_processes, serve_front, worker_command
+from ejsrl.app._capacity import UNMEASURED_SESSIONS
+from ejsrl.app._front import (
+    WORKER_ENV,
+    WorkerRole,
+    default_processes,
+    serve_front,
+    worker_command,
+)
 from ejsrl.app._loop import App, AppMeta, SimConfig, announce
+from ejsrl.app._slow import Overran, run_within
 from ejsrl.app.headless import csv_columns, refusal, run_headless, split_vars
 from ejsrl.sim._console import quiet_prints
 from ejsrl.sim.model import ModelBase, SetValueError, UserCodeError
@@ -123,6 +131,45 @@ def _parse_value(name: str, raw: str, kind: str) -> Any:
             raise ValueError(f"--set {name}: expected a list of finite numbers, got {raw!r}")
         return arr
     raise ValueError(f"--set {name}: this variable's type cannot be set from the command line")
+
+
+#: seconds a served lab's ``init:`` may take before the server starts without it: per tab
+#: (the template only measures the lab), and ``--shared`` (the one simulation: paused with
+#: the error, Reset runs it again); ``EJSRL_INIT_WAIT`` / ``EJSRL_SHARED_INIT_WAIT`` override
+INIT_WAIT = float(os.environ.get("EJSRL_INIT_WAIT", "10"))
+SHARED_INIT_WAIT = float(os.environ.get("EJSRL_SHARED_INIT_WAIT", "30"))
+
+
+def _served_app(model_cls: type[ModelBase], view: list[Any], *, shared: bool, **kw: Any) -> App:
+    """The app ``serve`` starts from. Served per tab it is only the template the sessions are
+    made like: what its ``init:`` prints or alerts is nobody's (each tab's session prints its
+    own), and an ``init:`` that does not end within :data:`INIT_WAIT` is stopped so the class
+    is served anyway (each tab's own ``init:`` then says in its page where it is), unmeasured.
+    An endless ``init:`` used to keep the port closed for good, said only in the terminal."""
+
+    def make() -> App:
+        with contextlib.nullcontext() if shared else quiet_prints():
+            return App(model_cls, view, **kw)
+
+    wait = SHARED_INIT_WAIT if shared else INIT_WAIT
+    finished, made = run_within(make, wait, name="ejsrl-init")
+    if finished:
+        return made
+    app = App(model_cls, view, run_init=False, **kw)
+    stopped = Overran(f"init: did not end within {wait:g} s (an endless loop?) and was stopped")
+    if made is not None:
+        stopped = stopped.with_traceback(made.__traceback__)
+    app.fail(stopped)
+    place = f"{app.error.where}: " if app.error is not None and app.error.where else ""
+    if shared:
+        print(f"{place}warning: init: did not end within {wait:g} s and was stopped: serving the simulation paused with "
+              "this error in its page (Reset runs init: again)", file=sys.stderr, flush=True)
+    else:
+        app.error, app.error_rev = None, 0  # the template: nobody sees it; each tab runs its own init:
+        print(f"{place}warning: init: did not end within {wait:g} s and was stopped: serving without measuring the lab "
+              f"({UNMEASURED_SESSIONS} places a process; --max-sessions sets them); each tab runs its own init: and its "
+              "page says where it is", file=sys.stderr, flush=True)
+    return app
 
 
 def _parser(title: str) -> argparse.ArgumentParser:
@@ -347,10 +394,7 @@ def _main(
         if args.processes is not None:
             print(f"warning: --processes {count}: this app was not started as a script (python app.py), so it cannot "
                   "start copies of itself; serving from one process", file=sys.stderr, flush=True)
-    # served per tab, this app is only the template the sessions are made like: what its
-    # init prints or alerts is nobody's (each tab's session prints its own when it starts)
-    with contextlib.nullcontext() if args.shared else quiet_prints():
-        app = App(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides)
+    app = _served_app(model_cls, view, sim=sim, meta=meta, base_dir=base_dir, overrides=overrides, shared=args.shared)
     app.serve(args.host, args.port, allow_origins=origins, per_client=not args.shared,
               max_sessions=args.max_sessions, grace=args.grace, role=role)
     return 0
