@@ -24,6 +24,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tests"))  # testkit.web_page: a visit timed and weighed, as the page tests do
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 
@@ -47,29 +48,6 @@ def serve(folder: Path):
         proc.wait(timeout=10)
 
 
-def visit(page, url: str, *, cold: bool) -> tuple[float, int]:
-    responses: list = []
-
-    def seen(r) -> None:
-        responses.append(r)
-
-    page.on("response", seen)
-    if cold:
-        cdp = page.context.new_cdp_session(page)
-        cdp.send("Network.clearBrowserCache")
-        cdp.detach()
-    start = time.monotonic()
-    page.goto(url)
-    page.get_by_role("button", name="Play").wait_for(state="visible", timeout=180_000)
-    took = time.monotonic() - start
-    page.remove_listener("response", seen)
-    got = 0
-    for r in responses:
-        sizes = r.request.sizes()
-        got += (0 if r.request.method == "HEAD" else sizes["responseBodySize"]) + sizes["responseHeadersSize"]
-    return took, got
-
-
 def native_model(app_dir: Path):
     spec = importlib.util.spec_from_file_location("bench_web_app", app_dir / "app.py")
     module = importlib.util.module_from_spec(spec)
@@ -90,6 +68,7 @@ def main() -> int:
 
     from ejsgen._web_build import build_web
     from ejsgen.cli import build
+    from testkit.web_page import visit
 
     spec = ROOT / "examples" / f"{args.lab}.ejs.yaml"
     with tempfile.TemporaryDirectory() as tmp:
@@ -106,12 +85,12 @@ def main() -> int:
             ctx = pw.chromium.launch_persistent_context(tempfile.mkdtemp(dir=tmp), executable_path="/usr/bin/chromium",
                                                         headless=True, args=ARGS)
             page = ctx.new_page()
-            cold, got = visit(page, url, cold=True)
+            cold, got = visit(page, url, cold=True, timeout_ms=180_000)
             timing = page.evaluate("ejsWeb.timing")
             print(f"cold start {cold:.1f} s to a usable panel, {got / 1e6:.1f} MB over the wire ({uptime()})")
             print("  in the page (ms): " + ", ".join(f"{k} {v:.0f}" for k, v in timing.items()))
             page.goto("about:blank")
-            warm, got = visit(page, url, cold=False)
+            warm, got = visit(page, url, cold=False, timeout_ms=180_000)
             timing = page.evaluate("ejsWeb.timing")
             print(f"warm start {warm:.1f} s, {got / 1e6:.2f} MB over the wire ({uptime()})")
             print("  in the page (ms): " + ", ".join(f"{k} {v:.0f}" for k, v in timing.items()))

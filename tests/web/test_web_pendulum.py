@@ -9,13 +9,13 @@ native app's to 1e-12.
 
 from __future__ import annotations
 
-import csv
-import io
-import subprocess
 import sys
 import time
 
 import pytest
+
+from testkit.csvcompare import assert_same_csv, native_csv
+from testkit.web_page import visit
 
 pytestmark = pytest.mark.browser
 
@@ -25,32 +25,6 @@ FIRST_VISIT_BYTES = 30_000_000
 #: (cold <= 10 s, warm <= 3 s on an idle machine) are timed by bench/web.py, since a test run
 #: shares the machine with another worker's Chromium
 USABLE_S = 90.0
-
-
-def visit(page, url: str, *, cold: bool) -> tuple[float, int]:
-    """Open the lab; ``(seconds until its panel can be used, bytes received over the wire)``."""
-    responses: list = []
-
-    def seen(response) -> None:
-        responses.append(response)
-
-    page.on("response", seen)
-    if cold:
-        cdp = page.context.new_cdp_session(page)
-        cdp.send("Network.clearBrowserCache")
-        cdp.detach()
-    start = time.monotonic()
-    page.goto(url)
-    page.get_by_role("button", name="Play").wait_for(state="visible", timeout=120_000)
-    page.get_by_text("Length (m)").first.wait_for(state="visible")
-    took = time.monotonic() - start
-    page.remove_listener("response", seen)
-    received = 0
-    for r in responses:
-        sizes = r.request.sizes()
-        body = 0 if r.request.method == "HEAD" else sizes["responseBodySize"]  # a HEAD reports the file's length
-        received += body + sizes["responseHeadersSize"]
-    return took, received
 
 
 def state(page, *names: str) -> dict:
@@ -66,11 +40,11 @@ def test_pendulum_page_loads_within_the_download_limit_cold_and_warm(browser_con
     site, url, _app = pendulum
     page = browser_context.new_page()
     try:
-        cold, received = visit(page, url, cold=True)
+        cold, received = visit(page, url, cold=True, text="Length (m)")
         failed = page.evaluate("ejsWeb.failed")
         assert failed is None, failed
         page.goto("about:blank")
-        warm, _ = visit(page, url, cold=False)
+        warm, _ = visit(page, url, cold=False, text="Length (m)")
         timing = page.evaluate("ejsWeb.timing")
     finally:
         page.close()
@@ -140,12 +114,4 @@ def test_the_page_computes_the_native_apps_numbers(page, pendulum) -> None:
     page.get_by_role("button", name="Play").wait_for(state="visible", timeout=120_000)
     got = page.evaluate("ejsWeb.call('headless', {duration: 5})")
     assert got["status"] == 0
-    out = app_dir / "native.csv"
-    subprocess.run([sys.executable, str(app_dir / "app.py"), "--headless", "--duration", "5", "--csv", str(out)],
-                   check=True, capture_output=True)
-    web = list(csv.reader(io.StringIO(got["csv"])))
-    native = list(csv.reader(io.StringIO(out.read_text())))
-    assert web[0] == native[0] and len(web) == len(native) > 400
-    for w, n in zip(web[1:], native[1:]):
-        for a, b in zip(w, n):
-            assert float(a) == pytest.approx(float(b), rel=1e-12, abs=1e-12)
+    assert_same_csv(got["csv"], native_csv(app_dir, 5), more_rows_than=400)

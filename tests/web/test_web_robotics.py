@@ -6,12 +6,9 @@ served panel and computes the native app's numbers to 1e-12."""
 
 from __future__ import annotations
 
-import csv
-import io
-import subprocess
-import sys
-
 import pytest
+
+from testkit.csvcompare import assert_same_csv, native_csv
 
 pytestmark = pytest.mark.browser
 
@@ -37,20 +34,7 @@ def test_robotics_page_runs_the_native_numbers(page, web_lab, name: str) -> None
     assert state["error"] is None, state["error"]
     got = page.evaluate("ejsWeb.call('headless', {duration: 2})")
     assert got["status"] == 0
-    out = app_dir / "native.csv"
-    subprocess.run([sys.executable, str(app_dir / "app.py"), "--headless", "--duration", "2", "--csv", str(out)],
-                   check=True, capture_output=True)
-    web = list(csv.reader(io.StringIO(got["csv"])))
-    native = list(csv.reader(io.StringIO(out.read_text())))
-    assert web[0] == native[0] and len(web) == len(native) > 10
-    for w, n in zip(web[1:], native[1:]):
-        for a, b in zip(w, n):
-            try:
-                fa, fb = float(a), float(b)
-            except ValueError:
-                assert a == b
-                continue
-            assert fa == pytest.approx(fb, rel=1e-12, abs=1e-12)
+    assert_same_csv(got["csv"], native_csv(app_dir, 2), more_rows_than=10)
     if name == "paper/six_axis_kinematics":
         # the wrist camera's picture (rendered by the runtime's NumPy rasterizer, 240 x 180) reaches
         # the panel as an image the browser decodes (PNG: the page has no OpenCV)

@@ -1,0 +1,43 @@
+"""A visit of a lab's web page (``ejsgen build --web``) in Chromium, timed and weighed: shared by
+the page tests (tests/web) and ``bench/web.py`` (which puts ``tests/`` on its path)."""
+
+from __future__ import annotations
+
+import time
+from typing import Any, NamedTuple
+
+
+class Visit(NamedTuple):
+    """What a visit took: ``seconds`` until the panel could be used and ``received``, the bytes
+    over the wire (every response's body and headers, the page's and its worker's)."""
+
+    seconds: float
+    received: int
+
+
+def visit(page: Any, url: str, *, cold: bool, text: str | None = None, timeout_ms: int = 120_000) -> Visit:
+    """Open ``url`` in ``page`` (with an empty browser cache if ``cold``) until the panel's Play
+    button is visible, and ``text`` too if given (a control's label); ``timeout_ms`` for Play."""
+    responses: list[Any] = []
+
+    def seen(response: Any) -> None:
+        responses.append(response)
+
+    page.on("response", seen)
+    if cold:
+        cdp = page.context.new_cdp_session(page)
+        cdp.send("Network.clearBrowserCache")
+        cdp.detach()
+    start = time.monotonic()
+    page.goto(url)
+    page.get_by_role("button", name="Play").wait_for(state="visible", timeout=timeout_ms)
+    if text is not None:
+        page.get_by_text(text).first.wait_for(state="visible")
+    took = time.monotonic() - start
+    page.remove_listener("response", seen)
+    received = 0
+    for r in responses:
+        sizes = r.request.sizes()
+        body = 0 if r.request.method == "HEAD" else sizes["responseBodySize"]  # a HEAD reports the file's length
+        received += body + sizes["responseHeadersSize"]
+    return Visit(took, received)
