@@ -109,15 +109,17 @@ def _compressed(data: bytes, dest: Path, *, level_br: int = 9) -> int:
 
 def _wasm(out: Path) -> tuple[int, int]:
     """python.wasm (debug sections stripped) and its compressed copies, from the cache."""
+    from ejsgen._web_gzip import gzip_tag, smallest_gzip
     from ejsgen._web_wasm import strip_debug
 
     src = _wasi_artifacts().plain
     digest = hashlib.sha256(src.read_bytes()).hexdigest()[:16]
-    cached = cache_dir() / digest
+    cached = cache_dir() / f"{digest}{gzip_tag()}"
     names = ["python.wasm", "python.wasm.gz"] + (["python.wasm.br"] if _brotli() is not None else [])
     if not all((cached / n).exists() for n in names):
         tmp = Path(tempfile.mkdtemp(prefix="wasm-", dir=_mkdir(cache_dir())))
         _compressed(strip_debug(src.read_bytes()), tmp / "python.wasm")
+        smallest_gzip(tmp / "python.wasm")  # zopfli: what a student downloads from a plain static host
         if cached.exists():
             shutil.rmtree(cached, ignore_errors=True)
         tmp.rename(cached)

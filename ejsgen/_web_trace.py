@@ -20,12 +20,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-__all__ = ["traced_modules", "HIDDEN", "TraceError"]
+__all__ = ["traced_modules", "stdlib_imports", "HIDDEN", "TraceError"]
 
-#: packages the browser's Python does not have, hidden from the traced run; and two it has that
-#: trimesh only uses when present (graphs, image textures): left out of the page to keep its
-#: download small (6 MB), so trimesh runs without them there, as on a machine without them
-HIDDEN = ("msgspec", "websockets", "zstandard", "rich", "cv2", "ssl", "_ssl", "networkx", "PIL")
+#: packages the browser's Python does not have, hidden from the traced run; and three it has
+#: that trimesh only uses when present (graphs, image textures, SVG and XML meshes, which --web
+#: refuses): left out of the page to keep its download small (6 MB; lxml's Python 0.15 MB), so
+#: trimesh runs without them there, as on a machine without them
+HIDDEN = ("msgspec", "websockets", "zstandard", "rich", "cv2", "ssl", "_ssl", "networkx", "PIL", "lxml")
 
 _SCRIPT = r"""
 import importlib.abc, importlib.util, json, os, sys
@@ -129,5 +130,29 @@ def traced_modules(lab_dir: Path, io_dir: Path, there: list[str], *, timeout: fl
                           cwd=str(io_dir), check=False)
     for line in reversed(done.stdout.split("\n")):  # not splitlines(): it splits at \x1e too
         if line.startswith("\x1e"):
-            return list(json.loads(line[1:]))
+            loaded = list(json.loads(line[1:]))
+            return loaded + sorted(stdlib_imports(lab_dir, loaded, set(there) & set(sys.stdlib_module_names)) - set(loaded))
     raise TraceError(f"running the lab to find its imports failed:\n{done.stderr[-3000:]}")
+
+
+#: the top-level packages of a lab's own bundle (not the standard library's)
+_LAB_PACKAGES = {"ejsrl", "viser", "trimesh", "app"}
+
+
+def stdlib_imports(lab_dir: Path, loaded: list[str], stdlib: set[str]) -> set[str]:
+    """The modules of the standard library (top-level names in ``stdlib``: the browser's that this
+    Python knows as its own, not a third-party package of the zip) that the lab's own
+    modules seen loading (``loaded``: dotted names; their files under ``lab_dir``) import
+    anywhere in their code, inside functions too: a branch the traced run did not take (an
+    export, an error's message) then still finds its module in the page."""
+    from ejsgen._web_stdlib import imported_names
+
+    files = []
+    for name in loaded:
+        if name.split(".")[0] not in _LAB_PACKAGES:
+            continue
+        base = lab_dir.joinpath(*name.split("."))
+        for f in (base.with_suffix(".py"), base / "__init__.py"):
+            if f.is_file():
+                files.append(f)
+    return {n for n in imported_names(files) if n.split(".")[0] in stdlib}

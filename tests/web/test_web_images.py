@@ -156,3 +156,5 @@ def test_a_page_build_leaves_the_image_files_out_and_ships_their_decoded_picture
         shipped = decode_copy(files[rel + WEB_COPY])
         bgr = cv2.imread(str(folder / rel), cv2.IMREAD_COLOR)  # what the served app shows
         assert np.array_equal(shipped, bgr[:, :, ::-1])
+        # the copy is a PNG any decoder reads to the same pixels
+        assert np.array_equal(cv2.imdecode(np.frombuffer(files[rel + WEB_COPY], np.uint8), cv2.IMREAD_COLOR), bgr)

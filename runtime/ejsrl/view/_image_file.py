@@ -17,6 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ejsrl.web._png import _chunk  # the PNG chunk writer of the page's image encoder
+
 __all__ = ["WEB_COPY", "read_image_file", "write_web_copy", "encode_copy", "decode_copy"]
 
 #: the suffix of the decoded copy a web build writes beside an image file (``map.jpg.web.png``)
@@ -46,10 +48,6 @@ def write_web_copy(path: Path, shown: str | None = None) -> Path:
     copy = Path(f"{path}{WEB_COPY}")
     copy.write_bytes(encode_copy(read_image_file(path, shown)))
     return copy
-
-
-def _chunk(kind: bytes, data: bytes) -> bytes:
-    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
 
 
 def encode_copy(rgb: np.ndarray) -> bytes:
