@@ -18,16 +18,15 @@ __all__ = ["CPU_SHARE", "MAX_DEFAULT_SESSIONS", "SEND_SECONDS", "UNMEASURED_SESS
 
 #: the share of the machine's cores that sessions may use when the default limit is derived
 CPU_SHARE = 0.8
-#: CPU seconds viser's event loop spends on a tab's frame whatever the lab (serialising,
-#: compressing, sending): ``bench/classroom.py`` measured 0.6 ms a frame in all for the
-#: pendulum, whose frame alone takes 0.2-0.35 ms; without it the pendulum's default was
-#: 100 places a process where 40 held
+#: CPU seconds a served tab's frame costs beyond what :func:`measure_frame_cost` measures,
+#: whatever the lab: viser's event loop serialising, compressing and sending it, and the
+#: sessions' threads taking turns for the GIL. ``bench/classroom.py`` (issue #30, load 22, CPU
+#: of the whole server per frame sent): pendulum 0.63 ms served for 0.34 ms measured, visual
+#: servoing 6.2 for 5.0; the six-axis arm 0.91 for 1.43 (its measured first two seconds of
+#: play cost more than the eight the bench serves)
 SEND_SECONDS = 0.0004
 #: what a session costs while served over what :func:`measure_frame_cost` measures (which
-#: already reads every value its view shows): ``bench/classroom.py`` measured 1.4 ms a frame
-#: served for the six-axis arm (1.95 ms measured), 3.6-4.2 ms for visual servoing (3.4-4.1)
-#: and 0.3 ms for the pendulum (0.3). With 1.5 the six-axis arm's default was 16 places where
-#: 24 held.
+#: already includes its view's own work)
 VIEW_FACTOR = 1.0
 MAX_DEFAULT_SESSIONS = 100
 #: the places a process offers when its lab could not be measured (the template's ``init:``
