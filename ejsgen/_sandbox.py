@@ -3,8 +3,12 @@
 Spec code is Python and runs with the rights of whoever runs it: a hand-in can import
 ``os`` and do anything the teacher can. ``contained(cmd, writable=DIR)`` runs ``cmd`` with
 
-- the whole file system **read-only** but ``DIR`` (its own output folder) and a private,
-  empty ``/tmp`` (a tmpfs of at most ``Limits.file_mb``);
+- only the system's folders (programs, libraries, settings: :data:`SYSTEM_DIRS`, secrets such
+  as ``/etc/shadow`` hidden), this Python and its packages, and what the caller shows
+  (``readable``: the hand-in, see :func:`handin_files`), all **read-only**; ``DIR`` (its own
+  output folder) writable; a private, empty ``/tmp`` (a tmpfs of at most ``Limits.file_mb``).
+  Homes, ``/work``, ``/srv``, other hand-ins are not there at all: a hand-in reads nothing
+  of the teacher's;
 - **no network** (a network namespace of its own, with no interface up);
 - its own process, IPC and UTS namespaces; it dies with its parent (``--die-with-parent``);
 - **limits**: ``cpu_seconds`` of CPU time (RLIMIT_CPU), ``memory_mb`` of address space
@@ -39,7 +43,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO
 
-__all__ = ["TAIL_BYTES", "Contained", "Limits", "bwrap_hint", "contained"]
+__all__ = ["SYSTEM_DIRS", "TAIL_BYTES", "Contained", "Limits", "bwrap_hint", "contained", "handin_files"]
 
 TAIL_BYTES = 64 * 1024
 """How much of the end of a contained command's standard output and error is kept."""
@@ -79,33 +83,70 @@ def bwrap_hint(what: str = "grading") -> str | None:
 
 
 def _packages() -> list[Path]:
-    """Where ejsgen and ejsrl are imported from, each its package folder's parent (a checkout or
-    site-packages; the package folder itself if that is ``/tmp``): an editable install finds them
-    through a finder of its own, not ``sys.path``."""
+    """The folders ejsgen, its templates and ejsrl are imported from: an editable install finds
+    them through a finder of its own (not ``sys.path``), whose targets must be shown."""
     import ejsrl
 
     import ejsgen
+    import ejsgen.templates
 
+    return [Path(p).resolve() for m in (ejsgen, ejsgen.templates, ejsrl) for p in m.__path__]
+
+
+#: the system's folders a contained command sees (read-only): programs, libraries, settings;
+#: not homes (/root, /home), /work, /srv, /var, /mnt, /opt, ...: a hand-in reads nothing of the
+#: teacher's, nor another student's
+SYSTEM_DIRS = ("/usr", "/bin", "/sbin", "/lib", "/lib32", "/lib64", "/libx32", "/etc", "/sys")
+#: inside those, what is hidden all the same (secrets readable by root)
+SECRETS = ("/etc/shadow", "/etc/gshadow", "/etc/shadow-", "/etc/gshadow-", "/etc/ssh", "/etc/sudoers", "/etc/sudoers.d",
+           "/etc/ssl/private")
+
+
+def handin_files(spec: Path) -> list[Path]:
+    """What of a hand-in a contained build may read: its folder when the spec is the only spec
+    in it (a hand-in brings its meshes and data files in a folder of its own), else only the
+    spec file (hand-ins side by side in one folder must not read each other)."""
+    spec = spec.resolve()
+    others = [p for p in spec.parent.glob("*.ejs.y*ml") if p.resolve() != spec]
+    return [spec] if others else [spec.parent]
+
+
+def _python_dirs() -> list[Path]:
+    """This Python's installation (its prefixes, site-packages and ``PYTHONPATH``) and the
+    ejsgen/ejsrl packages, wherever they are (a venv, pyenv under /root, a checkout under /tmp),
+    shown read-only, not the folders around them (the script's folder, a teacher's checkout
+    holding the reference, are not there)."""
+    import site
+
+    entries = [sys.prefix, sys.exec_prefix, sys.base_prefix, *site.getsitepackages(),
+               *os.environ.get("PYTHONPATH", "").split(os.pathsep), *_packages()]
     found: list[Path] = []
-    for module in (ejsgen, ejsrl):
-        folder = Path(module.__file__ or ".").resolve().parent
-        found.append(folder if folder.parent == Path("/tmp").resolve() else folder.parent)
-    return found
-
-
-def _python_under_tmp() -> list[Path]:
-    """This Python's installation, import path and the ejsgen/ejsrl packages where they lie
-    under ``/tmp`` (a venv or a checkout made there), which the sandbox's empty ``/tmp`` would
-    hide: shown read-only."""
-    tmp = Path("/tmp").resolve()
-    found: list[Path] = []
-    for entry in (sys.prefix, sys.exec_prefix, sys.base_prefix, *sys.path, *_packages()):
+    for entry in entries:
         if not entry:
             continue
         path = Path(entry).resolve()
-        if path.is_dir() and path != tmp and tmp in path.parents and not any(f == path or f in path.parents for f in found):
+        if path.is_dir() and path != Path("/") and not any(f == path or f in path.parents for f in found):
+            found = [f for f in found if path not in f.parents]
             found.append(path)
     return found
+
+
+def _mounts(shown: Sequence[Path]) -> list[str]:
+    """bwrap's arguments for the system's folders, the secrets hidden in them, and ``shown``."""
+    args: list[str] = []
+    for folder in SYSTEM_DIRS:
+        if os.path.islink(folder):  # Debian's /bin -> usr/bin
+            args += ["--symlink", os.readlink(folder), folder]
+        elif os.path.isdir(folder):
+            args += ["--ro-bind", folder, folder]
+    for secret in SECRETS:
+        if os.path.isdir(secret) and not os.path.islink(secret):
+            args += ["--tmpfs", secret, "--remount-ro", secret]
+        elif os.path.lexists(secret):
+            args += ["--ro-bind", "/dev/null", secret]
+    for path in shown:
+        args += ["--ro-bind", str(path), str(path)]
+    return args
 
 
 def _command(cmd: Sequence[str], writable: Path, readable: Sequence[Path], limits: Limits, cwd: Path | None) -> list[str]:
@@ -116,12 +157,12 @@ def _command(cmd: Sequence[str], writable: Path, readable: Sequence[Path], limit
     cpu = max(1, int(limits.cpu_seconds))
     memory = int(limits.memory_mb) * 1024 * 1024
     fsize = int(limits.file_mb) * 1024 * 1024
-    shown = [p.resolve() for p in [*readable, *_python_under_tmp()]]
+    shown = [p.resolve() for p in [*_python_dirs(), *readable]]
     return [
         prlimit, f"--cpu={cpu}:{cpu + 2}", f"--as={memory}:{memory}", f"--fsize={fsize}:{fsize}", "--core=0:0", "--",
-        bwrap, "--ro-bind", "/", "/", "--dev", "/dev", "--proc", "/proc", "--size", str(fsize), "--tmpfs", "/tmp",
-        *[arg for r in shown for arg in ("--ro-bind", str(r), str(r))],
-        "--bind", str(writable), str(writable), "--unshare-all", "--die-with-parent", "--new-session",
+        bwrap, *_mounts(shown), "--dev", "/dev", "--proc", "/proc", "--size", str(fsize), "--tmpfs", "/tmp",
+        *[arg for r in shown if Path("/tmp") in r.parents for arg in ("--ro-bind", str(r), str(r))],
+        "--remount-ro", "/", "--bind", str(writable), str(writable), "--unshare-all", "--die-with-parent", "--new-session",
         "--chdir", str((cwd or writable).resolve()), "--", *cmd,
     ]
 

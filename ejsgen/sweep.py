@@ -75,7 +75,7 @@ def _sweep_contained(args: argparse.Namespace) -> int:
     import sys
     import threading
 
-    from ejsgen._sandbox import Contained, Limits, bwrap_hint, contained
+    from ejsgen._sandbox import Contained, Limits, bwrap_hint, contained, handin_files
     from ejsrl.app.sweep import sweep_main
     from ejsrl.app.sweep_sandbox import ContainedRuns, SandboxError
     from ejsrl.app.sweep_worker import app_ref
@@ -104,7 +104,7 @@ def _sweep_contained(args: argparse.Namespace) -> int:
         work = Path(tmp) / "build"
         work.mkdir()
         folder = work / "app"
-        built = contain([sys.executable, "-P", "-m", "ejsgen", "build", str(spec), "-o", str(folder)], work, [spec.parent], None)
+        built = contain([sys.executable, "-P", "-m", "ejsgen", "build", str(spec), "-o", str(folder)], work, handin_files(spec), None)
         if built.status != 0 or built.reason:  # the build's own FILE:LINE:COL message, or the limit it hit
             print(f"error: {args.spec}: the build {built.reason}" if built.reason else built.stderr.strip() or f"error: {args.spec}: "
                   f"the build ended with status {built.status}", file=err)

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ejsgen._sandbox import Limits, bwrap_hint, contained
+from ejsgen._sandbox import Limits, bwrap_hint, contained, handin_files
 
 HERE = Path(__file__).resolve().parent
 
@@ -60,7 +60,7 @@ def run_handin(spec: Path, work: Path, reference, args: argparse.Namespace, limi
     """
     work.mkdir(parents=True)
     built = contained([sys.executable, "-P", "-m", "ejsgen", "build", str(spec.resolve()), "-o", str(work / "app")], writable=work,
-                       readable=[spec.parent], limits=limits)
+                       readable=handin_files(spec), limits=limits)
     if built.status != 0:
         why = built.reason or next((line for line in built.stderr.splitlines() if "error" in line), built.stderr.strip()[-300:])
         return Grade(spec.name, False, detail=f"does not build: {why}"), {}
