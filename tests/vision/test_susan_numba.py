@@ -84,6 +84,21 @@ def test_the_same_on_a_parameter_grid(kw, monkeypatch):
         _same_bits(rb, ra)
 
 
+@pytest.mark.parametrize("shape", [(9, 9), (12, 13), (40, 71), (33, 72), (50, 73), (64, 136), (260, 300), (300, 263)])
+def test_the_same_on_images_of_any_width(shape, monkeypatch):
+    """The bound works on rows padded to a whole number of 64 pixels (its SIMD width): images whose
+    rows are shorter than that, just one pixel over or under it, and large enough to be split into
+    bands on two threads give the NumPy path's corners and responses, bit for bit."""
+    H, W = shape
+    big = cv2.GaussianBlur(np.random.default_rng(H * W).integers(0, 256, (4 * H, 4 * W), dtype=np.uint8), (0, 0), 6.0)
+    img = cv2.normalize(cv2.resize(big, (W, H), interpolation=cv2.INTER_AREA), None, 0, 255, cv2.NORM_MINMAX)
+    (pa, ra), (pb, rb) = _both(img, monkeypatch)
+    if H * W > 3000:
+        assert len(pa) > 0
+    _same_bits(pb, pa)
+    _same_bits(rb, ra)
+
+
 def test_the_same_when_numbas_sums_over_the_mask_are_not_opencvs(monkeypatch):
     """Where numba's float32 sums over the mask would differ from OpenCV's ``filter2D`` (checked once
     at load, ``_disc_sums_match``), the kernels take the in-between pixels' side estimate from
