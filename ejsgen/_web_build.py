@@ -235,12 +235,28 @@ def _bundle(files: dict[str, Path]) -> bytes:
     return struct.pack("<I", len(index)) + index + b"".join(b for _rel, b in blobs)
 
 
+def _software_messages() -> list[dict]:
+    """What bridge.js puts in front of the lab's first batch when the browser renders WebGL in
+    software (SwiftShader, llvmpipe: no GPU): viser's environment map turned off. Prefiltering
+    it for the standard material is most of the CPU a start costs there (about 5 of 8 s on the
+    project's machine); the scene is lit by viser's default lights alone. Made from viser's own
+    message class: a viser whose message changed fails here, at build time, not in a page."""
+    from viser import _messages as m
+
+    off = m.EnvironmentMapMessage(hdri_data=None, background=False, background_blurriness=0.0, background_intensity=1.0,
+                                  background_wxyz=(1.0, 0.0, 0.0, 0.0), environment_intensity=1.0,
+                                  environment_wxyz=(1.0, 0.0, 0.0, 0.0))
+    return [off.as_serializable_dict()]
+
+
 def _index_html(title: str) -> str:
-    """viser's client page with the bridge in front of its code and the lab's title."""
+    """viser's client page with the software-WebGL messages and the bridge in front of its
+    code and the lab's title."""
     import viser
 
     page = (Path(viser.__file__).resolve().parent / "client" / "build" / "index.html").read_text(encoding="utf-8")
-    tag = '<script src="ejsweb/bridge.js"></script>\n'
+    software = json.dumps(_software_messages(), separators=(",", ":")).replace("</", "<\\/")
+    tag = f'<script>window.ejsWebSoftware = {software};</script>\n    <script src="ejsweb/bridge.js"></script>\n'
     at = page.index("<head>") + len("<head>")
     page = page[:at] + "\n    " + tag + page[at:]
     return page.replace("<title>Viser</title>", f"<title>{html.escape(title)}</title>", 1)

@@ -43,7 +43,14 @@
   mark("bridge");
 
   // -- what the page shows while the lab loads -------------------------------------------------
+  // viser's client is hidden (its stock panel: a server field, "Connected", the scene tree)
+  // until the lab's own panel is drawn; the lab's title and what the start does now show
+  // instead. Text only: nothing here is read as HTML.
+  const hiding = document.createElement("style");
+  hiding.textContent = "#root{visibility:hidden}";
+  (document.head || document.documentElement).appendChild(hiding);
   let overlay = null;
+  let phase = null;
   const progress = {};
   let stage = "";
   function show(text, failed) {
@@ -51,18 +58,30 @@
       overlay = document.createElement("div");
       overlay.id = "ejsweb-loading";
       overlay.setAttribute("role", "status");
-      overlay.style.cssText = "position:fixed;left:50%;top:40%;transform:translate(-50%,-50%);z-index:10000;" +
-        "font:15px system-ui,sans-serif;padding:14px 20px;border-radius:8px;background:rgba(255,255,255,.95);" +
-        "box-shadow:0 2px 12px rgba(0,0,0,.2);color:#222;max-width:80vw;white-space:pre-wrap";
+      overlay.style.cssText = "position:fixed;inset:0;z-index:10000;display:flex;flex-direction:column;" +
+        "align-items:center;justify-content:center;gap:12px;background:#fff;color:#222;" +
+        "font:15px system-ui,sans-serif;text-align:center;padding:24px";
+      const title = document.createElement("div");
+      title.style.cssText = "font-size:22px;font-weight:600";
+      title.textContent = document.title || "";
+      phase = document.createElement("div");
+      phase.style.cssText = "white-space:pre-wrap;max-width:80vw;color:#555";
+      overlay.append(title, phase);
       (document.body || document.documentElement).appendChild(overlay);
+      if (!title.textContent) document.addEventListener("DOMContentLoaded", () => { title.textContent = document.title; });
     }
-    overlay.textContent = text; // text only: nothing here is read as HTML
-    if (failed) overlay.style.color = "#a00";
+    phase.textContent = text;
+    if (failed) phase.style.color = "#a00";
   }
-  function hide() {
+  /** The lab's panel is drawn: viser's client shows, the loading view goes. */
+  function reveal() {
+    if (api.failed) return;
+    mark("panelDrawn");
+    hiding.remove();
     if (overlay !== null) overlay.remove();
     overlay = null;
   }
+  show("Starting…");
   const mb = (n) => (n / 1e6).toFixed(1);
 
   // The client is told it is connected as soon as it asks (a websocket that opened), so what
@@ -81,6 +100,24 @@
     }
   }
 
+  // Whether this browser renders WebGL in software (no GPU), by viser's own test of the
+  // renderer's name. There the lab's first batch turns viser's environment map off
+  // (window.ejsWebSoftware, made by the build from viser's message class): prefiltering it takes
+  // seconds of CPU there, most of what a start costs. With a GPU the page looks as served.
+  function softwareWebGL() {
+    try {
+      const gl = document.createElement("canvas").getContext("webgl2");
+      if (!gl) return false;
+      const info = gl.getExtension("WEBGL_debug_renderer_info");
+      const renderer = String(gl.getParameter(info ? info.UNMASKED_RENDERER_WEBGL : gl.RENDERER)).toLowerCase();
+      const lose = gl.getExtension("WEBGL_lose_context");
+      if (lose) lose.loseContext();
+      return /swiftshader|llvmpipe|softpipe|software/.test(renderer);
+    } catch (e) {
+      return false;
+    }
+  }
+
   function startPython(served) {
     python = new RealWorker(new URL(served ? "worker.js?sw=1" : "worker.js", base), { type: "module" });
     const t0 = performance.now();
@@ -92,8 +129,14 @@
         if (!api.timing.panel && msg.messages.some((m) => m.type === "GuiButtonMessage")) {
           api.timing.panel = performance.now() - t0; // the panel's controls reach the client
         }
+        if (api.software === undefined) {
+          api.software = softwareWebGL();
+          const off = window.ejsWebSoftware;
+          if (api.software && Array.isArray(off)) msg.messages.unshift(...off);
+        }
         if (socket !== null) socket.emit({ type: "message_batch", messages: msg.messages });
-        hide();
+        if (waitingFor === undefined) waitingFor = labelOf(msg.messages);
+        if (waitingFor !== undefined) drawn();
       } else if (msg.type === "mark") {
         mark(msg.name, msg.at);
       } else if (msg.type === "progress") {
@@ -130,6 +173,22 @@
       show("The lab could not start: " + api.failed + "\n(this page needs a recent Chrome, Edge or Firefox)", true);
       rejectReady(new Error(api.failed));
     };
+  }
+
+  // The panel is drawn once the first labelled control of the lab's first batch is in the page
+  // (viser's client renders a batch on its next frames).
+  let waitingFor;
+  function labelOf(messages) {
+    for (const m of messages) {
+      const label = m.props && m.props.label;
+      if (typeof label === "string" && label.trim()) return label.trim();
+    }
+    return null;
+  }
+  function drawn() {
+    const root = document.getElementById("root");
+    if (waitingFor === null || (root !== null && root.textContent.includes(waitingFor))) reveal();
+    else requestAnimationFrame(drawn);
   }
 
   /** Stands in for viser's websocket worker. */
@@ -202,15 +261,4 @@
     startPython(served);
   })();
   document.addEventListener("DOMContentLoaded", () => mark("domContentLoaded"));
-  // the panel drawn: viser's Play button in the page (what a student waits for)
-  const drawn = new MutationObserver(() => {
-    for (const b of document.querySelectorAll("button")) {
-      if (b.textContent.trim() === "Play") {
-        mark("panelDrawn");
-        drawn.disconnect();
-        return;
-      }
-    }
-  });
-  drawn.observe(document.documentElement, { childList: true, subtree: true });
 })();
