@@ -18,7 +18,10 @@ import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
+
+from ejsgen.errors import EjsError
 
 __all__ = ["traced_modules", "stdlib_imports", "HIDDEN", "TraceError"]
 
@@ -113,26 +116,73 @@ print("\x1e" + json.dumps(sorted(sys.modules)))
 """
 
 
-class TraceError(RuntimeError):
-    """The lab could not be run natively to find what it imports."""
+class TraceError(EjsError):
+    """The lab could not be run natively to find what it imports (printed as is: ``error: ...``)."""
+
+
+#: seconds the traced run's ``init:`` may go on after it was said to be slow (its spec line
+#: printed): an endless ``init:`` ends the build with that line instead of holding it
+#: (``EJSGEN_WEB_INIT_GRACE`` overrides)
+INIT_GRACE = float(os.environ.get("EJSGEN_WEB_INIT_GRACE", "30"))
+_SLOW = "warning: init: has been running"
 
 
 def traced_modules(lab_dir: Path, io_dir: Path, there: list[str], *, timeout: float = 300.0) -> list[str]:
     """The names of the modules the lab in ``lab_dir`` (a built app folder with ``app.py``)
     loads when it runs as a web page; ``io_dir``: a scratch folder for its files; ``there``:
     the top-level packages the browser's Python has besides the standard library (the zip's
-    and the lab's): any other is made unimportable for the run, as it is in the browser."""
+    and the lab's): any other is made unimportable for the run, as it is in the browser.
+
+    An ``init:`` that runs on is said at once, with its spec line (the runtime's slow-block
+    warning, echoed), and ends the build :data:`INIT_GRACE` seconds later with a
+    :class:`TraceError` at that line; so does a run past ``timeout`` seconds."""
     io_dir.mkdir(parents=True, exist_ok=True)
     env = dict(os.environ, EJSWEB_HIDDEN=json.dumps(HIDDEN), EJSWEB_THERE=json.dumps(sorted(there)),
                EJSWEB_LAB=str(lab_dir), EJSWEB_IO=str(io_dir),
                PYTHONDONTWRITEBYTECODE="1")
-    done = subprocess.run([sys.executable, "-c", _SCRIPT], env=env, capture_output=True, text=True, timeout=timeout,
-                          cwd=str(io_dir), check=False)
-    for line in reversed(done.stdout.split("\n")):  # not splitlines(): it splits at \x1e too
+    out_path, err_path = io_dir / "trace.out", io_dir / "trace.err"
+    with open(out_path, "w+b") as out, open(err_path, "w+b") as err:
+        proc = subprocess.Popen([sys.executable, "-c", _SCRIPT], env=env, stdout=out, stderr=err, cwd=str(io_dir))
+        ended, slow = _watch(proc, err_path, timeout)
+        stdout, stderr = out_path.read_text(errors="replace"), err_path.read_text(errors="replace")
+    if not ended and slow is not None:
+        where, _, _ = slow.partition(": warning:")
+        place = f"{where}: " if ".ejs." in where else ""
+        raise TraceError(f"{place}error: init: did not end within {INIT_GRACE:g} s after it was said to be slow "
+                         "(an endless loop?), so the build could not run the lab to find what it imports")
+    if not ended:
+        raise TraceError(f"error: running the lab to find what it imports took longer than {timeout:g} s and was stopped")
+    for line in reversed(stdout.split("\n")):  # not splitlines(): it splits at \x1e too
         if line.startswith("\x1e"):
             loaded = list(json.loads(line[1:]))
             return loaded + sorted(stdlib_imports(lab_dir, loaded, set(there) & set(sys.stdlib_module_names)) - set(loaded))
-    raise TraceError(f"running the lab to find its imports failed:\n{done.stderr[-3000:]}")
+    raise TraceError(f"error: running the lab to find what it imports failed:\n{stderr[-3000:]}")
+
+
+def _watch(proc: subprocess.Popen[bytes], err_path: Path, timeout: float) -> tuple[bool, str | None]:
+    """Wait for the traced run; echo its slow-``init:`` warning when it comes; kill it
+    :data:`INIT_GRACE` s after that or past ``timeout``. Returns whether it ended by itself,
+    and the warning (None if there was none)."""
+    start, said, line = time.monotonic(), None, None
+    try:
+        while proc.poll() is None:
+            now = time.monotonic()
+            if said is None:
+                text = err_path.read_text(errors="replace")
+                if _SLOW in text:
+                    line = next(x for x in text.splitlines() if _SLOW in x)
+                    print(line, file=sys.stderr, flush=True)
+                    said = now
+            if (said is not None and now - said > INIT_GRACE) or now - start > timeout:
+                proc.kill()
+                proc.wait()
+                return False, line
+            time.sleep(0.2)
+    except BaseException:  # Ctrl+C: the traced run goes too
+        proc.kill()
+        proc.wait()
+        raise
+    return True, line
 
 
 #: the top-level packages of a lab's own bundle (not the standard library's)

@@ -129,3 +129,54 @@ def test_a_slow_page_says_the_browser_is_busy_not_a_server() -> None:
                                  " · *running at 50% of real time (the browser is busy)*"]
     assert "server is busy" not in page
     assert served.splitlines()[0] == " · *running at 82% speed (the server is busy)*"
+
+
+ENDLESS = """\
+ejs: 1
+title: Endless
+model:
+  variables:
+    t: 0.0
+    dt: 0.1
+    x: 1.0
+    n: 0
+  init: |
+    x = 1.0
+    while x > 0:
+        n = n + 1
+  evolution:
+    - ode:
+        equations:
+          x: -x
+view: []
+"""
+
+
+def test_an_endless_init_ends_the_web_build_at_its_spec_line(tmp_path) -> None:
+    """The web build runs the lab natively to learn what it imports: an ``init:`` that never
+    ends is said with its line at once and ends the build (it was silent for 300 s, then a
+    raw TimeoutExpired traceback), leaving no site behind."""
+    import os
+    import subprocess
+    import sys
+    import time
+
+    spec = tmp_path / "endless.ejs.yaml"
+    spec.write_text(ENDLESS, encoding="utf-8")
+    out = tmp_path / "site"
+    env = dict(os.environ, EJSRL_SLOW_SECONDS="1", EJSGEN_WEB_INIT_GRACE="2")
+    t0 = time.monotonic()
+    done = subprocess.run([sys.executable, "-P", "-m", "ejsgen", "build", str(spec), "--web", "-o", str(out)],
+                          capture_output=True, text=True, env=env, timeout=600, check=False)
+    took = time.monotonic() - t0
+    assert done.returncode == 1, done.stderr
+    assert "Traceback" not in done.stderr, done.stderr
+    lines = done.stderr.strip().splitlines()
+    warned = next(x for x in lines if "warning: init: has been running" in x)
+    failed = lines[-1]
+    for line in (warned, failed):
+        assert line.split(":")[0].endswith("endless.ejs.yaml"), line
+        assert ENDLESS.splitlines()[int(line.split(":")[1]) - 1].strip() in ("while x > 0:", "n = n + 1"), line
+    assert "error: init: did not end within 2 s" in failed, failed
+    assert not out.exists() or not any(out.iterdir())
+    assert took < 300, took
