@@ -74,8 +74,9 @@ def candidates(gray, lut, mdx, mdy, T, m, L_max, g100, below, y0, y1, idx, rv, v
     # 56 to the scalar remainder loop of each offset, which took 5 times the SIMD loop's time
     Wv = (W - 2 * b + 63) // 64 * 64
     ya, yb = max(max(y0, b) - b, 0), min(min(y1, H - b) + b, H)
-    wide = np.zeros((max(yb - ya, 0), Wv + 2 * b), np.uint8)
+    wide = np.empty((max(yb - ya, 0), Wv + 2 * b), np.uint8)
     wide[:, :W] = gray[ya:yb]
+    wide[:, W:] = 0  # (read by the lanes past the row's end, whose sums are never read)
     acc = np.zeros(Wv, np.uint8)
     xs = np.empty(W, np.int64)
     Tu, mu, sat = np.uint8(T), np.uint8(m), np.uint8(255)
