@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ejsgen._assets import ASSET_FUNCTION, asset_call, opens_an_asset, unlisted_file
-from ejsgen._code_bounds import MAX_CODE_DEPTH, too_deep
+from ejsgen._code_bounds import MAX_CODE_DEPTH, heaviest_statement, too_deep
 from ejsgen._power import power_text
 from ejsgen._suggest import did_you_mean, module_hint
 from ejsgen.errors import CodeSyntaxError, Location, SpecError, UnknownNameError
@@ -126,7 +126,8 @@ def parse_snippet(snippet: Snippet) -> ast.AST:
         tree = None
     deep = too_deep(tree) if tree is not None else None
     if tree is None or deep is not None:
-        where = snippet.location(getattr(deep, "lineno", 1), getattr(deep, "col_offset", 0))
+        line, col = heaviest_statement(snippet.text) if tree is None else (getattr(deep, "lineno", 1), getattr(deep, "col_offset", 0))
+        where = snippet.location(line, col)
         raise SpecError(where, f"the code in {snippet.what} nests more than {MAX_CODE_DEPTH} levels deep", "split it into steps with names") from None
     if snippet.mode == "eval":
         for node in ast.walk(tree):

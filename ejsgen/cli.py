@@ -70,6 +70,7 @@ simulation:
 
 def load_plan(spec_path: str | Path):  # -> AppPlan
     """Load, validate and compile a spec (raises ``EjsError`` subclasses for the user)."""
+    from ejsgen._lab_needs import uses_opencv
     from ejsgen.compiler import compile_spec
     from ejsgen.validate import validate
     from ejsgen.yamlload import load_yaml
@@ -77,7 +78,9 @@ def load_plan(spec_path: str | Path):  # -> AppPlan
     path = Path(spec_path)
     doc = load_yaml(path, display_name=str(spec_path))
     checked = validate(doc)
-    return compile_spec(checked, path.resolve())
+    plan = compile_spec(checked, path.resolve())
+    plan.uses_opencv = uses_opencv(checked, path.resolve())  # its requirements list OpenCV only then
+    return plan
 
 
 def default_out_dir(spec_path: Path) -> Path:
@@ -164,13 +167,14 @@ class _AppRunner(SignalScope):
     """Runs the built app as a child process and stops it on SIGINT/SIGTERM.
 
     The child has its own process group, so a Ctrl+C in the terminal reaches only this
-    process. On the first signal the child gets SIGTERM, whichever signal came: the app
-    handles it as a clean stop (its server stopped, or its rows written), and while the
-    child is still starting up (before it handles signals) SIGTERM ends it silently, where
-    a SIGINT would print Python's KeyboardInterrupt traceback. The child is then waited
-    for; a second signal, or a child still running after ``grace`` seconds, kills it. A
-    signal before the child starts raises :class:`_Stopped`, so the temporary folder is
-    removed on the way out.
+    process. On the first signal the child gets the same signal once it handles stops (it
+    catches SIGTERM: :func:`_catches`): the app stops cleanly (its server stopped, or its
+    rows written) and prints the one line naming that signal. While the child is still
+    starting up it gets SIGTERM, which ends it silently, where a SIGINT would print
+    Python's KeyboardInterrupt traceback, and this process prints the line. The child is
+    then waited for; a second signal, or a child still running after ``grace`` seconds,
+    kills it. A signal before the child starts raises :class:`_Stopped`, so the temporary
+    folder is removed on the way out.
     """
 
     def __init__(self, grace: float = 10.0) -> None:
@@ -185,7 +189,7 @@ class _AppRunner(SignalScope):
             self.signum = signum
             if proc is None:
                 raise _Stopped(signum)
-            _signal_child(proc, signal.SIGTERM)
+            _signal_child(proc, signum if _catches(proc.pid, signal.SIGTERM) else signal.SIGTERM)
         elif proc is not None:
             _signal_child(proc, signal.SIGKILL)
 
@@ -203,9 +207,23 @@ class _AppRunner(SignalScope):
             except subprocess.TimeoutExpired:
                 _signal_child(proc, signal.SIGKILL)
         if self.signum is not None:
-            print(f"ejsgen run: stopped by {signal.Signals(self.signum).name}", file=sys.stderr, flush=True)
+            if code != 128 + int(self.signum):  # the app did not stop on it, and report it, itself
+                print(f"ejsgen run: stopped by {signal.Signals(self.signum).name}", file=sys.stderr, flush=True)
             return 128 + int(self.signum)
         return 128 - code if code < 0 else code
+
+
+def _catches(pid: int, signum: int) -> bool:
+    """Whether process ``pid`` has a handler of its own for ``signum`` (Linux's
+    ``/proc/PID/status``, ``SigCgt``); False where that cannot be read."""
+    try:
+        with open(f"/proc/{pid}/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("SigCgt:"):
+                    return bool(int(line.split()[1], 16) >> (signum - 1) & 1)
+    except (OSError, ValueError):
+        pass
+    return False
 
 
 def _signal_child(proc: subprocess.Popen[bytes], signum: int) -> None:

@@ -28,9 +28,14 @@ from ejsgen.errors import EjsError, SpecError
 from ejsgen.emit import WIDTH, call_lines, flat, meta_call, method_lines, program_call, runtime_defaults, sim_call, used_names, view_lines
 from ejsgen.plan import AppPlan, Line
 
-__all__ = ["render_app", "write_app", "REQUIREMENTS", "runtime_dir"]
+__all__ = ["render_app", "write_app", "REQUIREMENTS", "OPENCV", "SERVE_ONLY", "runtime_dir"]
 
-REQUIREMENTS = ["numpy>=1.26", "scipy>=1.11", "viser>=1.1,<1.2", "trimesh>=4.0", "opencv-python-headless>=4.8"]
+#: what every lab needs (viser serves it; trimesh makes its 3D shapes)
+REQUIREMENTS = ["numpy>=1.26", "scipy>=1.11", "viser>=1.1,<1.2", "trimesh>=4.0"]
+#: what only a lab that uses OpenCV needs (``AppPlan.uses_opencv``: cameras' images, vision functions, image files)
+OPENCV = "opencv-python-headless>=4.8"
+#: what only serving a lab imports: ``--headless``, ``--sweep`` and ``--help`` run without them (``ejsrl._needs``)
+SERVE_ONLY = ["viser"]
 _MARK = "  #@@ejsloc:"
 _MARK_RE = re.compile(r"  #@@ejsloc:(\d+)$")
 _TABLE = "@@SPEC_LINES@@"  # where the class's SPEC_LINES go, once the lines below are numbered
@@ -297,8 +302,10 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
         _check_urdf_parser(plan)
     fmi = ["fmpy>=0.3.20"] if "from ejsrl.fmi import" in app_text else []  # the spec's fmus: run through FMPy
     plant = ["paho-mqtt>=2.0"] if "from ejsrl.app._plant_link import" in app_text else []  # the spec's plant: over MQTT
-    reqs = env.get_template("requirements.txt.j2").render(requirements=REQUIREMENTS + urdf + fmi + plant, fast=fast)
-    app_text += _script_metadata(REQUIREMENTS + urdf + fmi + plant)  # at the end: app.py's line numbers stay
+    opencv = [OPENCV] if plan.uses_opencv else []
+    requirements = REQUIREMENTS + opencv + urdf + fmi + plant
+    reqs = env.get_template("requirements.txt.j2").render(requirements=requirements, fast=fast)
+    app_text += _script_metadata(requirements)  # at the end: app.py's line numbers stay
     out_dir = out_dir.resolve()
     out_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", dir=out_dir.parent))
@@ -322,12 +329,17 @@ def write_app(plan: AppPlan, out_dir: Path, *, bundle: bool = False) -> list[Pat
 
 
 def _script_metadata(requirements: list[str]) -> str:
-    """Inline script metadata (PEP 723): ``uv run app.py`` and ``pipx run app.py`` install these."""
+    """Inline script metadata (PEP 723): ``uv run app.py`` and ``pipx run app.py`` install these
+    (with the ``ejsrl`` folder beside app.py); ``[tool.ejsrl] serve-only`` names those that
+    ``--headless``, ``--sweep`` and ``--help`` do not need (``ejsrl._needs`` reads both)."""
     deps = "".join(f'#     "{r}",\n' for r in requirements)
+    serve_only = ", ".join(f'"{name}"' for name in SERVE_ONLY)
     return (
         "\n\n# The packages this app needs, as inline script metadata (PEP 723): `uv run app.py` or\n"
-        "# `pipx run app.py` installs them and runs it; requirements.txt lists the same for pip.\n"
-        f'# /// script\n# requires-python = ">=3.11"\n# dependencies = [\n{deps}# ]\n# ///\n'
+        "# `pipx run app.py` installs them and runs it (the ejsrl folder beside app.py is the runtime);\n"
+        "# requirements.txt lists the same for pip.\n"
+        f'# /// script\n# requires-python = ">=3.11"\n# dependencies = [\n{deps}# ]\n'
+        f"# [tool.ejsrl]\n# serve-only = [{serve_only}]\n# ///\n"
     )
 
 

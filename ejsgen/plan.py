@@ -193,6 +193,8 @@ class AppPlan:
     var_plans: list[Variable] = field(default_factory=list)
     pages: list[OdePlan | Call] = field(default_factory=list)
     programs: list[ProgramPlan] = field(default_factory=list)
+    #: the lab uses OpenCV (its requirements list it); ``ejsgen.cli.load_plan`` decides from the spec
+    uses_opencv: bool = True
 
     @property
     def view_lines(self) -> list[str]:

@@ -5,10 +5,14 @@ A generated ``app.py`` ends with its inline script metadata (PEP 723)::
     # /// script
     # requires-python = ">=3.11"
     # dependencies = ["numpy>=1.26", "viser>=1.1,<1.2", ...]
+    # [tool.ejsrl]
+    # serve-only = ["viser"]
     # ///
 
 so ``uv run app.py`` or ``pipx run app.py`` install them and run it on a machine with only
-Python. Run with plain ``python app.py`` (or a ``.pyz``) where some are missing, the app
+Python (the ``ejsrl`` folder, this runtime, stays beside app.py: it is not on PyPI). Only
+the lab's own packages are listed (OpenCV only for a lab that uses it), and ``--headless``,
+``--sweep`` and ``--help`` do not demand the ``serve-only`` ones. Run with plain ``python app.py`` (or a ``.pyz``) where some are missing, the app
 used to die with ``ModuleNotFoundError: No module named 'numpy'``; ``require_packages``
 (called by ``import ejsrl``, with the standard library only, before anything imports NumPy)
 reads that list from the app's own file and, when a package is missing, prints which and the command, and exits 1.
@@ -22,8 +26,9 @@ import shlex
 import sys
 import zipfile
 from pathlib import Path
+from typing import Any
 
-__all__ = ["require_packages", "dependencies_of", "missing", "check_main"]
+__all__ = ["require_packages", "dependencies_of", "serve_only_of", "serving", "missing", "check_main"]
 
 _BLOCK = re.compile(r"(?m)^# /// script$\s(?P<content>(^#(| .*)$\s)+)^# ///$")
 _NAME = re.compile(r"^\s*([A-Za-z0-9][A-Za-z0-9._-]*)")
@@ -48,28 +53,51 @@ def _source(app_file: str) -> str | None:
     return None
 
 
-def dependencies_of(text: str) -> list[str]:
-    """The ``dependencies`` of a script's PEP 723 block (``[]`` if it has none)."""
+def _metadata(text: str) -> dict[str, Any]:
+    """The TOML of a script's PEP 723 block (``{}`` if it has none, or not valid TOML)."""
     import tomllib
 
     m = _BLOCK.search(text)
     if m is None:
-        return []
+        return {}
     toml = "".join(line[2:] if line.startswith("# ") else line[1:] for line in m.group("content").splitlines(keepends=True))
     try:
-        return [str(d) for d in tomllib.loads(toml).get("dependencies", [])]
+        return tomllib.loads(toml)
     except tomllib.TOMLDecodeError:
-        return []
+        return {}
+
+
+def dependencies_of(text: str) -> list[str]:
+    """The ``dependencies`` of a script's PEP 723 block (``[]`` if it has none)."""
+    return [str(d) for d in _metadata(text).get("dependencies", [])]
+
+
+def serve_only_of(text: str) -> set[str]:
+    """The distributions (lower case) that only serving the app imports: the block's
+    ``[tool.ejsrl] serve-only`` list (``--headless``, ``--sweep`` and ``--help`` run without them)."""
+    tool = _metadata(text).get("tool", {}).get("ejsrl", {})
+    return {str(name).lower() for name in tool.get("serve-only", [])} if isinstance(tool, dict) else set()
+
+
+def serving(argv: list[str]) -> bool:
+    """Whether an app's command line (``sys.argv[1:]``) serves its web UI: not ``--headless``,
+    ``--sweep`` nor ``--help``."""
+    return not any(arg in ("--headless", "--sweep", "--help", "-h") for arg in argv)
+
+
+def _name(requirement: str) -> str:
+    """The distribution's name in a requirement (``"viser>=1.1,<1.2"`` -> ``"viser"``; ``""`` if none)."""
+    m = _NAME.match(requirement)
+    return m.group(1) if m else ""
 
 
 def missing(requirements: list[str]) -> list[str]:
     """The requirements whose distribution is not installed (nor its module importable)."""
     out = []
     for req in requirements:
-        m = _NAME.match(req)
-        if not m:
+        name = _name(req)
+        if not name:
             continue
-        name = m.group(1)
         module = _MODULES.get(name.lower(), name.replace("-", "_"))
         try:
             if importlib.util.find_spec(module) is not None:
@@ -85,10 +113,11 @@ def missing(requirements: list[str]) -> list[str]:
     return out
 
 
-def require_packages(app_file: str | None = None) -> None:
+def require_packages(app_file: str | None = None, *, serve: bool = True) -> None:
     """Exit with a message naming the missing packages of ``app_file``'s list (default: the
     calling module's file) and the command that installs them all (nothing happens when none
-    is missing, or when the code has no file, e.g. ``exec`` of its text)."""
+    is missing, or when the code has no file, e.g. ``exec`` of its text). ``serve=False``
+    (headless, a sweep, ``--help``): the list's ``serve-only`` packages may be missing."""
     if app_file is None:
         app_file = sys._getframe(1).f_globals.get("__file__")
     if app_file is None:
@@ -97,10 +126,11 @@ def require_packages(app_file: str | None = None) -> None:
     if text is None:
         return
     requirements = dependencies_of(text)
-    lacking = missing(requirements)
+    skip = set() if serve else serve_only_of(text)
+    lacking = missing([r for r in requirements if _name(r).lower() not in skip])
     if not lacking:
         return
-    names = ", ".join(_NAME.match(r).group(1) for r in lacking)  # type: ignore[union-attr]
+    names = ", ".join(_name(r) for r in lacking)
     folder = Path(app_file).parent
     archive = folder.is_file()  # app.py inside a .pyz
     listed = folder / "requirements.txt"
@@ -129,4 +159,4 @@ def check_main() -> None:
             return
     except Exception:  # noqa: BLE001 - a check that must never stop an import
         return
-    require_packages(str(app))
+    require_packages(str(app), serve=serving(sys.argv[1:]))

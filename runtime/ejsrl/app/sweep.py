@@ -263,7 +263,7 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     print(f"{label}: {len(runs)} run{plural}, {span}, on {ex.describe()}{resuming}", file=err, flush=True)
     progress = None if args.quiet else Progress(len(runs), err)
     if progress is not None:
-        progress.done = len(done)
+        progress.skip(len(done))
     start = time.perf_counter()
     try:
         _, signum = execute(ref, todo, options, ex, progress=progress, on_batch=journal.write)
@@ -295,12 +295,14 @@ def sweep_main(ref: AppRef, app: LoadedApp, args: argparse.Namespace, *, label: 
     ran = tally.runs - len(done)
     rate = ran / seconds if seconds > 0 else math.inf
     stopped = f"stopped by {_signal_name(signum)} after {tally.runs} of {len(runs)} runs; " if signum else ""
-    print(
-        f"{label}: {stopped}{tally.runs} run{'s' if tally.runs != 1 else ''} ({tally.ok} ok, {tally.failed} failed) "
-        f"in {seconds:.2f} s ({rate:.1f} runs/s); wrote {args.out} ({tally.rows} rows) and {summary_file}",
-        file=err,
-        flush=True,
-    )
+    counts = f"{tally.runs} run{'s' if tally.runs != 1 else ''} ({tally.ok} ok, {tally.failed} failed)"
+    if not todo:  # a resumed sweep whose runs had all finished: only the tables were left to write
+        counts = f"nothing to run: all {counts} were already in {parts}"
+    elif done:  # resumed: the rate is of the runs computed now
+        counts += f" in {seconds:.2f} s: {ran} run now ({rate:.1f} runs/s), {len(done)} were already in {parts}"
+    else:
+        counts += f" in {seconds:.2f} s ({rate:.1f} runs/s)"
+    print(f"{label}: {stopped}{counts}; wrote {args.out} ({tally.rows} rows) and {summary_file}", file=err, flush=True)
     if signum:
         print(f"{label}: the finished runs are kept in {parts}; rerun with --resume to run the other {len(runs) - tally.runs}",
               file=err, flush=True)

@@ -70,13 +70,20 @@ class Progress:
         self.clock = clock
         self.start = clock()
         self.done = 0
+        self.skipped = 0  # of ``done``: runs a resumed sweep found finished (not in the rate)
         self.failed = 0
         self._last_draw = -1.0
         self._last_decile = 0
 
+    def skip(self, runs: int) -> None:
+        """Count ``runs`` finished before this start (``--resume``): in the bar, not in the rate."""
+        self.done += runs
+        self.skipped += runs
+        self._last_decile = (10 * self.done) // max(self.total, 1)
+
     def text(self) -> str:
         elapsed = max(self.clock() - self.start, 1e-9)
-        rate = self.done / elapsed
+        rate = (self.done - self.skipped) / elapsed
         left = (self.total - self.done) / rate if rate > 0 else math.inf
         eta = "--:--" if not math.isfinite(left) else _clock_text(left)
         width = 24
