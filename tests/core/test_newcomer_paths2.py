@@ -95,6 +95,10 @@ def test_the_pendulum_lists_no_opencv_and_runs_headless_without_opencv_or_viser(
     assert rows[0] == "t,theta" and len(rows) == 102 and abs(float(rows[-1].split(",")[0]) - 1.0) < 1e-9
     assert subprocess.run([sys.executable, "-S", app, "--help"], env=env, capture_output=True, text=True,
                           timeout=120).returncode == 0
+    out = pendulum.parent / "sweep.csv"
+    sweep = subprocess.run([sys.executable, "-S", app, "--sweep", "--values", "L=1,2", "--duration", "0.1", "--workers", "0", "--quiet",
+                            "--out", str(out)], env=env, capture_output=True, text=True, timeout=120)
+    assert sweep.returncode == 0 and "2 runs (2 ok, 0 failed)" in sweep.stderr, sweep.stderr
     # served, it needs viser: the check names it (and only it) with the command that installs the list
     served = subprocess.run([sys.executable, "-S", app, "--port", "0"], env=env, capture_output=True, text=True, timeout=120)
     assert served.returncode == 1 and "Traceback" not in served.stderr, served.stderr
