@@ -26,7 +26,6 @@ import shlex
 import sys
 import zipfile
 from pathlib import Path
-from typing import Any
 
 __all__ = ["require_packages", "dependencies_of", "serve_only_of", "serving", "missing", "check_main"]
 
@@ -53,7 +52,7 @@ def _source(app_file: str) -> str | None:
     return None
 
 
-def _metadata(text: str) -> dict[str, Any]:
+def _metadata(text: str) -> dict:  # type: ignore[type-arg]  # TOML: values of any type
     """The TOML of a script's PEP 723 block (``{}`` if it has none, or not valid TOML)."""
     import tomllib
 
