@@ -26,8 +26,13 @@ CPU_SHARE = 0.8
 #: play cost more than the eight the bench serves)
 SEND_SECONDS = 0.0004
 #: what a session costs while served over what :func:`measure_frame_cost` measures (which
-#: already includes its view's own work)
-VIEW_FACTOR = 1.0
+#: already includes its view's own work): a heavier frame costs a little more served (the
+#: sessions' threads share caches and the GIL). ``bench/classroom.py`` at load 6-9: visual
+#: servoing 4.4-5.3 ms served for 4.7-5.1 measured; 8 held, 10 at 28 frames/s but 0.94 of real
+#: time, and with 1.0 its default was 10; the six-axis arm 0.68-0.78 for 0.72-0.85 (40 held,
+#: default 44), the pendulum 0.54-0.56 for 0.25 (60 held at load 6.7, 80 at 24.4 frames/s;
+#: default 78)
+VIEW_FACTOR = 1.1
 MAX_DEFAULT_SESSIONS = 100
 #: the places a process offers when its lab could not be measured (the template's ``init:``
 #: did not end in time: see ``ejsrl.app.cli``); ``--max-sessions`` sets them
@@ -43,8 +48,8 @@ def measure_frame_cost(app: Any, frames: int = 60) -> float:
     The view is a real one (:class:`ejsrl.view.viser_view.ViserView`) on a private viser server
     on loopback that no tab connects to (so nothing is serialised or sent: :data:`SEND_SECONDS`
     counts that), stopped after; the process's CPU time (a camera's picture is drawn partly in Mesa's
-    rasteriser threads). ``app`` is played for ``frames`` frames after a few unmeasured
-    ones, back to back as a busy server runs frames, on a clock that moves one frame period a
+    rasteriser threads). ``app`` is played for ``frames`` frames after :data:`WARM_SECONDS` of
+    unmeasured ones, back to back as a busy server runs frames, on a clock that moves one frame period a
     frame (so the rates above, and a real-time lab's steps, are those of the lab's frame rate),
     then reset, its spec code's prints and alerts silenced (``quiet_prints``: a throw-away run,
     not a student's). Returns the mean over the frames: the plots' and images' pictures
@@ -55,8 +60,10 @@ def measure_frame_cost(app: Any, frames: int = 60) -> float:
         return _frame_cost(app, frames)
 
 
-#: frames played before the measured ones (the first builds the plots' and images' pictures)
-WARM_FRAMES = 4
+#: seconds of the lab played before the measured frames: its first frames cost more than a
+#: class's steady frames (the six-axis arm's first second 2.6 ms a frame, its second 1.8, then
+#: 0.75-0.95: ``bench/classroom.py`` measures after two seconds of play, and a class plays for minutes)
+WARM_SECONDS = 2.0
 
 
 class _Beat:
@@ -87,10 +94,11 @@ def _frame_cost(app: Any, frames: int) -> float:
         app.views = [view]
         beat.now += IMAGE_SETTLE  # images are shown (and read) from then on when no page says it is laid out
         app.play()
-        for k in range(WARM_FRAMES + frames):
+        warm = max(4, min(240, round(WARM_SECONDS / period)))
+        for k in range(warm + frames):
             start = time.process_time()  # the process's: Mesa's rasteriser threads draw a camera's picture
             app.frame()
-            if k >= WARM_FRAMES:
+            if k >= warm:
                 costs.append(time.process_time() - start)
             beat.now += period
         view.close()
