@@ -30,9 +30,10 @@ compiled (``_susan_numba``: the same corners, response and sub-pixel positions, 
 3x as fast on one thread, 5x on two, outside the GIL). Outside a served class a call runs them on two
 threads (``set_threads``; a served class sets one, its sessions already sharing the cores). On
 one thread each in CPU time (a served class; bench/vision.py, 2026-11-27, a loaded 2-core
-machine) it takes 1.6x the time of ``cv2.goodFeaturesToTrack`` at the median over 40
-photographs at 640x480 and 5.1x at worst (textures: grass, a forest slope, page, gravel: 8 of
-40 over 3x); idle on two threads it measured 1.1-1.2x and 2.9x. The NumPy path: 4.6x at the
+machine) it takes 1.5x the time of ``cv2.goodFeaturesToTrack`` at the median over 40
+photographs at 640x480 and 4.7-4.8x at worst (textures: page, a forest slope, grass, gravel: 7-8
+of 40 over 3x; 4.7-5.1x before the kernels' last changes, the same corners 10 % faster on
+textures); idle on two threads it measured 1.1-1.2x and 2.9x. The NumPy path: 4.6x at the
 median, 16x at worst. Blurred pictures: ``blur=`` (``_susan_scale``).
 Without numba, this NumPy/OpenCV code. The kernels are compiled (a child process writes
 numba's cache, once per machine) or loaded in the background from the first call, this code
