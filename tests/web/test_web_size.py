@@ -18,9 +18,10 @@ from testkit.web_page import visit
 #: bytes over the wire of a first visit (issue #32's limit)
 FIRST_VISIT_BYTES = 30_000_000
 #: the examples whose build is quick enough to test: the issue's three, the six-axis arm example,
-#: a lab that uses SciPy (linalg and spatial) and one whose 2D panel draws an image (an array)
+#: a lab that uses SciPy (linalg and spatial), one whose 2D panel draws an image (an array) and
+#: the heaviest of all (van der Pol: SciPy's integrate, which loads its optimize, 29.2 MB)
 LABS = ["pendulum", "paper/six_axis_kinematics", "paper/path_planning_434", "six_axis_arm", "mobile_prm_laser",
-        "mobile_dstar_replanning"]
+        "mobile_dstar_replanning", "van_der_pol"]
 
 
 @pytest.mark.browser
