@@ -19,10 +19,11 @@ __all__ = ["decode_images"]
 def decode_images(spec_path: Path, app_dir: Path) -> dict[str, tuple[int, int]]:
     """Replace each 2D image file of the built app in ``app_dir`` (built from ``spec_path``) by
     its decoded copy; ``{file as written in the spec: (bytes of the file, bytes of the copy)}``."""
+    from ejsrl.view._image_file import write_web_copy
+
     from ejsgen._web_check import web_image_files
     from ejsgen.validate import validate
     from ejsgen.yamlload import load_yaml
-    from ejsrl.view._image_file import write_web_copy
 
     checked = validate(load_yaml(Path(spec_path), display_name=str(spec_path)))
     done: dict[str, tuple[int, int]] = {}

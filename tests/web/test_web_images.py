@@ -11,9 +11,9 @@ values written out in NumPy; and the page's canvas at the picture's quadrants.
 from __future__ import annotations
 
 import io
+
 import numpy as np
 import pytest
-
 from testkit.browser import serving
 
 pytestmark = pytest.mark.browser
@@ -99,7 +99,7 @@ def pictures(page, until) -> dict[tuple[int, int], np.ndarray]:
 def test_the_page_shows_the_served_pictures_of_png_jpeg_and_array_images(page, browser_context, lab, until) -> None:
     from PIL import Image
 
-    folder, (site, url, app_dir) = lab
+    folder, (_site, url, app_dir) = lab
     page.goto(url)
     web = pictures(page, until)
     assert page.evaluate("ejsWeb.failed") is None

@@ -12,7 +12,6 @@ from __future__ import annotations
 import zipfile
 
 import pytest
-
 from testkit.web_page import visit
 
 #: bytes over the wire of a first visit (issue #32's limit)
