@@ -3,7 +3,7 @@ long the page takes to a usable panel cold and warm, where that time goes (the s
 as the page marks them), and the cost of a model step in the browser's Python against native
 CPython, side by side.
 
-    python bench/web.py [--lab pendulum six_axis_kinematics path_planning_434] [--rounds 3] [--steps 2000]
+    python bench/web.py [--lab pendulum paper/six_axis_kinematics paper/path_planning_434] [--rounds 3] [--steps 2000]
 
 Builds each example with ``--web``, serves it with ``python -m http.server`` on 127.0.0.1 and
 opens it in headless Chromium (Debian's, the tests' flags). Each round makes a cold visit (the
@@ -59,7 +59,7 @@ def native_model(app_dir: Path):
     spec.loader.exec_module(module)
     from ejsrl.app import App
 
-    return App(module.Model, module.VIEW, meta=module.META).model
+    return App(module.Model, module.VIEW, meta=module.META, base_dir=app_dir).model  # the lab's assets beside app.py
 
 
 #: the start's phases (ejsWeb.marks, ms from navigation) in the order they happen, with what each is
@@ -126,8 +126,8 @@ def start_times(page, url: str, rounds: int) -> dict[str, list[dict[str, float]]
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--lab", nargs="+", default=["pendulum", "six_axis_kinematics", "path_planning_434"],
-                    help="examples under examples/ (default: pendulum six_axis_kinematics path_planning_434)")
+    ap.add_argument("--lab", nargs="+", default=["pendulum", "paper/six_axis_kinematics", "paper/path_planning_434"],
+                    help="examples under examples/ (default: pendulum paper/six_axis_kinematics paper/path_planning_434)")
     ap.add_argument("--steps", type=int, default=2000, help="model steps per measurement")
     ap.add_argument("--rounds", type=int, default=3, help="rounds of a cold and a warm visit, and of step costs")
     args = ap.parse_args()
