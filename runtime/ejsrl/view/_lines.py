@@ -131,11 +131,12 @@ class _Handle:
         current = self.T
         if not np.array_equal(T[:3, 3], current[:3, 3]):
             set_position(self.h, T[:3, 3])
-        if not np.array_equal(T[:3, :3], current[:3, :3]):
-            set_wxyz(self.h, r2q(T))
-        self._T = T
         self.pos = tuple(T[:3, 3].tolist())
-        self.q = tuple(r2q(T).tolist())
+        if not np.array_equal(T[:3, :3], current[:3, :3]):
+            q = r2q(T)
+            set_wxyz(self.h, q)
+            self.q = tuple(q.tolist())
+        self._T = T
 
     def pose_q(self, pos: tuple[float, ...], q: tuple[float, ...]) -> None:
         """Pose the set at ``pos`` (3,) turned by the unit quaternion ``q`` (wxyz), sending what
