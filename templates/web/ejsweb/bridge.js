@@ -4,8 +4,13 @@
 // WsWorkerOutgoing of viser's WebsocketClientWorker.ts) whose other end is the lab's Python,
 // running in worker.js. Every other Worker the client makes is a real one.
 //
-// window.ejsWeb: {ready (a Promise), call(what, args) -> Promise, timing, bytes}: what the
-// tests and bench/web.py use (a headless run's CSV, the model's time, the step cost).
+// It also shows the lab's loading view in place of viser's stock panel, registers sw.js (the
+// lab's Python from Cache Storage on later visits) and, on software WebGL, turns viser's
+// environment map off (see softwareWebGL).
+//
+// window.ejsWeb: {ready (a Promise), call(what, args) -> Promise, timing, marks (the start's
+// phases, ms from navigation), software, bytes}: what the tests and bench/web.py use (a headless
+// run's CSV, the model's time, the step cost, where the start's time goes).
 (() => {
   "use strict";
   const RealWorker = window.Worker;
@@ -135,8 +140,10 @@
           if (api.software && Array.isArray(off)) msg.messages.unshift(...off);
         }
         if (socket !== null) socket.emit({ type: "message_batch", messages: msg.messages });
-        if (waitingFor === undefined) waitingFor = labelOf(msg.messages);
-        if (waitingFor !== undefined) drawn();
+        if (waitingFor === undefined) { // the first batch: watch for the lab's panel (once)
+          waitingFor = labelOf(msg.messages);
+          drawn();
+        }
       } else if (msg.type === "mark") {
         mark(msg.name, msg.at);
       } else if (msg.type === "progress") {

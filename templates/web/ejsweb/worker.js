@@ -3,12 +3,13 @@
 // lab's files at /lab, makes the lab (ejsrl.web.lab.open_lab) and then runs one display frame
 // per tick: the page's messages go in through /io/inbox, viser's batch comes out of /io/outbox
 // (see runtime/ejsrl/web/lab.py). One interpreter lives as long as the page: each call is a
-// "turn" of the reactor's `turn` export.
+// "turn" of the reactor's `turn` export. The downloaded files are kept inflated in the page's
+// Cache Storage (see load); `worker.js?sw=1` (bridge.js) says sw.js serves this worker.
 //
 // Messages from the page (bridge.js): {type: "connect"}, {type: "send", message},
 // {type: "call", id, what, args} (headless CSV, state). To the page: {type: "progress", ...},
 // {type: "stage", text} (what the loader does now), {type: "ready", fps}, {type: "batch", messages}, {type: "reply", id, ok, value},
-// {type: "failed", text}, {type: "log", level, text}.
+// {type: "failed", text}, {type: "log", level, text}, {type: "mark", name, at} (a phase of the start).
 
 import { WASI, File, OpenFile, ConsoleStdout, PreopenDirectory, Directory } from "./vendor/browser_wasi_shim/index.js";
 import { decode, encode } from "./msgpack.js";
