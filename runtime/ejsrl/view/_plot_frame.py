@@ -20,6 +20,7 @@ Automatic ranges (an axis without a fixed ``range``):
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -173,19 +174,26 @@ def axis_ticks(lo: float, hi: float, log: bool, *, long_at: int = 0, length_px: 
     ``long_at``: when a label is longer than this many characters (0: never), the axis is
     ticked more sparsely (about 3 ticks instead of 5), so that x labels do not run together;
     a nonzero ``long_at`` also marks a horizontal (x) axis. ``length_px``: the axis' length
-    on screen (CSS px), which a log axis spaces its labels by.
+    on screen (CSS px), which a log axis spaces its labels by. Remembered for the last
+    few hundred axes: a plot's y axis keeps its range from frame to frame (its readouts and
+    picture are sent 15 times a second by every session of a class).
     """
+    return [[v, s] for v, s in _axis_ticks(float(lo), float(hi), bool(log), int(long_at), length_px)]
+
+
+@functools.lru_cache(maxsize=512)
+def _axis_ticks(lo: float, hi: float, log: bool, long_at: int, length_px: float | None) -> tuple[tuple[float, str], ...]:
     if log:
         horizontal = bool(long_at)
         px = length_px if length_px else PLOT_AREA_PX[0 if horizontal else 1]
         ticks, labels = log_ticks(lo, hi, length_px=px, horizontal=horizontal)
-        return [[v, s] for v, s in zip(ticks, labels)]
+        return tuple(zip(ticks, labels))
     ticks, step = linear_ticks(lo, hi)
     labels = tick_labels(ticks, step)
     if long_at and labels and max(len(s) for s in labels) > long_at:
         ticks, step = linear_ticks(lo, hi, target=3)
         labels = tick_labels(ticks, step)
-    return [[v, s] for v, s in zip(ticks, labels)]
+    return tuple(zip(ticks, labels))
 
 
 def _extent(values: list[np.ndarray], log: bool) -> tuple[float, float] | None:
