@@ -80,7 +80,7 @@
   }
   /** The lab's panel is drawn: viser's client shows, the loading view goes. */
   function reveal() {
-    if (api.failed) return;
+    if (api.failed || "panelDrawn" in api.marks) return;
     mark("panelDrawn");
     hiding.remove();
     if (overlay !== null) overlay.remove();
@@ -143,6 +143,7 @@
         if (waitingFor === undefined) { // the first batch: watch for the lab's panel (once)
           waitingFor = labelOf(msg.messages);
           drawn();
+          setTimeout(reveal, 3000); // a label the client shows otherwise (a closed tab): shown anyway
         }
       } else if (msg.type === "mark") {
         mark(msg.name, msg.at);
@@ -193,6 +194,7 @@
     return null;
   }
   function drawn() {
+    if ("panelDrawn" in api.marks) return;
     const root = document.getElementById("root");
     if (waitingFor === null || (root !== null && root.textContent.includes(waitingFor))) reveal();
     else requestAnimationFrame(drawn);
