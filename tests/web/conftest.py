@@ -42,11 +42,12 @@ def static_server(folder: Path) -> Iterator[str]:
         proc.wait(timeout=10)
 
 
-@pytest.fixture(scope="session")
+@pytest.fixture(scope="module")
 def web_lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator:
     """``web_lab(name)`` -> ``(site, url, app_dir)``: the example built with ``--web`` (once per
-    test session: the page tests and the download-size test share the builds), served, and its
-    normal build (for native runs); ``name`` may also be a spec's path."""
+    module: a module's visits and rewrites of a site stay its own, on a port of its own, so no
+    other module finds it in the browser's caches), served, and its normal build (for native
+    runs); ``name`` may also be a spec's path."""
     from ejsgen._web_build import build_web
     from ejsgen.cli import build
 

@@ -4,7 +4,7 @@ files: the page fetches the ``.gz`` copies and inflates them itself).
 
 Each lab is opened with an empty cache and every response the page and its worker receive,
 bodies and headers, is added up until the panel can be used; the parts are printed (the
-figures of specs/web.md). The builds are shared with the page tests (``web_lab``).
+figures of specs/web.md). Each lab is built once for this module (``web_lab``).
 """
 
 from __future__ import annotations
