@@ -40,11 +40,13 @@ Measured for issue #30 on the project's 2-core machine, shared with other work (
 quiet moment): six-axis arm **40** held (27.5 frames/s, full rate, 0.68 ms of server CPU a
 frame sent; default 44-46), visual servoing **8** held (29 frames/s, 0.98 of real time; 10 ran
 at 28 frames/s and 0.94; default 8), pendulum **60** held (26.8 frames/s, 0.95 of its rate, load
-6.9; default 76-80) and **80 not** (24.4 frames/s minimum, 27.1 median, 0.86 of its rate), the
+6.9; default 76-84) and **80 not** (24.4 frames/s minimum, 27.1 median, 0.86 of its rate), the
 server using 1.16 of the 2 cores at 0.55 ms a frame sent: the machine's other work took the
-rest. Where the pendulum's time goes (``--spy pendulum=80``): the view 56 % (the plot's picture
-35 %: ticks, readouts, JSON; the 3D scene 11 %), viser's event loop 24 %, serialising 10 %,
-steps 4 %. Before/after the issue's cuts (a rod's pieces posed in plain floats, one wake of
+rest; with the plots' ticks remembered, 60 held at load 4.7 (0.48 ms a frame sent) and 80
+ran at 19-20 frames/s at load 5.5-6.2, the server getting 0.91 cores. Where the pendulum's time
+goes (``--spy pendulum=80``, before the ticks were remembered): the view 56 % (the plot's
+picture 35 %: ticks, readouts, JSON; the 3D scene 11 %), viser's event loop 24 %, serialising
+10 %, steps 4 %. Before/after the issue's cuts (a rod's pieces posed in plain floats, one wake of
 viser's loop for many sessions' frames, the cameras' framebuffer clears without the GIL), runs
 interleaved at load 20-24: six-axis arm 1.66-1.72 -> 0.95-1.00 ms of server CPU a frame sent;
 the pendulum's and servoing's differences were within that load's noise (pendulum 0.76-1.07 ->
