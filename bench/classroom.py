@@ -36,14 +36,16 @@ a loaded machine are lower bounds; compare runs at the same speed and a low load
 runtimes, run this script with ``PYTHONPATH`` set to each one's ``runtime`` folder in turn
 (the server inherits it), interleaved.
 
-Measured for issue #30 on the project's 2-core machine, shared with other work (load 6-9, no
-quiet moment): six-axis arm **40** held (27.5 frames/s, full rate, 0.68 ms of server CPU a
+Measured for issue #30 on the project's 2-core machine, shared with other work (load 3.7-9;
+load under 1.5 lasted too short for a run): six-axis arm **40** held (27.5 frames/s, full rate, 0.68 ms of server CPU a
 frame sent; default 44-46), visual servoing **8** held (29 frames/s, 0.98 of real time; 10 ran
 at 28 frames/s and 0.94; default 8), pendulum **60** held (26.8 frames/s, 0.95 of its rate, load
-6.9; default 76-84) and **80 not** (24.4 frames/s minimum, 27.1 median, 0.86 of its rate), the
-server using 1.16 of the 2 cores at 0.55 ms a frame sent: the machine's other work took the
-rest; with the plots' ticks remembered, 60 held at load 4.7 (0.48 ms a frame sent) and 80
-ran at 19-20 frames/s at load 5.5-6.2, the server getting 0.91 cores. Where the pendulum's time
+6.9; default 76-84) and 80 not at first (24.4 frames/s minimum, 27.1 median, 0.86 of its rate),
+the server using 1.16 of the 2 cores at 0.55 ms a frame sent: the machine's other work took the
+rest; with the plots' ticks remembered, 60 held at load 4.7 (0.48 ms a frame sent), and at
+load 3.7 (Python speed 0.22 s) **80 held** (29.6 frames/s minimum, full rate, the server using
+1.17 cores, 0.49 ms a frame sent; 110 ran at 14 frames/s), where runs minutes apart at load 3-6
+gave 18-20 frames/s with the server getting 0.9 cores. Where the pendulum's time
 goes (``--spy pendulum=80``, before the ticks were remembered): the view 56 % (the plot's
 picture 35 %: ticks, readouts, JSON; the 3D scene 11 %), viser's event loop 24 %, serialising
 10 %, steps 4 %. Before/after the issue's cuts (a rod's pieces posed in plain floats, one wake of
