@@ -118,3 +118,22 @@ def test_a_second_visit_takes_the_labs_python_from_the_page_until_the_site_is_re
         manifest_path.write_text(manifest, encoding="utf-8")
         lab_gz.write_bytes(lab_bytes)
         page.close()
+
+
+def test_a_page_opened_as_a_file_says_how_to_serve_it(browser_context, pendulum) -> None:
+    """Double-clicking index.html opens it as a file://, where no browser starts the lab's
+    worker: the page says so and gives the one command that serves it (it showed viser's
+    panel, "Connected" to a file:// address, and nothing else)."""
+    site, _url, _app = pendulum
+    page = browser_context.new_page()
+    try:
+        page.goto((site.out / "index.html").as_uri())
+        view = page.locator("#ejsweb-loading")
+        view.wait_for(state="visible", timeout=90_000)
+        page.wait_for_function("ejsWeb.failed !== null && ejsWeb.failed !== undefined", timeout=90_000)
+        text = view.inner_text()
+        assert "python3 -m http.server" in text and "not as a file" in text, text
+        assert "recent Chrome" not in text, text  # not the misleading 'old browser' reason
+        assert page.locator("#root").evaluate("e => getComputedStyle(e).visibility") == "hidden"
+    finally:
+        page.close()

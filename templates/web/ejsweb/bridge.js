@@ -177,6 +177,7 @@
       }
     };
     python.onerror = (e) => {
+      if (location.protocol === "file:") return; // said already
       api.failed = String(e.message || e);
       show("The lab could not start: " + api.failed + "\n(this page needs a recent Chrome, Edge or Firefox)", true);
       rejectReady(new Error(api.failed));
@@ -269,5 +270,11 @@
     mark(served ? "serviceWorker" : "noServiceWorker");
     startPython(served);
   })();
+  if (location.protocol === "file:") { // a browser runs no module worker from a file: say what to do instead
+    api.failed = "opened as a file";
+    show("This lab runs from a web server, not as a file (a browser does not start its Python from a file:// page).\n" +
+      "In its folder run   python3 -m http.server 8000\nthen open   http://localhost:8000/", true);
+    rejectReady(new Error(api.failed));
+  }
   document.addEventListener("DOMContentLoaded", () => mark("domContentLoaded"));
 })();
