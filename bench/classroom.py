@@ -45,8 +45,9 @@ the server using 1.16 of the 2 cores at 0.55 ms a frame sent: the machine's othe
 rest; with the plots' ticks remembered, 60 held at load 4.7 (0.48 ms a frame sent), and at
 load 3.7 (Python speed 0.22 s) **80 held** (29.6 frames/s minimum, full rate, the server using
 1.17 cores, 0.49 ms a frame sent; 110 ran at 14 frames/s), where runs minutes apart at load 3-6
-gave 18-20 frames/s with the server getting 0.9 cores. Where the pendulum's time
-goes (``--spy pendulum=80``, before the ticks were remembered): the view 56 % (the plot's
+gave 18-20 frames/s with the server getting 0.9 cores; at load 3.7-5.5 the six-axis arm held 48
+(26 frames/s; default 42) and visual servoing 10 (29.9 frames/s, full rate; default 8). Where
+the pendulum's time goes (``--spy pendulum=80``, before the ticks were remembered): the view 56 % (the plot's
 picture 35 %: ticks, readouts, JSON; the 3D scene 11 %), viser's event loop 24 %, serialising
 10 %, steps 4 %. Before/after the issue's cuts (a rod's pieces posed in plain floats, one wake of
 viser's loop for many sessions' frames, the cameras' framebuffer clears without the GIL), runs

@@ -31,7 +31,8 @@ SEND_SECONDS = 0.0004
 #: servoing 4.4-5.3 ms served for 4.7-5.1 measured; 8 held, 10 at 28 frames/s but 0.94 of real
 #: time, and with 1.0 its default was 10; the six-axis arm 0.68-0.78 for 0.72-0.85 (40 held,
 #: default 44), the pendulum 0.54-0.56 for 0.25 (60 held at load 6.7, 80 at 24.4 frames/s;
-#: default 78)
+#: default 78). At load 3.7-5.5 later: pendulum 80, six-axis 48 and servoing 10 held (defaults
+#: 80-84, 42 and 8: the default errs on the side of full rate)
 VIEW_FACTOR = 1.1
 MAX_DEFAULT_SESSIONS = 100
 #: the places a process offers when its lab could not be measured (the template's ``init:``
