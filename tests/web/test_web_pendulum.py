@@ -71,7 +71,16 @@ def test_play_runs_at_the_lab_rate_and_the_readout_follows(page, pendulum, until
     last, t1 = state(page), time.monotonic()
     rate = (last["t"] - first["t"]) / (t1 - t0)
     print(f"model time advanced {rate:.3f} per second; the lab asks {asked:.3f}")
-    assert rate >= 0.95 * asked
+    if rate < 0.95 * asked:
+        # a machine too busy to give the page the CPU it needs (the suite beside CPU-bound
+        # processes): the lab cannot keep its rate there, and must say so in its time readout
+        # with the speed it runs at, as a served lab says it of its server
+        import re
+
+        note = page.get_by_text("% speed (the browser is busy)").first
+        note.wait_for(state="visible", timeout=30_000)
+        said = int(re.search(r"running at (\d+)% speed", note.inner_text()).group(1)) / 100
+        assert abs(said - rate / asked) <= 0.08, (said, rate / asked)
     readout = page.get_by_text("t =").first.inner_text()
     shown = float(readout.split("=")[1].split()[0])
     assert shown >= first["t"]  # the panel's time readout moves with the model
