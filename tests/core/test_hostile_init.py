@@ -19,26 +19,9 @@ from pathlib import Path
 from typing import Any
 
 import pytest
+from testkit.hostile import ENDLESS_INIT
 
-SPEC = """\
-ejs: 1
-title: Slow
-model:
-  variables:
-    t: 0.0
-    dt: 0.1
-    x: 1.0
-    n: 0
-  init: |
-    x = 1.0
-    while x > 0:
-        n = n + 1
-  evolution:
-    - ode:
-        equations:
-          x: -x
-view: []
-"""
+SPEC = ENDLESS_INIT
 
 
 @pytest.fixture(scope="module")

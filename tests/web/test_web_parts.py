@@ -8,8 +8,8 @@ import math
 
 import msgspec
 import pytest
-
 from ejsrl.web import _msgpack
+from testkit.hostile import ENDLESS_INIT as ENDLESS
 
 VALUES = [None, True, False, 0, 1, 127, 128, 255, 256, 65535, 65536, 2**32, 2**64 - 1, -1, -32, -33, -128, -129,
           -(2**63), 1.5, -0.0, math.inf, "", "a" * 31, "b" * 32, "é" * 300, "x" * 70_000, b"", b"\x00" * 300,
@@ -50,7 +50,6 @@ def test_page_png_decodes_to_the_same_pixels_in_opencv(shape: tuple[int, ...]) -
     very pixels (OpenCV orders channels BGR)."""
     import cv2
     import numpy as np
-
     from ejsrl.web._png import encode_png
 
     rng = np.random.default_rng(len(shape) * 10 + shape[0])
@@ -130,26 +129,6 @@ def test_a_slow_page_says_the_browser_is_busy_not_a_server() -> None:
     assert "server is busy" not in page
     assert served.splitlines()[0] == " · *running at 82% speed (the server is busy)*"
 
-
-ENDLESS = """\
-ejs: 1
-title: Endless
-model:
-  variables:
-    t: 0.0
-    dt: 0.1
-    x: 1.0
-    n: 0
-  init: |
-    x = 1.0
-    while x > 0:
-        n = n + 1
-  evolution:
-    - ode:
-        equations:
-          x: -x
-view: []
-"""
 
 
 def test_an_endless_init_ends_the_web_build_at_its_spec_line(tmp_path) -> None:
