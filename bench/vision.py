@@ -185,6 +185,62 @@ def susan_with(path: str, img: np.ndarray):
     return run
 
 
+#: numba's kernels in ``_susan._corners_compiled``, by the stage the profile names them
+STAGES = {"candidates": "search", "judge": "judging", "lazy_maxima": "non-maxima", "saddles": "saddles",
+          "refine": "refinement", "settle": "response map", "share_image": "side shares"}
+STAGES_LEGEND = ("search: the uint8 bound over the image, then the exact USAN and moments of the pixels it leaves; "
+                 "judging: each pixel with a response on its own (in-between pixels' side estimate; centroid, contiguity "
+                 "and smooth tests; the side tests); non-maxima: deciding the failing pixels that could hide a corner")
+
+
+def stage_profile(img: np.ndarray, n: int) -> str:
+    """Median CPU time per call of each of numba's kernels in ``susan_corners(img)`` on one thread
+    (the kernels wrapped in a timer), and of the rest (Python, OpenCV's 3x3 filters, allocations)."""
+    import types
+
+    from ejsrl.vision import _susan
+
+    kernels = _susan._kernels()
+    calls: dict[str, list[float]] = {}
+    found: list[int] = []  # the candidates' kernel returns how many pixels have a response
+
+    class Timed(types.ModuleType):
+        def __getattr__(self, name: str):
+            fn = getattr(kernels, name)
+            if not callable(fn):
+                return fn
+
+            def timed(*a, **kw):
+                t0 = time.thread_time()
+                out = fn(*a, **kw)
+                calls.setdefault(name, []).append(time.thread_time() - t0)
+                if name == "candidates":
+                    found.append(out)
+                return out
+
+            return timed
+
+    timed = Timed("timed_kernels")
+    saved = _susan._kernels
+    _susan._kernels = lambda: timed
+    try:
+        totals = []
+        for _ in range(n + 1):
+            calls.clear()
+            found.clear()
+            t0 = time.thread_time()
+            susan_corners(img)
+            totals.append((time.thread_time() - t0, {k: sum(v) for k, v in calls.items()}))
+    finally:
+        _susan._kernels = saved
+    totals = totals[1:]  # the first: warm-up
+    total = statistics.median(t for t, _ in totals)
+    per = {k: statistics.median(d.get(k, 0.0) for _, d in totals) for k in totals[0][1]}
+    rest = total - sum(per.values())
+    parts = [f"{STAGES.get(k, k)} {v * 1e3:.2f}" for k, v in sorted(per.items(), key=lambda kv: -kv[1])]
+    return f"{total * 1e3:.2f} ms for {sum(found):,} pixels with a response: " + ", ".join(parts + [f"the rest {max(rest, 0.0) * 1e3:.2f}"])
+
+
 def compile_times() -> str:
     """First-call time of the numba kernels in a fresh process: compiled (an empty numba cache)
     and loaded from the cache (numba's import included), and where the cache is."""
@@ -282,6 +338,11 @@ def bench_susan(n: int, rounds: int) -> None:
             t = interleaved_n(fns, n, time.process_time)
             for i, p in enumerate(paths):
                 cpu[p][name] = t[i] / t[-1]
+    profiles = {}
+    if have_numba:  # where the time goes on the slowest, stage by stage (still one thread each)
+        load_p = os.getloadavg()[0]
+        for name in sorted(photo_names, key=lambda k: -cpu["numba"][k])[:3]:
+            profiles[name] = stage_profile(images[name], n)
     cv2.setNumThreads(threads)
     _susan.set_threads(None)
     print(f"-- one thread each, CPU time (as in a served class), load average {load0:.2f} before, {os.getloadavg()[0]:.2f} after:")
@@ -291,6 +352,10 @@ def bench_susan(n: int, rounds: int) -> None:
             _summary(lab, names, cpu[p]) for lab, names in (("the 18", list(base)), ("the 22 more", list(extra)), ("all 40", photo_names))))
     worst = sorted(photo_names, key=lambda k: -cpu[paths[-1] if len(paths) == 1 else "numba"][k])[:6]
     print("   the slowest (one thread): " + ", ".join(f"{k} {cpu['numba' if 'numba' in cpu else 'numpy'][k]:.2f}x" for k in worst))
+    if profiles:
+        print(f"where numba's time goes, one thread, CPU time, ms per call (load average {load_p:.2f}; {STAGES_LEGEND}):")
+        for name, line in profiles.items():
+            print(f"   {name}: {line}")
     # a detector that leaves threads spinning (OpenBLAS after a large product) also slows whatever runs
     # next, GFTT in the interleaved timing above included: that would flatter the ratio
     img = images["camera"]
