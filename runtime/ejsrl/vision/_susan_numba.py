@@ -231,6 +231,7 @@ def side_tests(gray, share, idx, rows, lo, hi, v, dark, contig, g100, floor, cho
     """
     W = gray.shape[1]
     f = gray.ravel()
+    tf = share.ravel()
     N = len(rows)
     got = np.zeros(N, np.bool_)
     r_mid = np.zeros(N, np.float64)
@@ -238,14 +239,16 @@ def side_tests(gray, share, idx, rows, lo, hi, v, dark, contig, g100, floor, cho
         p = idx[rows[i]]
         l8 = np.int32(lo[i])
         span = max(np.int32(hi[i]) - l8, np.int32(1))
-        tab = share[np.int64(dark[i]), span]
+        # the table's row by its flat index: a view of it per pixel (``share[dark, span]``) cost numba
+        # a reference count up and down each time, a quarter of this loop (page: 1.14 -> 0.85 ms)
+        row = (np.int64(dark[i]) * 256 + np.int64(span)) * 256
         # the side's USAN and its moments in one pass (integers: the same sums in any order)
         n_, sx_, sy_ = 0, 0, 0
         for dy in range(-3, 4):
             w = _HALF[dy + 3]
             base = p + dy * W
             for dx in range(-w, w + 1):
-                c = np.int64(tab[np.uint64(min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))])
+                c = np.int64(tf[np.uint64(row + min(max(np.int32(f[np.uint64(base + dx)]) - l8, np.int32(0)), span))])
                 n_ += c
                 sx_ += c * dx
                 sy_ += c * dy
@@ -264,7 +267,7 @@ def side_tests(gray, share, idx, rows, lo, hi, v, dark, contig, g100, floor, cho
         s1, s2, s3 = _contiguity(sx, sy, W)
         total = 0.0
         for st in (s1, s2, s3):
-            total += tab[min(max(np.int32(f[np.uint64(p + st)]) - l8, np.int32(0)), span)] * _UNFIX
+            total += tf[np.uint64(row + min(max(np.int32(f[np.uint64(p + st)]) - l8, np.int32(0)), span))] * _UNFIX
         if total > contig:
             got[i] = True
             r_mid[i] = rr
