@@ -29,11 +29,11 @@ Speed: with numba installed (``pip install 'ejsgen[fast]'``), ``susan_corners`` 
 compiled (``_susan_numba``: the same corners, response and sub-pixel positions, bit for bit,
 3x as fast on one thread, 5x on two, outside the GIL). Outside a served class a call runs them on two
 threads (``set_threads``; a served class sets one, its sessions already sharing the cores). On
-one thread each in CPU time (a served class; bench/vision.py, 2026-11-27, a loaded 2-core
-machine) it takes 1.5x the time of ``cv2.goodFeaturesToTrack`` at the median over 40
-photographs at 640x480 and 4.7-4.8x at worst (textures: page, a forest slope, grass, gravel: 7-8
-of 40 over 3x; 4.7-5.1x before the kernels' last changes, the same corners 10 % faster on
-textures); idle on two threads it measured 1.1-1.2x and 2.9x. The NumPy path: 4.6x at the
+one thread each in CPU time (a served class; bench/vision.py, 2026-11-27, load 0.9 on the
+2-core machine) it takes 1.47x the time of ``cv2.goodFeaturesToTrack`` at the median over 40
+photographs at 640x480 and 4.5x at worst (textures: page, a forest slope, grass, gravel: 8
+of 40 over 3x; the bench prints where the time goes, stage by stage); on two threads in wall
+time 1.2x and 3.0x. The NumPy path: 4.7x at the
 median, 16x at worst. Blurred pictures: ``blur=`` (``_susan_scale``).
 Without numba, this NumPy/OpenCV code. The kernels are compiled (a child process writes
 numba's cache, once per machine) or loaded in the background from the first call, this code
@@ -88,8 +88,8 @@ FAST_HINT = "SUSAN's compiled kernels need numba: pip install 'ejsgen[fast]' (or
 class _Compiled:
     """numba's kernels, compiled (or loaded from numba's cache) once per process in a thread.
 
-    The first process on a machine compiles them (12 s on an idle 2-core machine, 17-27 s on
-    a loaded one); later ones load them from numba's cache (0.7 s idle, 1.6-2.2 s loaded,
+    The first process on a machine compiles them (10-11 s on an idle 2-core machine, 17-29 s on
+    a loaded one); later ones load them from numba's cache (0.5 s idle, 1.1-2.3 s loaded,
     numba's import included). With
     ``BACKEND = "auto"`` no SUSAN call waits for that: until the kernels are ready the NumPy
     path runs (the same corners).
