@@ -3,7 +3,7 @@
 A built lab lists OpenCV (``opencv-python-headless``) in its ``requirements.txt`` and its
 inline script metadata only when something in the spec runs on it: the web build's check
 (:mod:`ejsgen._web_check`) already finds every such feature at its spec line (a camera's
-real ``source:``, ``blur`` and ``distortion``, marker textures, an image's ``points``, the
+real ``source:``, ``blur`` and ``distortion``, marker textures, the
 OpenCV functions of ``ejsrl.vision`` and ``cv2`` in imports or code, ``ImageSource``, maps
 read from image files), and a served lab decodes a 2D ``image`` element's ``file:`` with
 OpenCV too (the web build does that at build time instead).

@@ -8,10 +8,10 @@ as a :class:`~ejsgen.errors.SpecError` at the spec's line and column that asks f
 naming the feature, saying why, and what to do (serve the lab instead):
 
 - OpenCV: a camera's real image ``source:``, its ``blur`` and lens ``distortion``, marker
-  textures, an image element's ``points``, the OpenCV functions of ``ejsrl.vision`` (and
-  ``cv2``) in ``imports:`` or code, ``ImageSource``, and an ``OccupancyGrid.from_image`` of a
-  file. Virtual cameras themselves render with NumPy, and their images are shown by ``image``
-  elements as served; a 2D ``image`` runs too: an array is drawn as served, and a ``file:``
+  textures, the OpenCV functions of ``ejsrl.vision`` (and ``cv2``) in ``imports:`` or code,
+  ``ImageSource``, and an ``OccupancyGrid.from_image`` of a file. Virtual cameras themselves
+  render with NumPy, and their images are shown by ``image`` elements as served, with their
+  ``points`` (drawn with NumPy); a 2D ``image`` runs too: an array is drawn as served, and a ``file:``
   (PNG, JPEG, ...) is decoded by the build (:func:`web_image_files`), so only a file OpenCV
   cannot read is refused;
 - native code: every FMU under ``fmus:`` (FMPy loads the FMU's binary; an FMU kept as C
@@ -293,7 +293,6 @@ def _value_at(data: Any, path: Path_) -> Any:
 
 _UNREADABLE_WHY = ("the build decodes it for the page with OpenCV, which cannot read this file (not an image, or a "
                    "format this OpenCV has no decoder for)")
-_POINTS_WHY = f"the points are drawn over the picture by {_WHY_OPENCV}"
 _SOURCE_WHY = ("cameras, streams and video files are read by OpenCV and the devices of the machine that runs "
                "the lab; a page's Python has neither")
 #: a camera's properties that need OpenCV when set -> the feature and why
@@ -338,16 +337,13 @@ def _items(doc: Document, items: Any, path: Path_, where: str) -> Iterator[tuple
 
 
 def _view_refusals(doc: Document, view: Any) -> list[SpecError]:
-    """The panel's ``image`` ``points``, a camera's real ``source``, ``blur`` and ``distortion``,
+    """A camera's real ``source``, ``blur`` and ``distortion``,
     marker textures, and meshes read through lxml. Virtual cameras themselves render with
     NumPy, and image elements are shown as served (a 2D image's file: :func:`_image_refusals`)."""
     out = []
     for kind, props, path, where in _items(doc, view, ("view",), "panel"):
         at = (*path, kind)
         props = props if isinstance(props, dict) else {}
-        if where == "panel" and kind == "image" and props.get("points") is not None:
-            out.append(_refusal(doc, (*at, "points"), "an image's `points`", _POINTS_WHY, key=True,
-                                hint="leave `points` out (or draw them into the array with NumPy), or " + _SERVE))
         if where != "3d":
             continue
         if kind == "camera" and props.get("source") is not None:

@@ -130,10 +130,9 @@ def test_a_map_read_from_an_image_file(tmp_path: Path) -> None:
 VIEW_IMAGE = HEAD + "view:\n  - image: {source: img, label: Camera, points: '[[1, 2]]'}\n"
 
 
-def test_an_image_element_is_shown_but_its_points_are_refused(tmp_path: Path) -> None:
-    errors, text = refusals(tmp_path, VIEW_IMAGE)
-    one(errors, text, "points:", "an image's `points`", "OpenCV", "leave `points` out")
-    errors, _ = refusals(tmp_path, VIEW_IMAGE.replace(", points: '[[1, 2]]'", ""))
+def test_an_image_element_and_its_points_run_in_a_page(tmp_path: Path) -> None:
+    """The points are drawn with NumPy (``ejsrl.view._image.draw_rings``): nothing to refuse."""
+    errors, _ = refusals(tmp_path, VIEW_IMAGE)
     assert errors == []
 
 
@@ -248,9 +247,9 @@ def test_data_beyond_the_limit_names_the_file_that_crosses_it(tmp_path: Path) ->
 
 def test_every_refusal_of_a_lab_is_reported_in_file_order(tmp_path: Path) -> None:
     text = HEAD.replace("title: Web check\n", "title: Web check\nimports:\n  - import cv2\n") + \
-        "view:\n  - image: {source: img, points: '[[1, 2]]'}\nplant:\n  commands:\n    x: {to: joints}\n"
+        CAMERA.removeprefix(HEAD).replace("EXTRA", ", blur: 1.5") + "plant:\n  commands:\n    x: {to: joints}\n"
     errors, text = refusals(tmp_path, text)
-    assert [(e.where.line, e.where.col) for e in errors] == [position(text, "import cv2"), position(text, "points:"),
+    assert [(e.where.line, e.where.col) for e in errors] == [position(text, "import cv2"), position(text, "blur:"),
                                                              position(text, "plant:")]
 
 

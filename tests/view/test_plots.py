@@ -66,6 +66,36 @@ def test_images_become_rgb_uint8_with_markers():
     assert prepare_image(np.zeros((3,))) is None and prepare_image(None) is None
 
 
+def test_image_points_are_rings_drawn_with_numpy_at_their_sub_pixel_places(monkeypatch):
+    """An image's ``points`` are drawn without OpenCV (a web page's Python has none): a red ring of
+    radius min(H, W) / 80 around each point, centred on the point to a tenth of a pixel (the
+    centroid of the red drawn), a black ring just outside it, the picture untouched elsewhere;
+    NaN and far-away points are left out."""
+    import sys
+
+    monkeypatch.setitem(sys.modules, "cv2", None)  # import cv2 fails, as in a page
+    grey = np.full((400, 480), 128, np.uint8)
+    pts = np.array([[100.3, 200.7], [300.0, 50.5], [np.nan, 10.0], [5000.0, 3.0]])
+    out = prepare_image(grey, pts)
+    r = 5  # 400 / 80
+    y, x = np.mgrid[0:400, 0:480]
+    red = (out[:, :, 0].astype(int) - out[:, :, 1]).clip(0)  # how red each pixel is
+    for px, py in pts[:2]:
+        d = np.hypot(x - px, y - py)
+        ring = np.abs(d - r) < 0.5
+        assert (out[ring][:, 0] > 200).all() and (out[ring][:, 1] < 90).all()  # red on the ring
+        outside = np.abs(d - (r + 1.5)) < 0.25
+        assert out[outside].max(axis=1).mean() < 60  # dark just outside it
+        near = d < r + 4
+        w = red * near
+        assert abs((w * x).sum() / w.sum() - px) < 0.1 and abs((w * y).sum() / w.sum() - py) < 0.1
+        assert (out[d < r - 1.5] == 128).all()  # the middle is the picture's
+    far = np.min([np.hypot(x - px, y - py) for px, py in pts[:2]], axis=0) > r + 3
+    assert (out[far] == 128).all() and (grey == 128).all()
+    many = np.random.default_rng(3).random((3000, 2)) * [480, 400]
+    assert (prepare_image(grey, many)[:, :, 0] > 200).mean() > 0.2  # thousands (a texture's corners) drawn
+
+
 def test_make_server_takes_the_next_free_port():
     first, url1 = make_server("127.0.0.1", 0)
     try:
