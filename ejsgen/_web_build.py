@@ -30,6 +30,7 @@ import hashlib
 import html
 import json
 import os
+import re
 import shutil
 import struct
 import tempfile
@@ -146,9 +147,22 @@ def _mkdir(p: Path) -> Path:
     return p
 
 
-def _lab_files(app_dir: Path) -> dict[str, Path]:
+#: a lab's code that reads URDF files (yourdfpy, and lxml in the browser's Python): the names of
+#: ``ejsrl.robotics`` that do, and the packages
+_URDF_USE = re.compile(r"\b(load_urdf|ur5_urdf|yourdfpy)\b|\bejsrl\.robotics\.urdf\b|\bfrom\s+ejsrl\.robotics\s+import\s+urdf\b")
+
+
+def uses_urdf(app_dir: Path) -> bool:
+    """Whether the built lab in ``app_dir`` reads URDF files: its page then gets yourdfpy's
+    Python, lxml's (the browser's Python has lxml compiled in) and the runtime's robot
+    descriptions (the UR5's URDF and meshes, 0.3 MB); other labs download none of them."""
+    return bool(_URDF_USE.search(app_dir.joinpath("app.py").read_text(encoding="utf-8")))
+
+
+def _lab_files(app_dir: Path, urdf: bool = False) -> dict[str, Path]:
     """The lab's files by their path under /lab: app.py and its assets from the normal build,
-    the runtime (less what never runs in a page) and viser's Python package."""
+    the runtime (less what never runs in a page), viser's Python package, trimesh's, and for a
+    lab that reads URDF files (``urdf``) yourdfpy's and the runtime's robot descriptions."""
     import viser
 
     files: dict[str, Path] = {}
@@ -162,8 +176,8 @@ def _lab_files(app_dir: Path) -> dict[str, Path]:
     runtime = Path(__import__("ejsrl").__file__).resolve().parent
     for f in sorted(runtime.rglob("*")):
         rel = f.relative_to(runtime).as_posix()
-        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc") or rel.startswith("robotics/data/"):
-            continue  # robotics/data: the UR5's URDF, which a page cannot read (lxml)
+        if f.is_dir() or "__pycache__" in rel or rel.endswith(".pyc") or (rel.startswith("robotics/data/") and not urdf):
+            continue  # robotics/data: the UR5's URDF and meshes, for labs that read URDF files
         files[f"ejsrl/{rel}"] = f
     vdir = Path(viser.__file__).resolve().parent
     for f in sorted(vdir.rglob("*.py")):
@@ -180,11 +194,20 @@ def _lab_files(app_dir: Path) -> dict[str, Path]:
                                                                                           "resources/schema/")):
             continue  # the templates and schemas of trimesh's exporters: a lab only reads meshes
         files[f"trimesh/{rel}"] = f
+    if urdf:
+        try:
+            import yourdfpy  # pure Python on lxml, trimesh and six (MIT)
+        except ImportError as e:
+            raise EjsError("this lab reads URDF files, and its web build ships yourdfpy, which is not installed "
+                           "here: pip install 'ejsgen[urdf]'") from e
+        ydir = Path(yourdfpy.__file__).resolve().parent
+        for f in sorted(ydir.glob("*.py")):
+            files[f"yourdfpy/{f.name}"] = f
     return files
 
 
 #: the folders of the lab's bundle whose Python modules are trimmed to what the lab loads
-SHIPPED = ("ejsrl/", "viser/", "trimesh/")
+SHIPPED = ("ejsrl/", "viser/", "trimesh/", "yourdfpy/")
 
 
 def _trimmed(files: dict[str, Path], modules: set[str]) -> dict[str, Path]:
@@ -310,7 +333,7 @@ def _licences(out: Path) -> None:
     for name in ("LICENSE-MIT", "LICENSE-APACHE"):
         shutil.copyfile(shim / name, lic / f"browser_wasi_shim-{name}.txt")
     site = Path(viser.__file__).resolve().parent.parent
-    for package in ("viser", "trimesh"):
+    for package in ("viser", "trimesh", "yourdfpy"):
         for d in site.glob(f"{package}-*.dist-info"):
             for f in [*d.glob("LICENSE*"), *d.glob("licenses/*")]:
                 if f.is_file():
@@ -321,6 +344,7 @@ def _licences(out: Path) -> None:
         "- @bjorn3/browser_wasi_shim 0.4.2 (MIT or Apache-2.0: browser_wasi_shim-*)\n"
         "- viser's client and Python package (Apache-2.0: viser-*)\n"
         "- trimesh's Python package (MIT: trimesh-*)\n"
+        "- yourdfpy's Python package, in labs that read URDF files (MIT: yourdfpy-*)\n"
         "- ejsgen's runtime, ejsrl (MIT)\n",
         encoding="utf-8",
     )
@@ -363,7 +387,8 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
         from ejsgen._web_images import decode_images
 
         decode_images(spec_path, app_dir)  # 2D image files: their pictures decoded for a page without OpenCV
-        files = _lab_files(app_dir)
+        urdf = uses_urdf(app_dir)
+        files = _lab_files(app_dir, urdf)
         lab_dir = tmp / "lab"
         for rel, f in files.items():
             (lab_dir / rel).parent.mkdir(parents=True, exist_ok=True)
@@ -372,7 +397,8 @@ def build_web(spec_path: str | Path, out_dir: str | Path) -> WebBuild:
 
         with zipfile.ZipFile(art.stdlib_zip) as z:
             tops = zip_tops(z.namelist())
-        modules = set(traced_modules(lab_dir, tmp / "io", sorted(tops | {"ejsrl", "viser", "trimesh", "app"})))
+        shipped = {"ejsrl", "viser", "trimesh", "app"} | ({"yourdfpy"} if urdf else set())
+        modules = set(traced_modules(lab_dir, tmp / "io", sorted(tops | shipped), shown=("lxml",) if urdf else ()))
         modules |= imported_names([lab_dir / "app.py"])  # the lab's own code, every branch of it
         modules |= {"ejsrl.web", "ejsrl.web._codecache"}  # worker.js imports it before the lab
         py = _mkdir(out / "python")

@@ -1,9 +1,8 @@
 """What ``ejsgen build --web`` refuses: the parts of a spec that cannot run in a browser.
 
 A web build runs the lab in the student's browser, on a WebAssembly Python that has the
-standard library, NumPy and SciPy, and nothing else compiled (issue #32). It has no OpenCV,
-no Pillow, no lxml, no way to load a native library, no sockets, no threads and no
-processes. :func:`web_refusals` lists every feature of a spec that needs one of those, each
+standard library, NumPy and SciPy (and lxml, for a lab that reads URDF files) (issue #32).
+It has no OpenCV, no way to load a native library, no sockets, no threads and no processes. :func:`web_refusals` lists every feature of a spec that needs one of those, each
 as a :class:`~ejsgen.errors.SpecError` at the spec's line and column that asks for it,
 naming the feature, saying why, and what to do (serve the lab instead):
 
@@ -15,8 +14,9 @@ naming the feature, saying why, and what to do (serve the lab instead):
   (PNG, JPEG, ...) is decoded by the build (:func:`web_image_files`), so only a file OpenCV
   cannot read is refused;
 - native code: every FMU under ``fmus:`` (FMPy loads the FMU's binary; an FMU kept as C
-  sources is compiled to one), URDF files (yourdfpy needs lxml), COLLADA and 3MF meshes
-  (lxml), and third-party packages other than NumPy and SciPy in ``imports:`` or code;
+  sources is compiled to one), COLLADA and 3MF meshes (pycollada; lxml and networkx), and
+  third-party packages other than NumPy and SciPy in ``imports:`` or code. URDF robots run:
+  the page gets yourdfpy's Python and lxml's (``ejsgen._web_build.uses_urdf``);
 - the network, threads and processes: a remote plant (``plant:``), and the standard
   library's sockets, threads, processes and native calls (:data:`NO_BROWSER_STDLIB`);
 - data: the files the spec names (``assets:``, meshes, images, FMUs) beyond
@@ -63,17 +63,17 @@ NO_BROWSER_EJSRL = {
     "ejsrl.fmi": "FMPy loads each FMU's native binary, and a browser cannot load a native library",
     "ejsrl.plant": "a remote plant is driven over the network (MQTT or OPC UA), and a page's Python has no sockets",
     "ejsrl.app.sweep": "sweeps run on processes or Dask, which a page's Python cannot start",
-    "ejsrl.robotics.urdf": "URDF files are read by yourdfpy, which needs lxml, a C extension the browser's Python lacks",
     "ejsrl.vision.sources": "cameras, streams and videos are read by OpenCV and the devices of the machine that runs the lab",
 }
 #: names (in imports or code) that need what a browser lacks -> the feature and why
 NO_BROWSER_NAMES = {
-    "load_urdf": NO_BROWSER_EJSRL["ejsrl.robotics.urdf"],
-    "ur5_urdf": NO_BROWSER_EJSRL["ejsrl.robotics.urdf"],
     "ImageSource": NO_BROWSER_EJSRL["ejsrl.vision.sources"],
 }
-#: mesh formats trimesh reads through lxml (a C extension)
-LXML_MESHES = (".dae", ".3mf")
+#: mesh formats trimesh reads through packages a page does not get -> why
+LXML_MESHES = {
+    ".dae": ".dae (COLLADA) meshes are read through pycollada, which the browser's Python lacks",
+    ".3mf": ".3mf meshes are read through lxml and networkx, which a web build does not ship",
+}
 
 _WHY_OPENCV = "OpenCV, which the browser's Python does not have"
 _SERVE = "serve this lab instead (`ejsgen run SPEC`, or `python app.py --host 0.0.0.0` for a class: each tab gets its own simulation)"
@@ -238,8 +238,8 @@ def _vision_aliases(doc: Document) -> set[str]:
 
 
 def _code_refusals(doc: Document) -> list[SpecError]:
-    """Imports in code, OpenCV functions reached through a ``vision`` module name, URDF loading
-    and map images read from files, at their place in the code."""
+    """Imports in code, OpenCV functions reached through a ``vision`` module name and map images
+    read from files, at their place in the code."""
     from ejsgen._resolve import Snippet
 
     aliases = _vision_aliases(doc)
@@ -338,7 +338,7 @@ def _items(doc: Document, items: Any, path: Path_, where: str) -> Iterator[tuple
 
 def _view_refusals(doc: Document, view: Any) -> list[SpecError]:
     """A camera's real ``source``, ``blur`` and ``distortion``,
-    marker textures, and meshes read through lxml. Virtual cameras themselves render with
+    marker textures, and COLLADA and 3MF meshes. Virtual cameras themselves render with
     NumPy, and image elements are shown as served (a 2D image's file: :func:`_image_refusals`)."""
     out = []
     for kind, props, path, where in _items(doc, view, ("view",), "panel"):
@@ -356,8 +356,7 @@ def _view_refusals(doc: Document, view: Any) -> list[SpecError]:
             out.append(_refusal(doc, (*at, "texture"), f"the marker texture '{texture}'", _MARKER_WHY, key=True))
         for key, file in _mesh_files(kind, props):
             if Path(file).suffix.lower() in LXML_MESHES:
-                out.append(_refusal(doc, (*at, *key), f"the mesh '{file}'",
-                                    f"{Path(file).suffix} meshes are read through lxml, a C extension the browser's Python lacks",
+                out.append(_refusal(doc, (*at, *key), f"the mesh '{file}'", LXML_MESHES[Path(file).suffix.lower()],
                                     key=True, hint="convert it to GLB, OBJ or STL (e.g. in Blender), or " + _SERVE))
     return out
 

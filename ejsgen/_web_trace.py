@@ -127,17 +127,18 @@ INIT_GRACE = float(os.environ.get("EJSGEN_WEB_INIT_GRACE", "30"))
 _SLOW = "warning: init: has been running"
 
 
-def traced_modules(lab_dir: Path, io_dir: Path, there: list[str], *, timeout: float = 300.0) -> list[str]:
+def traced_modules(lab_dir: Path, io_dir: Path, there: list[str], *, timeout: float = 300.0, shown: tuple[str, ...] = ()) -> list[str]:
     """The names of the modules the lab in ``lab_dir`` (a built app folder with ``app.py``)
     loads when it runs as a web page; ``io_dir``: a scratch folder for its files; ``there``:
     the top-level packages the browser's Python has besides the standard library (the zip's
-    and the lab's): any other is made unimportable for the run, as it is in the browser.
+    and the lab's): any other is made unimportable for the run, as it is in the browser;
+    ``shown``: packages of :data:`HIDDEN` this lab needs, left importable (lxml for URDF files).
 
     An ``init:`` that runs on is said at once, with its spec line (the runtime's slow-block
     warning, echoed), and ends the build :data:`INIT_GRACE` seconds later with a
     :class:`TraceError` at that line; so does a run past ``timeout`` seconds."""
     io_dir.mkdir(parents=True, exist_ok=True)
-    env = dict(os.environ, EJSWEB_HIDDEN=json.dumps(HIDDEN), EJSWEB_THERE=json.dumps(sorted(there)),
+    env = dict(os.environ, EJSWEB_HIDDEN=json.dumps([h for h in HIDDEN if h not in shown]), EJSWEB_THERE=json.dumps(sorted(there)),
                EJSWEB_LAB=str(lab_dir), EJSWEB_IO=str(io_dir),
                PYTHONDONTWRITEBYTECODE="1")
     out_path, err_path = io_dir / "trace.out", io_dir / "trace.err"

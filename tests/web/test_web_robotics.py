@@ -1,7 +1,8 @@
 """Robotics labs built with ``--web``: a trajectory lab (examples/paper/path_planning_434), the
 six-axis arm's kinematics (a ``robot`` element: its links' meshes made by trimesh in the page,
-a wrist camera rendered by NumPy on 32-bit WebAssembly), the six-axis arm example and a SciPy
-lab (examples/mobile_prm_laser: ``scipy.linalg``, ``scipy.spatial``). Each page shows the
+a wrist camera rendered by NumPy on 32-bit WebAssembly), the six-axis arm example, a SciPy
+lab (examples/mobile_prm_laser: ``scipy.linalg``, ``scipy.spatial``) and the UR5 from its URDF file
+(examples/urdf_arm: yourdfpy on the page's lxml). Each page shows the
 served panel and computes the native app's numbers to 1e-12."""
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ pytestmark = pytest.mark.browser
 
 
 @pytest.mark.parametrize("name", ["paper/path_planning_434", "paper/six_axis_kinematics", "six_axis_arm",
-                                  "mobile_prm_laser"])
+                                  "mobile_prm_laser", "urdf_arm"])
 def test_robotics_page_runs_the_native_numbers(page, web_lab, name: str) -> None:
     _site, url, app_dir = web_lab(name)
     # every text the loader shows, as the student reads it
@@ -35,6 +36,16 @@ def test_robotics_page_runs_the_native_numbers(page, web_lab, name: str) -> None
     got = page.evaluate("ejsWeb.call('headless', {duration: 2})")
     assert got["status"] == 0
     assert_same_csv(got["csv"], native_csv(app_dir, 2), more_rows_than=10)
+    if name == "urdf_arm":  # its page got lxml's Python (the browser's Python has lxml compiled in) and yourdfpy's
+        import json
+        import struct
+        import zipfile
+
+        with zipfile.ZipFile(_site.out / "python" / "python315.zip") as z:
+            assert "lxml/__init__.pyc" in z.namelist()
+        bundle = (_site.out / "python" / "lab.bin").read_bytes()
+        index = {rel for rel, _size in json.loads(bundle[4 : 4 + struct.unpack("<I", bundle[:4])[0]])}
+        assert {"yourdfpy/urdf.pyc", "ejsrl/robotics/data/ur5/ur5.urdf"} <= index, sorted(index)[:20]
     if name == "paper/six_axis_kinematics":
         # the wrist camera's picture (rendered by the runtime's NumPy rasterizer, 240 x 180) reaches
         # the panel as an image the browser decodes (PNG: the page has no OpenCV)

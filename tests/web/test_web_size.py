@@ -9,6 +9,8 @@ figures of specs/web.md). Each lab is built once for this module (``web_lab``).
 
 from __future__ import annotations
 
+import json
+import struct
 import zipfile
 
 import pytest
@@ -62,3 +64,7 @@ def test_the_zip_keeps_what_the_lab_may_import_and_leaves_the_rest_out(web_lab) 
     left_out = {"imaplib.pyc", "smtplib.pyc", "poplib.pyc", "mailbox.pyc", "lxml/__init__.pyc",
                 "charset_normalizer/__init__.pyc", "scipy/__init__.pyc"}
     assert not left_out & names, left_out & names
+    # nor the URDF robots' parts (yourdfpy, the UR5's description: a URDF lab's, tests/web/test_web_robotics.py)
+    bundle = (site.out / "python" / "lab.bin").read_bytes()
+    index = json.loads(bundle[4 : 4 + struct.unpack("<I", bundle[:4])[0]])
+    assert not [rel for rel, _size in index if rel.startswith(("yourdfpy/", "ejsrl/robotics/data/"))]
