@@ -124,6 +124,46 @@ def cubes(rng: np.random.Generator, realism) -> tuple[np.ndarray, np.ndarray]:
     return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), np.array(verts)
 
 
+def floor_boxes(rng: np.random.Generator, realism) -> tuple[np.ndarray, np.ndarray]:
+    """Two boxes standing on a grey floor, in dim reds and blues, seen from any side at 35-55
+    degrees of elevation, at 320x240, 640x480 or 800x600 (grey), and their visible vertices: the
+    faces of a box differ by as little as 5-20 grey levels, less than SUSAN's usual t = 25 (the
+    scenes of session 11's new-user trial, where its three-face vertices were missed)."""
+    import math
+
+    from ejsrl.robotics.transforms import transl, trotz
+    from ejsrl.vision import CameraModel, look_at
+    from ejsrl.world import World
+    from ejsrl.world import render as render3d
+    from ejsrl.world.rendering import render_depth
+    from ejsrl.world.scene import Box
+
+    W, H = [(320, 240), (640, 480), (800, 600)][int(rng.integers(3))]
+    cam = CameraModel(W, H, fov_deg=rng.uniform(45, 65))
+    w = World()
+    boxes = []
+    for i, col in enumerate([(0.8, 0.3, 0.2), (0.2, 0.4, 0.8)]):
+        s = rng.uniform(0.08, 0.16, 3)
+        T = transl(rng.uniform(-0.15, 0.15), rng.uniform(-0.15, 0.15), s[2] / 2) @ trotz(rng.uniform(0, math.pi))
+        w.add(Box(f"b{i}", size=tuple(s), color=col, T_parent_local=T))
+        boxes.append((T, s))
+    w.add(Box("floor", size=(2, 2, 0.01), color=(0.55, 0.55, 0.5), T_parent_local=transl(0, 0, -0.005)))
+    az, el, r = rng.uniform(0, 2 * math.pi), rng.uniform(0.6, 0.95), rng.uniform(0.7, 1.1)
+    T_cam = look_at(r * np.array([math.cos(az) * math.cos(el), math.sin(az) * math.cos(el), math.sin(el)]), [0, 0, 0.05], [0, 0, 1])
+    rgb, _ = render3d(w, cam, T_cam, realism=realism, rng=rng, backend="numpy")
+    dep = render_depth(w, cam, T_cam, backend="numpy")
+    verts = []
+    for T, s in boxes:
+        for corner in np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T:
+            p = (T @ np.append(corner * s / 2, 1.0))[:3]
+            px, z = cam.project(p[None], T_cam)[0], cam.depth(p[None], T_cam)[0]
+            if 8 <= px[0] <= W - 9 and 8 <= px[1] <= H - 9:
+                x, y = int(round(px[0])), int(round(px[1]))
+                if np.abs(dep[y - 1 : y + 2, x - 1 : x + 2] - z).min() < 0.01:
+                    verts.append(px)
+    return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), np.array(verts).reshape(-1, 2)
+
+
 def checkerboard(rng: np.random.Generator, blur: float, noise: float) -> tuple[np.ndarray, np.ndarray]:
     """An 8x8 board of 24-36 px squares turned by up to 0.5 rad, drawn 8x finer and averaged
     down, blurred and noisy (grey 40 and 200); its 49 inner corners."""
@@ -180,6 +220,9 @@ def blur_suite(k: int) -> None:
         "cubes aa3": lambda r: cubes(r, Realism(antialias=3)),
         "cubes aa3 b1 n2": lambda r: cubes(r, Realism(antialias=3, blur=1.0, noise=2.0)),
         "cubes aa3 b1.5 n2": lambda r: cubes(r, Realism(antialias=3, blur=1.5, noise=2.0)),
+        "floor boxes aa3": lambda r: floor_boxes(r, Realism(antialias=3)),
+        "floor boxes b1 n2": lambda r: floor_boxes(r, Realism(antialias=3, blur=1.0, noise=2.0)),
+        "floor boxes b1.5 n2": lambda r: floor_boxes(r, Realism(antialias=3, blur=1.5, noise=2.0)),
         "checker b0.7 n1": lambda r: checkerboard(r, 0.7, 1.0),
         "checker b1.0 n2": lambda r: checkerboard(r, 1.0, 2.0),
         "checker b1.5 n2": lambda r: checkerboard(r, 1.5, 2.0),
@@ -188,7 +231,7 @@ def blur_suite(k: int) -> None:
         "poly b1.5 n4": lambda r: blurred_polygons(r, 1.5, 4.0),
     }
     print(f"{k} scenes each: recall / precision / median sub-pixel error (px), a vertex found within 1.5 px")
-    print(f"{'scene':18s} {'SUSAN':17s} {'SUSAN auto':17s} {'GFTT 200':17s} GFTT at SUSAN auto's count")
+    print(f"{'scene':20s} {'SUSAN':17s} {'SUSAN auto':17s} {'GFTT 200':17s} {'GFTT at auto n':17s} {'SUSAN auto, t auto':19s} GFTT at its count")
     for name, gen in suites.items():
         rng = np.random.default_rng(21)
         scenes = [gen(rng) for _ in range(k)]
@@ -197,6 +240,8 @@ def blur_suite(k: int) -> None:
             "auto": lambda i: susan_corners(i, blur="auto"),
             "gftt": lambda i: gftt_refined(i, 200),
             "gftt@n": lambda i: gftt_refined(i, max(1, len(susan_corners(i, blur="auto")))),
+            "auto t": lambda i: susan_corners(i, "auto", blur="auto"),
+            "gftt@n t": lambda i: gftt_refined(i, max(1, len(susan_corners(i, "auto", blur="auto")))),
         }
         cells = []
         for det in dets.values():
@@ -205,7 +250,7 @@ def blur_suite(k: int) -> None:
             prec = np.nanmean(rows[:, 1]) if np.isfinite(rows[:, 1]).any() else float("nan")
             err = np.nanmedian(rows[:, 2]) if np.isfinite(rows[:, 2]).any() else float("nan")
             cells.append(f"{rec:.2f}/{prec:.2f}/{err:.2f}")
-        print(f"{name:18s} " + " ".join(f"{c:17s}" for c in cells), flush=True)
+        print(f"{name:20s} " + " ".join(f"{c:17s}" for c in cells[:5]) + f"  {cells[5]}", flush=True)
 
 
 def main() -> None:

@@ -771,8 +771,7 @@ def susan_corners(
     (after the tests: 0 where a maximum was rejected).
     """
     gray = np.ascontiguousarray(as_gray(img))  # (numba's kernels are compiled for C order)
-    if not float(t) > 0:
-        raise ValueError(f"susan_corners: t must be positive, got {t}")
+    t = _threshold(gray, t)
     if not 0.0 <= float(quality) <= 1.0:
         raise ValueError(f"susan_corners: quality is a fraction of the strongest corner's response, in [0, 1] (0: off), got {quality}")
     if int(nms_radius) != nms_radius or nms_radius < 0:
@@ -832,6 +831,20 @@ def susan_corners(
     if subpixel and len(pts):
         pts = _refine(gray, pts, kernels)
     return (pts, resp / _SCALE) if return_response else pts
+
+
+def _threshold(gray: NDArray[np.uint8], t: float | str) -> float:
+    """The brightness threshold ``t`` in grey levels: as given (> 0), or ``"auto"``: from the image's
+    noise (``_susan_scale.auto_threshold``)."""
+    if isinstance(t, str):
+        if t != "auto":
+            raise ValueError(f"susan_corners: t is a brightness threshold in grey levels (> 0) or 'auto', got {t!r}")
+        from ejsrl.vision import _susan_scale
+
+        return _susan_scale.auto_threshold(gray)
+    if not float(t) > 0:
+        raise ValueError(f"susan_corners: t must be positive (grey levels), or 'auto', got {t}")
+    return float(t)
 
 
 def _corners_numpy(gray, t, g100: float, floor: float, below, mid_slack: float, lut, L_max: int | None, r: int):
