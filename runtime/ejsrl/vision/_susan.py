@@ -714,7 +714,7 @@ def _window_max(img: NDArray[np.float32], r: int, idx: NDArray[np.int64]) -> NDA
 @image_function
 def susan_corners(
     img: NDArray,
-    t: float = 25.0,
+    t: float | str = 25.0,
     *,
     g: float | None = None,
     nms_radius: int = 3,
@@ -729,7 +729,10 @@ def susan_corners(
 
     ``img``: grey (H, W) or RGB (H, W, 3) image (uint8, or another type read as
     ``help(ejsrl.vision)`` says). ``t``: brightness threshold in grey levels (lower finds
-    weaker corners, higher resists noise). ``g``: geometric threshold in mask pixels
+    weaker corners, higher resists noise), or ``"auto"``: read from the image (half the step
+    of its weaker edges, at most 25, at least 10 and 4.5 times its noise:
+    ``_susan_scale.auto_threshold``), for rendered scenes and dim pictures whose regions differ
+    by fewer than 25 grey levels (a dimly lit box's faces). ``g``: geometric threshold in mask pixels
     (default half the mask, 18.5). ``nms_radius``: non-maximum suppression window radius
     (3: 7x7, as in the original code). ``min_response``: drop corners whose response
     ``g - n`` is below this many mask pixels (a straight edge gives about 0, a 150-degree

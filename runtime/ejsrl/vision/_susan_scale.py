@@ -1,4 +1,6 @@
-"""SUSAN at the image's own scale: the mask widened for blurred images (``susan_corners(blur=...)``).
+"""SUSAN at the image's own scale and contrast: the mask widened for blurred images
+(``susan_corners(blur=...)``), the brightness threshold read from the image (``t="auto"``:
+``auto_threshold``, from ``estimate_noise`` and ``edge_steps``).
 
 SUSAN's 37-pixel mask (radius 3.4 px) was made for sharp edges: an edge blurred by a
 Gaussian of sigma about 1 px or more spreads over most of the mask, the nucleus' grey is
