@@ -101,8 +101,11 @@ PHOTOGRAPHS = ("camera", "astronaut", "coffee", "chelsea", "brick", "coins", "ro
 
 
 def photographs() -> dict[str, np.ndarray]:
-    """scikit-image's bundled photographs as 640x480 grey (scikit-image is in the test extra)."""
-    from skimage import data
+    """scikit-image's bundled photographs as 640x480 grey (scikit-image is in the bench and test extras)."""
+    try:
+        from skimage import data
+    except ImportError:
+        raise SystemExit("bench/vision.py times SUSAN on scikit-image's photographs: python3 -m pip install -e '.[bench]'") from None
 
     out = {}
     for name in PHOTOGRAPHS:
