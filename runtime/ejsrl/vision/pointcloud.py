@@ -184,7 +184,9 @@ def icp(
     best fits the pairs kept: ``method`` "point_to_plane" (the distances along the target's
     normals, ``estimate_normals``) or "point_to_point" (the distances themselves). The rms
     is of the point-to-point distances either way. It stops when the rms changes by less than
-    ``tolerance`` (metres) or after ``max_iterations``. ``init`` (4, 4): a first guess (ICP
+    ``tolerance`` (metres), or comes back to within it of one of the last iterations' (the
+    pairs flipping between a few sets, the pose with them: it keeps the one with the least
+    rms), both ``converged``, or after ``max_iterations`` (not converged: still moving). ``init`` (4, 4): a first guess (ICP
     finds the nearest local minimum: start it within ~30 degrees and a fraction of the
     clouds' size).
     """
@@ -202,6 +204,7 @@ def icp(
     normals = estimate_normals(D) if method == "point_to_plane" else None
     prev = np.inf
     rms, fitness, converged, it = np.inf, 0.0, False, 0
+    seen: list[tuple[float, np.ndarray, float]] = []  # the last iterations' (rms, pose, fitness)
     for it in range(1, int(max_iterations) + 1):
         moved = transform_points(T, S)
         dist, idx = tree.query(moved)
@@ -218,8 +221,15 @@ def icp(
             step = best_rigid_transform(moved[keep], D[idx[keep]])
         else:
             step = _plane_step(moved[keep], D[idx[keep]], normals[idx[keep]])
-        T = step @ T
         rms = float(np.sqrt(np.mean(dist[keep] ** 2)))
+        if any(abs(r - rms) < tolerance for r, _T, _f in seen[:-1]):
+            # a cycle: the pairs flip between two (or a few) sets and the pose with them, a few
+            # micrometres apart (trimmed pairs, points sampled apart): settled, at the best of them
+            rms, T, fitness = min([*seen, (rms, T, fitness)], key=lambda e: e[0])
+            converged = True
+            break
+        seen = [*seen[-3:], (rms, T, fitness)]
+        T = step @ T
         if abs(prev - rms) < tolerance:
             converged = True
             break
