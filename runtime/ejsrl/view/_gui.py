@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ejsrl.view._image import picture_of
 from ejsrl.view._plots import ImageBinding, PlotBinding
 from ejsrl.view._validate import option_label, validate_control
 from ejsrl.view._wire import set_markdown
@@ -447,7 +448,8 @@ class Panel:
         with self.app.lock:
             src = self.app.safe_value(el.source, el.where)
             pts = self.app.safe_value(el.points, el.where) if el.points is not None and src is not None else None
-        return src, pts
+            got = self.app.guard(lambda: picture_of(src, pts, self._text(el.label, el.where)), el.where)
+        return (None, None) if got is None else got
 
     def _track(self, prop: Any, where: str, handle: Any, attr: str) -> None:
         """Keep ``handle.<attr>`` showing ``prop`` if it changes at run time."""
@@ -596,7 +598,9 @@ class Panel:
                 continue  # not rendered for nothing: the picture could not be sent yet
             src = app.safe_value(im.image.source, im.image.where)
             pts = app.safe_value(im.image.points, im.image.where) if im.image.points is not None else None
-            im.update(src, pts)
+            got = app.guard(lambda: picture_of(src, pts, getattr(im.handle, "label", None) or ""), im.image.where) if src is not None else None
+            if got is not None:
+                im.update(*got)
         self._show_error()  # last: the expressions above may have just failed
         self._show_playing()
 

@@ -26,7 +26,7 @@ import numpy as np
 
 from ejsrl.view.elements import Image
 
-__all__ = ["ImageBinding", "prepare_image", "draw_rings", "probe_html", "IMAGE_RATE", "IMAGE_SETTLE", "LAID_OUT"]
+__all__ = ["ImageBinding", "prepare_image", "draw_rings", "picture_of", "probe_html", "IMAGE_RATE", "IMAGE_SETTLE", "LAID_OUT"]
 
 
 def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
@@ -56,6 +56,29 @@ def prepare_image(img: Any, points: Any = None) -> np.ndarray | None:
         if len(pts):
             a = draw_rings(a.copy(), pts)
     return a
+
+
+def picture_of(src: Any, pts: Any, label: str = "") -> tuple[Any, Any]:
+    """An image element's ``(source, points)`` as it draws them: a vision pipeline's result
+    (``vision.Pipeline(...)(img)``: anything with ``image`` and ``points``) gives its image and,
+    unless the element names its own, its points; a value that is no picture (H x W, H x W x 1,
+    3 or 4 numbers) raises a TypeError saying what it is, which pauses the lab with that message
+    (a blank element said nothing)."""
+    if src is None:
+        return None, pts
+    if not isinstance(src, np.ndarray) and hasattr(src, "image") and hasattr(src, "points"):
+        src, pts = src.image, (src.points if pts is None else pts)
+    try:
+        a = np.asarray(src)
+    except (TypeError, ValueError):  # ragged lists
+        a = None
+    ok = a is not None and a.dtype != object and (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (1, 3, 4))) and a.size > 0
+    if not ok:
+        what = f"a {type(src).__name__}" if a is None or a.dtype == object else f"an array of shape {a.shape} ({a.dtype})"
+        name = f"image element '{label}'" if label else "an image element"
+        raise TypeError(f"{name}: its source gives {what}, not a picture (an H x W grey or H x W x 3 colour array; "
+                        "a vision pipeline's result shows as its .image)")
+    return a, pts
 
 
 #: the rings' colours: a red ring with a black one just outside it (seen on light and dark pictures)
