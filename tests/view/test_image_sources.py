@@ -42,3 +42,4 @@ def test_a_source_that_is_no_picture_pauses_the_lab_saying_what_it_gives(served)
     text = str(err)
     assert "not a picture" in text and "(5,)" in text and ".image" in text, text
     served.app.frame()  # and the app goes on serving
+

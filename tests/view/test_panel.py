@@ -255,3 +255,19 @@ def test_text_being_typed_is_not_overwritten_while_the_model_keeps_its_value(ser
     served.app.model.L = 0.7  # now the model itself changes
     served.app.frame()
     assert b.handle.value == pytest.approx(0.7)
+
+
+def test_the_readout_says_the_server_is_busy_only_below_the_labs_own_rate(served):
+    """A tab shown 10 frames a second: held back for a lab that asks 30, not for one that asks
+    10 (the trial's lab at ``fps: 10`` read 'showing 10 frames/s (the server is busy)')."""
+    panel = served.view.panel
+    served.app.play()
+    served.app.shown_fps = 10.0
+    served.app.frame()
+    assert "showing 10 frames/s" in panel._readout_shown
+    served.app.sim.fps = 10.0
+    served.app.frame()
+    assert "frames/s" not in panel._readout_shown and "busy" not in panel._readout_shown
+    served.app.shown_fps = 6.0  # and below the lab's own 10, it is held back again
+    served.app.frame()
+    assert "showing 6 frames/s" in panel._readout_shown

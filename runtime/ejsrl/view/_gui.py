@@ -116,7 +116,8 @@ def has_scene(elements: Any) -> bool:
 #: below this measured speed (1.0: as fast as the lab asks) the readout says the server (or, in a web page, the browser) is busy
 SLOW_SPEED = 0.95
 #: below this many frames a second shown to a tab (classroom serving: ``app.shown_fps``,
-#: set by :mod:`ejsrl.app._sessions`) the readout says so too
+#: set by :mod:`ejsrl.app._sessions`), or below SLOW_SPEED of the lab's own ``fps`` when it
+#: asks for fewer, the readout says so too (a lab at ``fps: 10`` showing 10 is not held back)
 SLOW_SHOWN_FPS = 20.0
 #: who is too busy when the readout says so: a web page (``ejsgen build --web``) runs the lab in
 #: the student's browser, with no server
@@ -636,7 +637,9 @@ class Panel:
             text += slow_text(speed, bool(getattr(getattr(self.app, "sim", None), "realtime", False)))
         else:
             shown = getattr(self.app, "shown_fps", None) if self.app.is_playing() else None
-            if shown is not None and shown < SLOW_SHOWN_FPS:
+            asked = getattr(getattr(self.app, "sim", None), "fps", None)
+            limit = SLOW_SHOWN_FPS if not asked else min(SLOW_SHOWN_FPS, SLOW_SPEED * float(asked))
+            if shown is not None and shown < limit:
                 text += f" · *showing {shown:.0f} frames/s ({BUSY})*"
         if text != self._readout_shown:
             set_markdown(self.readout, text)
