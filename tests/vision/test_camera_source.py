@@ -109,6 +109,12 @@ def test_a_missing_camera_pauses_the_lab_with_a_message_and_the_app_keeps_servin
     app.step_once()
     assert app.error is not None
     assert "camera 'cam' (source 97): cannot open camera 97: there is no such camera" in app.error.message
+    # said at the camera element, whose source: is what to change (not at the code that captured),
+    # and what to do said as that element is written
+    spec = (tmp_path / "lab.ejs.yaml").read_text().splitlines()
+    line = next(i for i, text in enumerate(spec, 1) if "- camera:" in text)
+    assert app.error.where.startswith(f"lab.ejs.yaml:{line}:"), app.error.where
+    assert "source: clip.mp4" in app.error.message and "ImageSource" not in app.error.message
     assert not app.playing
     # the session lives on: a reset clears the message, another step says it again
     app.reset()

@@ -292,7 +292,13 @@ class App(Controller):
         if source is not None:
             node = self.scene.world[name]
             t = self.model._ejs_time() if self.model.INDEPENDENT is not None else None
-            return self._camera_sources.frame(name, source, node.props.get("resolution", (320, 240)), t)
+            try:
+                return self._camera_sources.frame(name, source, node.props.get("resolution", (320, 240)), t)
+            except (ValueError, RuntimeError) as e:  # said at the camera element (its source:), not at the code that captured
+                where = getattr(self.scene, "where_of", lambda _n: "")(name)
+                if not where:
+                    raise
+                raise UserCodeError(f"{type(e).__name__}: {e}", where) from None
         self.scene.update(self.model, None)
         rgb, _depth = render(self.scene.world, name)
         return rgb

@@ -244,8 +244,9 @@ class CameraSources:
             what = source if isinstance(source, int) or "://" in str(source) else str(self.base_dir / str(source))
             try:
                 src = ImageSource(what)
-            except ValueError as e:
-                raise ValueError(f"camera '{name}' (source {source!r}): {e}") from None
+            except ValueError as e:  # what to do, said as a camera element's source is written
+                why = str(e).replace("read a video file instead: ImageSource('clip.mp4')", "give the camera a video file instead (source: clip.mp4)")
+                raise ValueError(f"camera '{name}' (source {source!r}): {why}") from None
             if kept is not None:
                 kept[1].close()
             self._open[name] = (source, src)

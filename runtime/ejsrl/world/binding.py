@@ -95,6 +95,10 @@ class SceneSync:
         for element in elements:
             self._build(element, None)
 
+    def where_of(self, name: str) -> str:
+        """The spec location of the element that made node ``name`` ("" if none did)."""
+        return next((b.element.where for b in self.bindings if b.node.name == name), "")
+
     # -- building ---------------------------------------------------------------------------
     def _build(self, element: Node3D, parent: Node | None) -> None:
         node = self._make_node(element)
