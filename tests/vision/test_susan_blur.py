@@ -4,6 +4,7 @@ recall against the scenes' ground truth and against GFTT + cornerSubPix at the s
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
@@ -78,6 +79,17 @@ def test_a_bad_blur_says_what_it_takes() -> None:
         susan_corners(img, blur="yes")
     with pytest.raises(ValueError, match=r"blur is the image's blur in pixels \(>= 0\)"):
         susan_corners(img, blur=-1)
+    # a blur so large that next to nothing is left to search is said, not an empty answer (the trial's blur=50)
+    big = np.zeros((480, 640), np.uint8)
+    big[100:300, 200:400] = 200
+    with pytest.raises(ValueError, match=r"a blur of 50 px widens the mask 85 times, which leaves 8 x 6 pixels"):
+        susan_corners(big, blur=50)
+    assert len(susan_corners(big, blur=10)) == 4  # 17x: 38 x 28 pixels, the square's four corners
+    # a blur read from a small image goes as far as the image allows
+    small = cv2.GaussianBlur(big[::8, ::8].copy(), (0, 0), 3.0)
+    susan_corners(small, blur="auto")
+    with pytest.raises(ValueError, match=r"in \(0, 255\].*above 255 every pixel is as similar"):
+        susan_corners(big, 300)
 
 
 @pytest.mark.parametrize("blur", [1.0, 1.5])

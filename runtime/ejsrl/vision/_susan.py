@@ -785,6 +785,13 @@ def susan_corners(
         from ejsrl.vision import _susan_scale
 
         _sigma, f = _susan_scale.blur_scale(gray, blur)
+        if f > 1.0 and min(gray.shape) / f < 16 and isinstance(blur, str):  # read from a small image: as far as it goes
+            f = max(1.0, min(gray.shape) / 16)
+        if f > 1.0 and min(gray.shape) / f < 16:
+            raise ValueError(f"susan_corners: a blur of {_sigma:.3g} px widens the mask {f:.3g} times, which leaves "
+                             f"{max(1, round(gray.shape[1] / f))} x {max(1, round(gray.shape[0] / f))} pixels of this "
+                             f"{gray.shape[1]} x {gray.shape[0]} image to search (at least 16 on a side): give the "
+                             "camera's real blur, or a larger image")
         if f > 1.0:
             opts = dict(g=g, nms_radius=nms_radius, quality=quality, min_response=min_response, max_corners=max_corners)
             # refined where they were found, brought back, and refined again on the full image in
@@ -845,8 +852,9 @@ def _threshold(gray: NDArray[np.uint8], t: float | str) -> float:
         from ejsrl.vision import _susan_scale
 
         return _susan_scale.auto_threshold(gray)
-    if not float(t) > 0:
-        raise ValueError(f"susan_corners: t must be positive (grey levels), or 'auto', got {t}")
+    if not 0 < float(t) <= 255:
+        raise ValueError(f"susan_corners: t is a brightness threshold in grey levels, in (0, 255] (25: the paper's), "
+                         f"or 'auto', got {t}" + (" (above 255 every pixel is as similar as any other: no corner)" if float(t) > 255 else ""))
     return float(t)
 
 
