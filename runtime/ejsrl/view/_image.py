@@ -136,15 +136,20 @@ LAID_OUT = "laid-out"
 # The probe's hook (``this``: its <img>). It polls (50 ms) until its copy is the only one in the
 # page, after the first animation frame (the panel's first layout pass has placed both copies
 # by then), then writes LAID_OUT into the input whose label names data-ev, as React expects.
+# Until the server takes the probe away (it does when it shows the element), it writes again
+# every second, first an empty value so that React sees a change: with three or more images in a
+# panel, the write of one of them now and then never reached the server (the trial's middle
+# image stayed hidden for IMAGE_SETTLE seconds); the server ignores anything but LAID_OUT.
 _PROBE_HOOK = (
-    "(function(img){var id=img.getAttribute('data-ejs-image'),ev=img.getAttribute('data-ev');"
+    "(function(img){var id=img.getAttribute('data-ejs-image'),ev=img.getAttribute('data-ev'),n=0;"
     "function field(){var w=document.querySelector('label[for=\"'+ev+'\"]');"
     "for(var i=0;w&&i<6&&!(w.querySelector&&w.querySelector('input'));i++)w=w.parentElement;"
     "return w?w.querySelector('input'):null}"
+    "function put(f,v){Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set.call(f,v);"
+    "f.dispatchEvent(new Event('input',{bubbles:true}))}"
     "function check(){if(!img.isConnected)return;var f=field();"
     "if(!f||document.querySelectorAll('img[data-ejs-image=\"'+id+'\"]').length!==1){setTimeout(check,50);return}"
-    "Object.getOwnPropertyDescriptor(HTMLInputElement.prototype,'value').set.call(f,'" + LAID_OUT + "');"
-    "f.dispatchEvent(new Event('input',{bubbles:true}))}"
+    "if(n>0)put(f,'');put(f,'" + LAID_OUT + "');if(++n<30)setTimeout(check,1000)}"
     "requestAnimationFrame(function(){setTimeout(check,50)})})(this)"
 )
 
