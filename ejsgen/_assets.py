@@ -22,7 +22,7 @@ from pathlib import Path, PurePosixPath
 
 from ejsgen.errors import Location, SpecError
 
-__all__ = ["checked_asset", "MESH_EXTENSIONS", "ASSET_FUNCTION", "asset_names", "asset_call", "opens_an_asset", "unlisted_file"]
+__all__ = ["checked_asset", "urdf_meshes", "MESH_EXTENSIONS", "ASSET_FUNCTION", "asset_names", "asset_call", "opens_an_asset", "unlisted_file"]
 
 #: extensions read as meshes by the runtime (``ejsrl.world.mesh``)
 MESH_EXTENSIONS = ("obj", "stl", "ply", "glb", "gltf", "off", "dae", "3mf", "wrl", "wrz", "vrml")
@@ -72,6 +72,57 @@ def checked_asset(spec_dir: Path, rel: str, where: Location, what: str = "asset"
     if mesh or p.suffix.lower().lstrip(".") in MESH_EXTENSIONS:
         _check_mesh(real, rel, where, what)
     return p.as_posix(), real
+
+
+def urdf_meshes(spec_dir: Path, real: Path, rel: str, where: Location) -> list[str]:
+    """The mesh files the URDF file ``rel`` (``real``: its real path, a listed asset) names, as
+    paths relative to the spec's folder, found as the runtime finds them (``ejsrl.robotics.urdf``:
+    a relative name beside the URDF file, ``package://pkg/rel`` as ``rel`` or ``pkg/rel`` there or
+    in a parent folder), so that the app gets them too. A URDF that is not XML, or whose root is
+    not ``<robot>``, or that names a mesh the spec's folder does not have, is a ``SpecError`` at
+    ``where`` (found at build time: at run time a broken file read as a tree of several roots)."""
+    import xml.etree.ElementTree as ET
+
+    data = real.read_bytes()
+    if b"<!ENTITY" in data or b"<!DOCTYPE" in data:
+        raise SpecError(where, f"the URDF file '{rel}' declares a DOCTYPE or entities, which a robot description does not need",
+                        "remove the <!DOCTYPE ...> / <!ENTITY ...> lines")
+    try:
+        root = ET.fromstring(data)
+    except ET.ParseError as e:
+        line, col = e.position
+        raise SpecError(where, f"the URDF file '{rel}' is not well-formed XML: {str(e).split(':')[0]} at its line {line}, "
+                        f"column {col + 1}", "fix the file (a missing closing tag, or a truncated file?)") from None
+    if root.tag != "robot":
+        raise SpecError(where, f"the URDF file '{rel}' has <{root.tag}> at its root, not <robot>", "name a URDF file (<robot name=...>)")
+    folder = spec_dir.resolve()
+    urdf_dir = real.parent
+    out: list[str] = []
+    for mesh in root.iter("mesh"):
+        name = mesh.get("filename", "")
+        for prefix in ("package://", "file://"):
+            if name.startswith(prefix):
+                name = name[len(prefix):]
+                break
+        parts = PurePosixPath(name.replace("\\", "/")).parts
+        found = None
+        if name and not PurePosixPath(name).is_absolute() and ".." not in parts:
+            for base in [urdf_dir, *urdf_dir.parents]:
+                if not base.is_relative_to(folder):
+                    break
+                for k in range(len(parts)):
+                    p = base.joinpath(*parts[k:])
+                    if p.is_file():
+                        found = p
+                        break
+                if found is not None:
+                    break
+        if found is None or not found.resolve().is_relative_to(folder):
+            raise SpecError(where, f"the URDF file '{rel}' names the mesh '{mesh.get('filename', '')}', which is not in the spec's folder",
+                            "put the mesh beside the URDF file (or in a subfolder, as the URDF names it): the app is made only "
+                            "from files inside the spec's folder")
+        out.append(found.relative_to(folder).as_posix() if found.is_relative_to(folder) else found.resolve().relative_to(folder).as_posix())
+    return sorted(set(out))
 
 
 def _check_mesh(real: Path, rel: str, where: Location, what: str) -> None:

@@ -501,10 +501,17 @@ class Compiler:
 
         try:
             name, real = checked_asset(self.spec_dir, rel, self.loc(path), what, mesh=what == "mesh file")
+            meshes = []
+            if name.lower().endswith(".urdf"):  # its meshes travel with it
+                from ejsgen._assets import urdf_meshes
+
+                meshes = [checked_asset(self.spec_dir, m, self.loc(path), "URDF mesh", mesh=True) for m in
+                          urdf_meshes(self.spec_dir, real, name, self.loc(path))]
         except SpecError as err:
             self.errors.append(err)
             return None
         self.assets[name] = real
+        self.assets.update(meshes)
         return name
 
     # -- the whole spec -----------------------------------------------------------------------------------
