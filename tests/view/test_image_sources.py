@@ -43,3 +43,15 @@ def test_a_source_that_is_no_picture_pauses_the_lab_saying_what_it_gives(served)
     assert "not a picture" in text and "(5,)" in text and ".image" in text, text
     served.app.frame()  # and the app goes on serving
 
+
+
+def test_a_number_or_a_string_is_said_in_plain_words(served):
+    from ejsrl.view._image import picture_of
+
+    for value, said in ((3.5, "a single number (3.5)"), ("hello", "a str ('hello')"), ([1, [2]], "a list")):
+        try:
+            picture_of(value, None, "Cam")
+        except TypeError as e:
+            assert f"image element 'Cam': its source gives {said}, not a picture" in str(e), str(e)
+        else:
+            raise AssertionError(value)

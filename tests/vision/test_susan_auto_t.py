@@ -63,6 +63,6 @@ def test_dim_boxes_on_a_floor_are_found_as_gftt_finds_them(blur: float, noise: f
 
 def test_a_threshold_that_is_neither_a_number_nor_auto_is_refused() -> None:
     img = np.zeros((40, 40), np.uint8)
-    for bad in ("autp", 0, -3.0):
+    for bad in ("autp", 0, -3.0, None, [25], True):
         with pytest.raises(ValueError, match="'auto'"):
             susan_corners(img, bad)

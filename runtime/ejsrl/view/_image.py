@@ -74,7 +74,12 @@ def picture_of(src: Any, pts: Any, label: str = "") -> tuple[Any, Any]:
         a = None
     ok = a is not None and a.dtype != object and (a.ndim == 2 or (a.ndim == 3 and a.shape[2] in (1, 3, 4))) and a.size > 0
     if not ok:
-        what = f"a {type(src).__name__}" if a is None or a.dtype == object else f"an array of shape {a.shape} ({a.dtype})"
+        if a is None or a.dtype == object or a.dtype.kind in "USO":
+            what = f"a {type(src).__name__}" + (f" ({src!r:.40})" if isinstance(src, str) else "")
+        elif a.ndim == 0:
+            what = f"a single number ({a.item()!r})"
+        else:
+            what = f"an array of shape {a.shape} ({a.dtype})"
         name = f"image element '{label}'" if label else "an image element"
         raise TypeError(f"{name}: its source gives {what}, not a picture (an H x W grey or H x W x 3 colour array; "
                         "a vision pipeline's result shows as its .image)")

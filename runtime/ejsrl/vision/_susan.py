@@ -788,7 +788,7 @@ def susan_corners(
         if f > 1.0 and min(gray.shape) / f < 16 and isinstance(blur, str):  # read from a small image: as far as it goes
             f = max(1.0, min(gray.shape) / 16)
         if f > 1.0 and min(gray.shape) / f < 16:
-            raise ValueError(f"susan_corners: a blur of {_sigma:.3g} px widens the mask {f:.3g} times, which leaves "
+            raise ValueError(f"susan_corners: a blur of {blur:g} px widens the mask {f:.3g} times, which leaves "
                              f"{max(1, round(gray.shape[1] / f))} x {max(1, round(gray.shape[0] / f))} pixels of this "
                              f"{gray.shape[1]} x {gray.shape[0]} image to search (at least 16 on a side): give the "
                              "camera's real blur, or a larger image")
@@ -852,6 +852,9 @@ def _threshold(gray: NDArray[np.uint8], t: float | str) -> float:
         from ejsrl.vision import _susan_scale
 
         return _susan_scale.auto_threshold(gray)
+    if isinstance(t, (bool, np.bool_)) or not isinstance(t, (int, float, np.integer, np.floating)):
+        raise ValueError(f"susan_corners: t is a brightness threshold in grey levels, a number in (0, 255] (25: the paper's), "
+                         f"or 'auto', got {t!r}")
     if not 0 < float(t) <= 255:
         raise ValueError(f"susan_corners: t is a brightness threshold in grey levels, in (0, 255] (25: the paper's), "
                          f"or 'auto', got {t}" + (" (above 255 every pixel is as similar as any other: no corner)" if float(t) > 255 else ""))
