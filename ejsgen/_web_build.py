@@ -302,7 +302,17 @@ def _software_messages() -> list[dict]:
     off = m.EnvironmentMapMessage(hdri_data=None, background=False, background_blurriness=0.0, background_intensity=1.0,
                                   background_wxyz=(1.0, 0.0, 0.0, 0.0), environment_intensity=1.0,
                                   environment_wxyz=(1.0, 0.0, 0.0, 0.0))
-    return [off.as_serializable_dict()]
+    # what the environment map lit, lit instead by a hemisphere light (no prefiltering: free):
+    # without it a page's scene was drawn much darker than the served app's (session 12's trial)
+    sky = m.HemisphereLightMessage(name=SOFTWARE_LIGHT, props=m.HemisphereLightProps(
+        sky_color=(255, 255, 255), ground_color=(150, 150, 150), intensity=SOFTWARE_LIGHT_INTENSITY))
+    return [off.as_serializable_dict(), sky.as_serializable_dict()]
+
+
+#: the scene node of that light, and its intensity (matched by eye to the served app's
+#: environment-lit scene on the same software WebGL: tests/web/test_web_robotics.py compares them)
+SOFTWARE_LIGHT = "/ejsweb_software_light"
+SOFTWARE_LIGHT_INTENSITY = 3.0
 
 
 def _index_html(title: str) -> str:

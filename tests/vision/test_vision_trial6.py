@@ -342,7 +342,8 @@ def _reference_imports() -> list[tuple[str, str]]:
     fenced = re.findall(r"```[^\n]*\n(.*?)```", text, flags=re.S)
     inline = re.findall(r"`([^`\n][^`]*)`", re.sub(r"```.*?```", "", text, flags=re.S))
     found: list[tuple[str, str]] = []
-    for code in fenced + inline:
+    # a fenced block line by line (one import a line), inline code whole (wrapped over lines)
+    for code in [line for block in fenced for line in block.splitlines()] + inline:
         code = " ".join(code.split())
         for mod, names in re.findall(r"\bfrom ([\w.]+) import ([\w ,]+)", code):
             found += [(mod, n.strip()) for n in names.split(",") if n.strip()]
