@@ -144,8 +144,11 @@ def _cmd_build(args: argparse.Namespace) -> int:
         from ejsgen._web_build import build_web
 
         site = build_web(args.spec, args.output or f"{default_out_dir(Path(args.spec))}-web")
+        parts = {"Python": "python.wasm", "its library": next((k for k in site.sizes if k.endswith(".zip")), ""), "the lab": "lab.bin"}
+        split = ", ".join(f"{label} {site.sizes[k][1] / 1e6:.1f}" for label, k in parts.items() if k in site.sizes)
         print(f"built {site.out} in {site.seconds:.1f} s: a web page, {site.download_bytes / 1e6:.1f} MB for a first "
-              f"visit; try it: python -m http.server -d {shlex.quote(str(site.out))} 8000")
+              f"visit ({split}, the page {(site.download_bytes - sum(gz for _r, gz in site.sizes.values())) / 1e6:.1f}); "
+              f"try it: python -m http.server -d {shlex.quote(str(site.out))} 8000")
         return 0
     start = time.perf_counter()
     out = build(args.spec, args.output, bundle=args.bundle)

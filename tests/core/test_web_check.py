@@ -288,3 +288,20 @@ def test_build_web_refuses_at_the_command_line_and_writes_nothing(tmp_path: Path
     assert "Traceback" not in r.stderr
     assert not (tmp_path / "site").exists()
     assert sorted(p.name for p in tmp_path.iterdir()) == ["lab.ejs.yaml"]
+
+
+def test_the_build_says_what_a_first_visit_downloads_part_by_part(tmp_path: Path, monkeypatch, capsys) -> None:
+    """The trial found only the total in the build's line; the split was in manifest.json alone."""
+    import argparse
+
+    from ejsgen import _web_build, cli
+
+    out = tmp_path / "site"
+    (out / "ejsweb").mkdir(parents=True)
+    (out / "index.html").write_bytes(b"x" * 600_000)
+    (out / "ejsweb" / "bridge.js").write_bytes(b"y" * 300_000)
+    site = _web_build.WebBuild(out, {"python.wasm": (70e6, 19_300_000), "python315.zip": (9e6, 3_800_000), "lab.bin": (5e6, 1_800_000)}, 11.4)
+    monkeypatch.setattr(_web_build, "build_web", lambda spec, dest: site)
+    assert cli._cmd_build(argparse.Namespace(web=True, spec="lab.ejs.yaml", output=str(out))) == 0
+    line = capsys.readouterr().out
+    assert "25.8 MB for a first visit (Python 19.3, its library 3.8, the lab 1.8, the page 0.9)" in line, line
