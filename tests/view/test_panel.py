@@ -271,3 +271,24 @@ def test_the_readout_says_the_server_is_busy_only_below_the_labs_own_rate(served
     served.app.shown_fps = 6.0  # and below the lab's own 10, it is held back again
     served.app.frame()
     assert "showing 6 frames/s" in panel._readout_shown
+
+
+def test_a_lab_that_fails_to_start_shows_its_controls_spec_values(tmp_path):
+    """Its init raised: the error is shown, and a slider shows the value its variable was given in
+    the spec (42), not its minimum (the trial's sliders at -180 and -140)."""
+    from ejsgen.cli import build
+    from ejsrl.app import load_app
+    from ejsrl.view.viser_view import ViserView, make_server
+
+    spec = tmp_path / "f.ejs.yaml"
+    spec.write_text("ejs: 1\ntitle: Fails at start\nmodel:\n  variables:\n    t: 0.0\n    a: {value: 42.0}\n"
+                    "  init: |\n    x = 1 / 0\n  evolution:\n    - code: t = t + 0.1\n"
+                    "view:\n  - slider: {bind: a, min: -100, max: 100, label: A}\n")
+    app = load_app(build(spec, tmp_path / "app"))
+    assert app.error is not None and "ZeroDivisionError" in app.error.message
+    server, _url = make_server("127.0.0.1", 0)
+    try:
+        view = ViserView(app, server)
+        assert view.panel.controls[0].handle.value == 42.0
+    finally:
+        server.stop()

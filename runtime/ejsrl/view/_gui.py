@@ -459,7 +459,13 @@ class Panel:
 
     def _initial(self, control: Control) -> Any:
         with self.app.lock:
-            value = self.app.safe_value(Dynamic(control.get, control.bind), control.where)
+            if self.app.error is None:
+                value = self.app.safe_value(Dynamic(control.get, control.bind), control.where)
+            else:  # the lab failed to start: show the value the variable has (its spec value), not the control's minimum
+                try:
+                    value = control.get(self.app.model)
+                except Exception:  # noqa: BLE001 - it has none: the control's own default
+                    value = None
         return _display_fn(control)(value)
 
     def _build_control(self, c: Control) -> None:
