@@ -117,4 +117,4 @@ def test_four_pictures_in_a_panel_are_each_shown_by_their_page(browser_context, 
     trial: the middle one of three): the probe writes again until the server takes it away."""
     spec = tmp_path / "four.ejs.yaml"
     spec.write_text(FOUR)
-    assert _console_errors(browser_context, spec, frames=10) == []
+    assert _console_errors(browser_context, spec, frames=2) == []

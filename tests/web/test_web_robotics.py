@@ -36,6 +36,8 @@ def test_robotics_page_runs_the_native_numbers(page, web_lab, name: str) -> None
     got = page.evaluate("ejsWeb.call('headless', {duration: 2})")
     assert got["status"] == 0
     assert_same_csv(got["csv"], native_csv(app_dir, 2), more_rows_than=10)
+    if name == "urdf_arm":
+        _lit_as_served(page, app_dir)
     if name == "urdf_arm":  # its page got lxml's Python (the browser's Python has lxml compiled in) and yourdfpy's
         import json
         import struct
@@ -66,19 +68,30 @@ def _arm_brightness(page) -> float:
     return float(img[drawn].mean())
 
 
-def test_a_page_on_software_webgl_lights_the_scene_as_the_served_app_does(page, browser_context, web_lab) -> None:
+
+def _arm_brightness(page) -> float:
+    """The mean grey of the 3D view's non-background pixels (the arm and its shadow), from a screenshot."""
+    import cv2
+    import numpy as np
+
+    page.wait_for_timeout(3000)  # the meshes drawn (the view's first frames after Play shows)
+    png = page.locator("canvas").first.screenshot()
+    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_GRAYSCALE).astype(float)
+    drawn = img < 225  # the grid's white floor and the sky are the background
+    assert drawn.sum() > 2000, drawn.sum()
+    return float(img[drawn].mean())
+
+
+def _lit_as_served(page, app_dir) -> None:
     """On software WebGL the page leaves viser's environment map out (its prefiltering was most of a
     start's CPU) and lights the scene with a hemisphere light instead: the UR5 is drawn about as
     bright as the served app draws it in the same browser (it was near-black: session 12's trial)."""
     from testkit.browser import serving
 
-    _site, url, app_dir = web_lab("urdf_arm")
-    page.goto(url)
-    page.get_by_role("button", name="Play").wait_for(state="visible", timeout=120_000)
     assert page.evaluate("ejsWeb.software") is True  # headless Chromium: SwiftShader
     in_page = _arm_brightness(page)
     with serving(app_dir) as (_app, served_url):
-        served = browser_context.new_page()
+        served = page.context.new_page()
         try:
             served.goto(served_url)
             served.get_by_role("button", name="Play").wait_for(state="visible", timeout=120_000)
