@@ -303,7 +303,7 @@ def _software_messages() -> list[dict]:
                                   background_wxyz=(1.0, 0.0, 0.0, 0.0), environment_intensity=1.0,
                                   environment_wxyz=(1.0, 0.0, 0.0, 0.0))
     # what the environment map lit, lit instead by a hemisphere light (no prefiltering: free):
-    # without it a page's scene was drawn much darker than the served app's (session 12's trial)
+    # without it a page's scene was drawn much darker than the served app's (session 11's second trial)
     sky = m.HemisphereLightMessage(name=SOFTWARE_LIGHT, props=m.HemisphereLightProps(
         sky_color=(255, 255, 255), ground_color=(150, 150, 150), intensity=SOFTWARE_LIGHT_INTENSITY))
     return [off.as_serializable_dict(), sky.as_serializable_dict()]

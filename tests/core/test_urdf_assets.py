@@ -1,4 +1,4 @@
-"""A URDF file listed in ``assets:`` brings the meshes it names into the app (session 12's trial: a
+"""A URDF file listed in ``assets:`` brings the meshes it names into the app (session 11's second trial: a
 URDF's own mesh was left behind, and the built app failed at start with "mesh file not found"),
 and a broken URDF is a build error at its ``assets:`` line, not a misleading message at run time.
 

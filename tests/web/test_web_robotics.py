@@ -85,7 +85,7 @@ def _arm_brightness(page) -> float:
 def _lit_as_served(page, app_dir) -> None:
     """On software WebGL the page leaves viser's environment map out (its prefiltering was most of a
     start's CPU) and lights the scene with a hemisphere light instead: the UR5 is drawn about as
-    bright as the served app draws it in the same browser (it was near-black: session 12's trial)."""
+    bright as the served app draws it in the same browser (it was near-black: session 11's second trial)."""
     from testkit.browser import serving
 
     assert page.evaluate("ejsWeb.software") is True  # headless Chromium: SwiftShader
