@@ -113,7 +113,7 @@ view:
 @pytest.mark.browser
 def test_four_pictures_in_a_panel_are_each_shown_by_their_page(browser_context, tmp_path):
     """With three or more image elements, one write of the probe's message now and then never
-    reached the server, and that picture stayed hidden until the 30 s fallback (session 12's
+    reached the server, and that picture stayed hidden until the 30 s fallback (session 11's second
     trial: the middle one of three): the probe writes again until the server takes it away."""
     spec = tmp_path / "four.ejs.yaml"
     spec.write_text(FOUR)
