@@ -91,6 +91,22 @@ def scene(rng: np.random.Generator) -> tuple[list[np.ndarray], list[int]]:
 BW, BH = 640, 480
 
 
+def _visible_vertices(boxes, cam, T_cam: np.ndarray, dep: np.ndarray, seen) -> list[np.ndarray]:
+    """The pixels (x, y) of the corners of ``boxes`` ((T, size) each) at least 8 px inside the
+    picture whose 3x3 depth window (``dep``) passes ``seen(window, z)``, z the corner's depth."""
+    H, W = dep.shape
+    verts = []
+    for T, s in boxes:
+        for corner in np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T:
+            p = (T @ np.append(corner * s / 2, 1.0))[:3]
+            px, z = cam.project(p[None], T_cam)[0], cam.depth(p[None], T_cam)[0]
+            if 8 <= px[0] <= W - 9 and 8 <= px[1] <= H - 9:
+                x, y = int(round(px[0])), int(round(px[1]))
+                if seen(dep[y - 1 : y + 2, x - 1 : x + 2], z):
+                    verts.append(px)
+    return verts
+
+
 def cubes(rng: np.random.Generator, realism) -> tuple[np.ndarray, np.ndarray]:
     """Six boxes of random size and pose seen from above and aside, rendered at 640x480 (grey),
     and their visible vertices (N, 2) (a vertex hidden by something nearer is left out)."""
@@ -115,15 +131,7 @@ def cubes(rng: np.random.Generator, realism) -> tuple[np.ndarray, np.ndarray]:
     T_cam = look_at([0.5 * math.cos(rng.uniform(0, 6.3)), -1.0, 1.0], [0, 0, 0], [0, 0, 1])
     rgb, _ = render3d(w, cam, T_cam, realism=realism, rng=rng, backend="numpy", background=(0.85, 0.85, 0.85))
     dep = render_depth(w, cam, T_cam, backend="numpy")
-    verts = []
-    for T, s in boxes:
-        for corner in np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T:
-            p = (T @ np.append(corner * s / 2, 1.0))[:3]
-            px, z = cam.project(p[None], T_cam)[0], cam.depth(p[None], T_cam)[0]
-            if 8 <= px[0] <= BW - 9 and 8 <= px[1] <= BH - 9:
-                x, y = int(round(px[0])), int(round(px[1]))
-                if dep[y - 1 : y + 2, x - 1 : x + 2].min() >= z - 0.01:
-                    verts.append(px)
+    verts = _visible_vertices(boxes, cam, T_cam, dep, lambda window, z: window.min() >= z - 0.01)  # nothing nearer
     return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), np.array(verts)
 
 
@@ -155,15 +163,7 @@ def floor_boxes(rng: np.random.Generator, realism) -> tuple[np.ndarray, np.ndarr
     T_cam = look_at(r * np.array([math.cos(az) * math.cos(el), math.sin(az) * math.cos(el), math.sin(el)]), [0, 0, 0.05], [0, 0, 1])
     rgb, _ = render3d(w, cam, T_cam, realism=realism, rng=rng, backend="numpy")
     dep = render_depth(w, cam, T_cam, backend="numpy")
-    verts = []
-    for T, s in boxes:
-        for corner in np.array(np.meshgrid([-1, 1], [-1, 1], [-1, 1])).reshape(3, -1).T:
-            p = (T @ np.append(corner * s / 2, 1.0))[:3]
-            px, z = cam.project(p[None], T_cam)[0], cam.depth(p[None], T_cam)[0]
-            if 8 <= px[0] <= W - 9 and 8 <= px[1] <= H - 9:
-                x, y = int(round(px[0])), int(round(px[1]))
-                if np.abs(dep[y - 1 : y + 2, x - 1 : x + 2] - z).min() < 0.01:
-                    verts.append(px)
+    verts = _visible_vertices(boxes, cam, T_cam, dep, lambda window, z: np.abs(window - z).min() < 0.01)  # a surface there
     return cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY), np.array(verts).reshape(-1, 2)
 
 

@@ -121,7 +121,7 @@ def urdf_meshes(spec_dir: Path, real: Path, rel: str, where: Location) -> list[s
             raise SpecError(where, f"the URDF file '{rel}' names the mesh '{mesh.get('filename', '')}', which is not in the spec's folder",
                             "put the mesh beside the URDF file (or in a subfolder, as the URDF names it): the app is made only "
                             "from files inside the spec's folder")
-        out.append(found.relative_to(folder).as_posix() if found.is_relative_to(folder) else found.resolve().relative_to(folder).as_posix())
+        out.append(found.relative_to(folder).as_posix())  # found lies under the URDF's real folder
     return sorted(set(out))
 
 

@@ -68,20 +68,6 @@ def _arm_brightness(page) -> float:
     return float(img[drawn].mean())
 
 
-
-def _arm_brightness(page) -> float:
-    """The mean grey of the 3D view's non-background pixels (the arm and its shadow), from a screenshot."""
-    import cv2
-    import numpy as np
-
-    page.wait_for_timeout(3000)  # the meshes drawn (the view's first frames after Play shows)
-    png = page.locator("canvas").first.screenshot()
-    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_GRAYSCALE).astype(float)
-    drawn = img < 225  # the grid's white floor and the sky are the background
-    assert drawn.sum() > 2000, drawn.sum()
-    return float(img[drawn].mean())
-
-
 def _lit_as_served(page, app_dir) -> None:
     """On software WebGL the page leaves viser's environment map out (its prefiltering was most of a
     start's CPU) and lights the scene with a hemisphere light instead: the UR5 is drawn about as

@@ -295,7 +295,7 @@ class App(Controller):
             try:
                 return self._camera_sources.frame(name, source, node.props.get("resolution", (320, 240)), t)
             except (ValueError, RuntimeError) as e:  # said at the camera element (its source:), not at the code that captured
-                where = getattr(self.scene, "where_of", lambda _n: "")(name)
+                where = self.scene.where_of(name)
                 if not where:
                     raise
                 raise UserCodeError(f"{type(e).__name__}: {e}", where) from None

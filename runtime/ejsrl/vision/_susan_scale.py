@@ -99,21 +99,31 @@ def estimate_noise(gray: NDArray[np.uint8], edges: float = 0.1) -> float:
     g = np.asarray(gray, dtype=np.float32)
     if g.shape[0] < 3 or g.shape[1] < 3:
         return 0.0
+    return _noise(g, _sobel(g), edges)
+
+
+def _sobel(g: NDArray[np.float32]) -> NDArray[np.float32]:
+    """The magnitude of the image's 3x3 Sobel gradient."""
+    return cv2.magnitude(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3))
+
+
+def _noise(g: NDArray[np.float32], mag: NDArray[np.float32], edges: float) -> float:
+    """``estimate_noise`` of the float image ``g`` (at least 3 x 3), given its Sobel magnitude ``mag``."""
     r = np.abs(cv2.filter2D(g, cv2.CV_32F, _NOISE_MASK)[1:-1, 1:-1])
-    mag = cv2.magnitude(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3))[1:-1, 1:-1]
+    mag = mag[1:-1, 1:-1]
     keep = mag <= np.percentile(mag, 100.0 * (1.0 - edges))
     if not keep.any():
         return 0.0
     return float(np.sqrt(np.pi / 2.0) / 6.0 * r[keep].mean())
 
 
-def edge_steps(gray: NDArray[np.uint8], sigma: float | None = None) -> NDArray[np.float32]:
+def edge_steps(gray: NDArray[np.uint8], sigma: float | None = None, mag: NDArray[np.float32] | None = None) -> NDArray[np.float32]:
     """The grey-level steps of the image's edges: at the pixels whose Sobel gradient is the
     largest in its 3x3 window and stands out of the noise (``sigma``: ``estimate_noise``'s), the
-    range (largest less smallest) of their 5x5 window."""
+    range (largest less smallest) of their 5x5 window. ``mag``: the Sobel magnitude, if known."""
     g = np.asarray(gray, dtype=np.float32)
     sigma = estimate_noise(gray) if sigma is None else sigma
-    mag = cv2.magnitude(cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3), cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3))
+    mag = _sobel(g) if mag is None else mag
     peak = cv2.dilate(mag, np.ones((3, 3), np.uint8))
     k5 = np.ones((5, 5), np.uint8)
     span = cv2.dilate(g, k5) - cv2.erode(g, k5)
@@ -130,9 +140,11 @@ def auto_threshold(gray: NDArray[np.uint8]) -> float:
     box, 10-20 grey levels apart, are told apart; at most the paper's 25 (checkerboards and other
     high-contrast pictures keep it); and at least ``T_MIN`` and ``T_PER_NOISE`` times the noise,
     so that noise does not break a region's USAN up. About 3 ms at 640x480."""
-    sigma = estimate_noise(gray)
+    g = np.asarray(gray, dtype=np.float32)
+    mag = _sobel(g)  # once, for the noise and the edges
+    sigma = _noise(g, mag, 0.1) if min(g.shape) >= 3 else 0.0
     floor = max(T_MIN, T_PER_NOISE * sigma)
-    steps = edge_steps(gray, sigma)
+    steps = edge_steps(gray, sigma, mag)
     if len(steps) < 20:  # next to no edges: nothing to fit it to
         return max(floor, T_MAX)
     return max(floor, min(T_MAX, T_PER_STEP * float(np.percentile(steps, STEP_PERCENTILE))))
